@@ -1,0 +1,268 @@
+"""ModelBuilder: particles, sticks, triangles and nails, plus mesh helpers, then ``finalize(device)``."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import warp as wp
+
+from .model import AIR_DENSITY, GRAVITY, Model, ObjectRecord, heightfield_data
+from .terrain import Heightfield
+
+
+def _csr(keys: np.ndarray, values: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Adjacency lists in CSR form: for each key 0..count-1 the values, in the order they were given."""
+    order = np.argsort(keys, kind="stable")
+    start = np.zeros(count + 1, dtype=np.int32)
+    np.add.at(start, keys + 1, 1)
+    return np.cumsum(start).astype(np.int32), values[order].astype(np.int32)
+
+
+class ModelBuilder:
+    """Accumulates the pieces of a model on the host; :meth:`finalize` uploads them to a device.
+
+    All positions are in metres, masses in kilograms. Indices returned by ``add_*`` are global.
+    """
+
+    def __init__(self, gravity: float = GRAVITY, air_density: float = AIR_DENSITY):
+        self.gravity = float(gravity)
+        self.air_density = float(air_density)
+        self.particle_q: list[Sequence[float]] = []
+        self.particle_qd: list[Sequence[float]] = []
+        self.particle_mass: list[float] = []
+        self.particle_world: list[int] = []
+        self.stick_particles: list[tuple[int, int]] = []
+        self.stick_rest: list[float] = []
+        self.tri_indices: list[tuple[int, int, int]] = []
+        self.nail_particles: list[int] = []
+        self.nail_target: list[Sequence[float]] = []
+        self.objects: list[ObjectRecord] = []
+        self.terrain: Heightfield | None = None
+        self.world_count = 1
+        self.current_world = 0
+
+    # ------------------------------------------------------------------ sizes
+    @property
+    def particle_count(self) -> int:
+        """Number of particles added so far."""
+        return len(self.particle_q)
+
+    @property
+    def stick_count(self) -> int:
+        """Number of sticks added so far."""
+        return len(self.stick_rest)
+
+    @property
+    def tri_count(self) -> int:
+        """Number of triangles added so far."""
+        return len(self.tri_indices)
+
+    # ------------------------------------------------------------------ primitives
+    def add_particle(self, pos, mass: float, vel=(0.0, 0.0, 0.0)) -> int:
+        """Add a particle at ``pos`` [m] of ``mass`` [kg] (> 0) moving at ``vel`` [m/s]; returns its index."""
+        mass = float(mass)
+        if not np.isfinite(mass) or mass <= 0.0:
+            raise ValueError(f"particle mass must be positive and finite, got {mass}")
+        self.particle_q.append(tuple(float(v) for v in pos))
+        self.particle_qd.append(tuple(float(v) for v in vel))
+        self.particle_mass.append(mass)
+        self.particle_world.append(self.current_world)
+        return self.particle_count - 1
+
+    def add_stick(self, i: int, j: int, rest: float | None = None) -> int:
+        """Add a distance constraint between particles ``i`` and ``j``; ``rest`` [m] defaults to their
+        current distance. Returns the stick index."""
+        n = self.particle_count
+        if not (0 <= i < n and 0 <= j < n) or i == j:
+            raise ValueError(f"stick ({i}, {j}) needs two distinct particles among 0..{n - 1}")
+        if rest is None:
+            rest = float(np.linalg.norm(np.subtract(self.particle_q[j], self.particle_q[i])))
+        if not rest > 0.0:
+            raise ValueError(f"stick ({i}, {j}) rest length must be positive, got {rest}")
+        self.stick_particles.append((int(i), int(j)))
+        self.stick_rest.append(float(rest))
+        return self.stick_count - 1
+
+    def add_triangle(self, i: int, j: int, k: int) -> int:
+        """Add an aerodynamic triangle (i, j, k); returns its index."""
+        n = self.particle_count
+        if len({i, j, k}) != 3 or not all(0 <= v < n for v in (i, j, k)):
+            raise ValueError(f"triangle ({i}, {j}, {k}) needs three distinct particles among 0..{n - 1}")
+        self.tri_indices.append((int(i), int(j), int(k)))
+        return self.tri_count - 1
+
+    def add_nail(self, i: int, target=None) -> int:
+        """Fix particle ``i`` at ``target`` [m] (default: where it is); returns the nail index.
+
+        A nailed particle ignores forces; its target can move through ``Control.nail_target``.
+        """
+        if not 0 <= i < self.particle_count:
+            raise ValueError(f"nail on particle {i}, which does not exist")
+        if i in self.nail_particles:
+            raise ValueError(f"particle {i} is already nailed")
+        self.nail_particles.append(int(i))
+        self.nail_target.append(tuple(float(v) for v in (self.particle_q[i] if target is None else target)))
+        return len(self.nail_particles) - 1
+
+    # ------------------------------------------------------------------ mesh helpers
+    def add_grid(
+        self,
+        origin,
+        axis_u,
+        axis_v,
+        count_u: int,
+        count_v: int,
+        mass: float,
+        vel=(0.0, 0.0, 0.0),
+        shear: bool = True,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A rectangular cloth of ``count_u x count_v`` particles at ``origin + i*axis_u + j*axis_v``.
+
+        ``axis_u``/``axis_v`` are the spacing vectors [m]; ``mass`` [kg] is the total, spread evenly.
+        Sticks on the grid edges and on both diagonals of every cell (``shear``); two triangles per cell.
+
+        Returns ``(particles [count_v, count_u], sticks, triangles)`` index arrays.
+        """
+        if count_u < 2 or count_v < 2:
+            raise ValueError(f"a grid needs at least 2x2 particles, got {count_u}x{count_v}")
+        o, du, dv = (np.asarray(a, dtype=np.float64) for a in (origin, axis_u, axis_v))
+        m = mass / (count_u * count_v)
+        ids = np.array(
+            [[self.add_particle(o + i * du + j * dv, m, vel) for i in range(count_u)] for j in range(count_v)]
+        )
+        s0, t0 = self.stick_count, self.tri_count
+        for j in range(count_v):
+            for i in range(count_u):
+                if i + 1 < count_u:
+                    self.add_stick(ids[j, i], ids[j, i + 1])
+                if j + 1 < count_v:
+                    self.add_stick(ids[j, i], ids[j + 1, i])
+                if i + 1 < count_u and j + 1 < count_v:
+                    self.add_stick(ids[j, i], ids[j + 1, i + 1])
+                    if shear:
+                        self.add_stick(ids[j, i + 1], ids[j + 1, i])
+                    self.add_triangle(ids[j, i], ids[j, i + 1], ids[j + 1, i + 1])
+                    self.add_triangle(ids[j, i], ids[j + 1, i + 1], ids[j + 1, i])
+        return ids, np.arange(s0, self.stick_count), np.arange(t0, self.tri_count)
+
+    def add_subdivided_triangle(
+        self, a, b, c, divisions: int, mass: float, vel=(0.0, 0.0, 0.0)
+    ) -> tuple[list[list[int]], np.ndarray, np.ndarray]:
+        """A triangle A, B, C [m] cut into ``divisions**2`` small triangles (paper Fig. 12).
+
+        Row ``r`` (0..divisions) runs from the point on AB to the point on AC at fraction ``r/divisions``
+        from A; it holds ``r + 1`` particles. ``mass`` [kg] is spread evenly over the
+        ``(divisions+1)(divisions+2)/2`` particles. A stick on every edge of every small triangle.
+
+        Returns ``(rows, sticks, triangles)``: ``rows[r][k]`` particle indices and index arrays.
+        """
+        if divisions < 1:
+            raise ValueError(f"a subdivided triangle needs at least 1 division, got {divisions}")
+        a, b, c = (np.asarray(p, dtype=np.float64) for p in (a, b, c))
+        count = (divisions + 1) * (divisions + 2) // 2
+        m = mass / count
+        rows = []
+        for r in range(divisions + 1):
+            left = a + (b - a) * (r / divisions)
+            right = a + (c - a) * (r / divisions)
+            rows.append(
+                [self.add_particle(left + (right - left) * (k / r if r else 0.0), m, vel) for k in range(r + 1)]
+            )
+        s0, t0 = self.stick_count, self.tri_count
+        for r in range(divisions):
+            for k in range(r + 1):
+                p, q, s = rows[r][k], rows[r + 1][k], rows[r + 1][k + 1]
+                self.add_triangle(p, q, s)
+                if k < r:
+                    self.add_triangle(p, s, rows[r][k + 1])
+                self.add_stick(p, q)
+                self.add_stick(p, s)
+                self.add_stick(q, s)
+        return rows, np.arange(s0, self.stick_count), np.arange(t0, self.tri_count)
+
+    def add_rope(
+        self, start, end, count: int, mass: float, vel=(0.0, 0.0, 0.0), first: int | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """A rope of ``count`` new particles from ``start`` to ``end`` [m], sticks in a chain.
+
+        ``mass`` [kg] is the rope's total. If ``first`` is given, the chain starts from that existing
+        particle (placed at ``start``) and the ``count`` new particles follow it up to ``end``.
+
+        Returns ``(particles, sticks)`` (``particles`` includes ``first`` when given).
+        """
+        if count < 1:
+            raise ValueError(f"a rope needs at least 1 particle, got {count}")
+        start, end = np.asarray(start, dtype=np.float64), np.asarray(end, dtype=np.float64)
+        m = mass / count
+        ids = [] if first is None else [int(first)]
+        steps = count if first is not None else max(count - 1, 1)
+        offset = 1 if first is not None else 0
+        for k in range(count):
+            ids.append(self.add_particle(start + (end - start) * ((k + offset) / steps), m, vel))
+        s0 = self.stick_count
+        for p, q in zip(ids[:-1], ids[1:], strict=True):
+            self.add_stick(p, q)
+        return np.array(ids), np.arange(s0, self.stick_count)
+
+    # ------------------------------------------------------------------ whole model
+    def set_terrain(self, terrain: Heightfield) -> None:
+        """Use ``terrain`` as the ground (default: flat at z = 0, 1 km square)."""
+        self.terrain = terrain
+
+    def add_object(self, record: ObjectRecord) -> ObjectRecord:
+        """Register the record of an object built into this builder (used by outputs and diagnostics)."""
+        record.world = self.current_world
+        self.objects.append(record)
+        return record
+
+    def finalize(self, device: str | None = "cpu") -> Model:
+        """Upload everything to ``device`` (default Warp's ``cpu``) and return the :class:`Model`."""
+        if self.particle_count == 0:
+            raise ValueError("the model has no particles")
+        device = wp.get_device(device)
+        m = Model()
+        m.device = device
+        n = self.particle_count
+        m.particle_count, m.stick_count, m.tri_count = n, self.stick_count, self.tri_count
+        m.nail_count = len(self.nail_particles)
+        m.world_count = self.world_count
+        mass = np.array(self.particle_mass, dtype=np.float64)
+        nails = np.array(self.nail_particles, dtype=np.int32)
+        inv_mass = 1.0 / mass
+        inv_mass[nails] = 0.0
+        m.particle_mass = mass.copy()
+        m.particle_mass[nails] = np.inf
+        m.particle_inv_mass = wp.array(inv_mass.astype(np.float32), dtype=wp.float32, device=device)
+        m.particle_world_np = np.array(self.particle_world, dtype=np.int32)
+        m.particle_world = wp.array(m.particle_world_np, dtype=wp.int32, device=device)
+        particle_nail = np.full(n, -1, dtype=np.int32)
+        particle_nail[nails] = np.arange(len(nails), dtype=np.int32)
+        m.particle_nail = wp.array(particle_nail, dtype=wp.int32, device=device)
+        m.particle_q0 = np.array(self.particle_q, dtype=np.float64)
+        m.particle_qd0 = np.array(self.particle_qd, dtype=np.float64)
+        m.nail_particles = nails
+        m.nail_target0 = np.array(self.nail_target, dtype=np.float64).reshape(-1, 3)
+
+        sticks = np.array(self.stick_particles, dtype=np.int32).reshape(-1, 2)
+        m.stick_particles_np = sticks
+        m.stick_particles = wp.array(sticks, dtype=wp.vec2i, device=device)
+        m.stick_rest = wp.array(np.array(self.stick_rest, dtype=np.float32), dtype=wp.float32, device=device)
+        stick_ids = np.arange(len(sticks), dtype=np.int32)
+        start, refs = _csr(sticks.reshape(-1), np.stack([2 * stick_ids, 2 * stick_ids + 1], axis=1).reshape(-1), n)
+        m.particle_stick_start = wp.array(start, dtype=wp.int32, device=device)
+        m.particle_stick_refs = wp.array(refs, dtype=wp.int32, device=device)
+
+        tris = np.array(self.tri_indices, dtype=np.int32).reshape(-1, 3)
+        m.tri_indices_np = tris
+        m.tri_indices = wp.array(tris, dtype=wp.vec3i, device=device)
+        start, ids = _csr(tris.reshape(-1), np.repeat(np.arange(len(tris), dtype=np.int32), 3), n)
+        m.particle_tri_start = wp.array(start, dtype=wp.int32, device=device)
+        m.particle_tri_ids = wp.array(ids, dtype=wp.int32, device=device)
+
+        m.terrain = self.terrain if self.terrain is not None else Heightfield.flat()
+        m.terrain_data = heightfield_data(m.terrain, device)
+        m.gravity = wp.vec3(0.0, 0.0, -self.gravity)
+        m.air_density = self.air_density
+        m.objects = list(self.objects)
+        return m

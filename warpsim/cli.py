@@ -1,0 +1,240 @@
+"""The ``warpsim`` command: list, info, run.
+
+Every error a user can cause ends with one line ``warpsim <command>: error: ...`` and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+from . import __version__
+
+EXIT_USAGE = 2
+
+
+class UsageError(Exception):
+    """A user mistake: printed as one line, exit code 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):  # one line, no usage dump
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _positive_float(name: str):
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a number, got {text!r}") from None
+        if not value > 0.0 or math.isinf(value):
+            raise argparse.ArgumentTypeError(f"{name} must be a positive finite number, got {text}")
+        return value
+
+    return parse
+
+
+def _iterations(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--iterations must be a whole number >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"--iterations must be a whole number >= 1, got {value}")
+    return value
+
+
+def scene_dirs() -> list[Path]:
+    """Where scene files are looked up: ./scenes, then the scenes/ folder beside the package."""
+    dirs = [Path.cwd() / "scenes", Path(__file__).resolve().parent.parent / "scenes"]
+    seen, out = set(), []
+    for d in dirs:
+        if d.is_dir() and d.resolve() not in seen:
+            seen.add(d.resolve())
+            out.append(d)
+    return out
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``warpsim`` command."""
+    parser = _Parser(
+        prog="warpsim",
+        description="Simulate flying fabric objects (flag, hang glider, delta kite, parachute) with Verlet "
+        "particles and Jacobi-averaged distance constraints, in NVIDIA Warp kernels.",
+        epilog="SCENE is a built-in object name (see `warpsim list`), a scene name found in ./scenes, "
+        "or a path to a .toml descriptor.",
+    )
+    parser.add_argument("--version", action="version", version=f"warpsim {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+
+    sub.add_parser(
+        "list",
+        help="built-in objects and the scene files found",
+        description="List built-in objects and the scene files found in ./scenes and the project's scenes/ folder.",
+    )
+
+    info = sub.add_parser(
+        "info",
+        help="counts, masses and settings of a scene",
+        description="Print a scene's particle/stick/triangle counts, masses and settings.",
+    )
+    info.add_argument("scene", metavar="SCENE")
+    info.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a descriptor value, e.g. --set flag.resolution=8 (repeatable)",
+    )
+
+    run = sub.add_parser(
+        "run",
+        help="simulate a scene",
+        description="Simulate a scene and print a summary: "
+        "simulated time, steps, wall time, steps per second, real-time factor, worst stick "
+        "stretch. Shows progress on a terminal; Ctrl-C stops cleanly.",
+    )
+    run.add_argument("scene", metavar="SCENE")
+    run.add_argument("--seconds", type=_positive_float("--seconds"), help="simulated time [s] (default: scene's)")
+    run.add_argument("--dt", type=_positive_float("--dt"), help="time step [s] (default: scene's, 0.01)")
+    run.add_argument("--iterations", type=_iterations, help="constraint iterations per step (default 55)")
+    run.add_argument("--fps", type=_positive_float("--fps"), help="output frames per simulated second")
+    run.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
+    run.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a descriptor value, e.g. --set wind.velocity=[8,0,0] (repeatable)",
+    )
+    run.add_argument("--realtime", action="store_true", help="pace the run to the wall clock")
+    run.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    return parser
+
+
+def _load(args) -> tuple[dict, str, str]:
+    from .descriptor import merge, parse_override, resolve
+
+    descriptor, text, where = resolve(args.scene, scene_dirs())
+    for item in args.set:
+        descriptor = merge(f"--set {item}", descriptor, parse_override(item))
+    overrides = {
+        ("solver", "dt"): getattr(args, "dt", None),
+        ("solver", "iterations"): getattr(args, "iterations", None),
+        ("scene", "fps"): getattr(args, "fps", None),
+        ("scene", "seconds"): getattr(args, "seconds", None),
+    }
+    for (section, key), value in overrides.items():
+        if value is not None:
+            descriptor[section][key] = value
+    return descriptor, text, where
+
+
+def _check_device(name: str) -> str:
+    import warp as wp
+
+    try:
+        wp.get_device(name)
+    except (ValueError, RuntimeError):
+        available = ", ".join(str(d) for d in wp.get_devices())
+        raise UsageError(f"--device {name} is not available here; available: {available}") from None
+    return name
+
+
+def cmd_list(args) -> int:
+    """Print built-in objects and scene files."""
+    from .objects import registry
+
+    print("built-in objects:")
+    for name, spec in registry.OBJECTS.items():
+        print(f"  {name:<12} {spec.summary}")
+    for directory in scene_dirs():
+        files = sorted(directory.glob("*.toml"))
+        if files:
+            print(f"scenes in {directory}:")
+            for f in files:
+                print(f"  {f.stem:<22} {f}")
+    return 0
+
+
+def cmd_info(args) -> int:
+    """Print counts, masses and settings of a scene."""
+    from .descriptor import to_toml
+    from .runner import build_model
+
+    descriptor, _, where = _load(args)
+    model = build_model(descriptor, "cpu", where)
+    kind = descriptor["scene"]["object"]
+    print(f"scene: {where} (object: {kind})")
+    print(
+        f"  particles {model.particle_count}, sticks {model.stick_count}, triangles {model.tri_count}, "
+        f"nails {model.nail_count}"
+    )
+    for record in model.objects:
+        mass = model.particle_mass[record.particles]
+        print(f"  {record.name}: total mass {mass[mass != float('inf')].sum():.3f} kg (nailed particles excluded)")
+        for part, ids in record.parts.items():
+            pm = model.particle_mass[ids]
+            finite = pm[pm != float("inf")]
+            print(f"    part {part:<10} {len(ids):5d} particles, {finite.sum():9.3f} kg")
+        paper = record.meta.get("paper_counts")
+        if paper:
+            print(f"  paper's counts: {paper}")
+    print(f"  terrain: {model.terrain}")
+    print("settings:")
+    print("  " + to_toml(descriptor).replace("\n", "\n  ").rstrip())
+    return 0
+
+
+def cmd_run(args) -> int:
+    """Run a scene and print the summary."""
+    from .runner import Simulation
+
+    descriptor, _, where = _load(args)
+    device = _check_device(args.device)
+    seconds = descriptor["scene"]["seconds"]
+    show_progress = not args.quiet and sys.stderr.isatty()
+    sim = Simulation(descriptor, device=device, where=where)
+    if not args.quiet:
+        m = sim.model
+        print(
+            f"{where}: {m.particle_count} particles, {m.stick_count} sticks, {m.tri_count} triangles; "
+            f"dt {sim.dt:g} s, {descriptor['solver']['method']}, device {device}"
+        )
+
+    def progress(t, total, steps, wall):
+        rate = steps / wall if wall > 0 else 0.0
+        sys.stderr.write(f"\r  t = {t:8.2f} / {total:.2f} s  ({100 * t / total:5.1f}%)  {rate:10,.0f} steps/s")
+        sys.stderr.flush()
+
+    summary = sim.run(seconds, on_progress=progress if show_progress else None, realtime=args.realtime)
+    if show_progress:
+        sys.stderr.write("\r" + " " * 70 + "\r")
+    if not args.quiet:
+        print(summary.text())
+    return 130 if summary.interrupted else 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``warpsim`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    import warp as wp
+
+    wp.config.log_level = wp.LOG_WARNING  # no per-module load lines on the user's terminal
+    from .descriptor import DescriptorError
+
+    commands = {"list": cmd_list, "info": cmd_info, "run": cmd_run}
+    try:
+        return commands[args.command](args)
+    except (DescriptorError, UsageError) as err:
+        sys.stderr.write(f"warpsim {args.command}: error: {err}\n")
+        return EXIT_USAGE
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,240 @@
+"""Scene descriptors: TOML files -> validated, typed configuration, with clear errors.
+
+A scene is an object + terrain + wind + solver settings (+ control schedules). Every key has a default,
+so a descriptor only lists what it changes. Sections and keys (``warpsim info SCENE`` prints them all):
+
+* ``[scene]`` ``object`` (flag, hang-glider, kite, parachute), ``seconds``, ``fps``
+* ``[solver]`` ``method`` (verlet | euler), ``dt`` [s], ``iterations``, ``relaxation``, ``damping``,
+  ``spring_stiffness`` [N/m], ``spring_damping`` [N s/m] (euler only)
+* ``[air]`` ``model`` (paper | plate), ``scale``, ``density`` [kg/m^3]
+* ``[wind]`` ``velocity`` [m/s, 3 numbers], ``shear_exponent``, ``reference_height`` [m]
+* ``[terrain]`` ``kind`` (flat | procedural | file), ``size`` [m], ``height`` [m], ``amplitude`` [m],
+  ``seed``, ``file`` (.npy)
+* ``[ground]`` ``collision`` (normal | clamp), ``friction``
+* one section per object, named after it (``[flag]``, ...), with the fields of its config class.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import difflib
+import sys
+from pathlib import Path
+from typing import Any
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+from .objects import registry
+
+
+class DescriptorError(ValueError):
+    """A scene descriptor or override a user wrote is invalid; the message says where and what is allowed."""
+
+
+CHOICES = {
+    ("scene", "object"): tuple(registry.OBJECTS),
+    ("solver", "method"): ("verlet", "euler"),
+    ("air", "model"): ("paper", "plate"),
+    ("terrain", "kind"): ("flat", "procedural", "file"),
+    ("ground", "collision"): ("normal", "clamp"),
+}
+
+# (low, high, low inclusive?) bounds on numbers
+BOUNDS = {
+    ("scene", "seconds"): (0.0, None, False),
+    ("scene", "fps"): (0.0, None, False),
+    ("solver", "dt"): (0.0, None, False),
+    ("solver", "iterations"): (1, 10000, True),
+    ("solver", "relaxation"): (0.0, 2.0, False),
+    ("solver", "damping"): (0.0, 1.0, True),
+    ("solver", "spring_stiffness"): (0.0, None, False),
+    ("solver", "spring_damping"): (0.0, None, True),
+    ("air", "scale"): (0.0, None, True),
+    ("air", "density"): (0.0, None, True),
+    ("terrain", "size"): (0.0, None, False),
+    ("ground", "friction"): (0.0, None, True),
+}
+
+BASE_DEFAULTS: dict[str, dict[str, Any]] = {
+    "scene": {"object": "flag", "seconds": 10.0, "fps": 30.0},
+    "solver": {
+        "method": "verlet",
+        "dt": 0.01,
+        "iterations": 55,
+        "relaxation": 1.0,
+        "damping": 0.0,
+        "spring_stiffness": 5000.0,
+        "spring_damping": 5.0,
+    },
+    "air": {"model": "paper", "scale": 1.0, "density": 1.294217666},
+    "wind": {"velocity": [4.0, 0.5, 0.0], "shear_exponent": 0.0, "reference_height": 10.0},
+    "terrain": {"kind": "flat", "size": 1000.0, "height": 0.0, "amplitude": 40.0, "seed": 0, "file": ""},
+    "ground": {"collision": "normal", "friction": 0.5},
+}
+
+
+def _object_defaults(kind: str) -> dict[str, Any]:
+    cfg = registry.OBJECTS[kind].config()
+    return {f.name: _plain(getattr(cfg, f.name)) for f in dataclasses.fields(cfg)}
+
+
+def _plain(value):
+    return list(value) if isinstance(value, tuple) else value
+
+
+def defaults(kind: str = "flag") -> dict[str, dict[str, Any]]:
+    """The full default descriptor for an object ``kind``, including the object's own scene defaults."""
+    d = copy.deepcopy(BASE_DEFAULTS)
+    d["scene"]["object"] = kind
+    d[registry.section(kind)] = _object_defaults(kind)
+    for section, values in registry.OBJECTS[kind].scene_defaults.items():
+        d[section].update(copy.deepcopy(values))
+    return d
+
+
+def _suggest(word: str, options) -> str:
+    close = difflib.get_close_matches(word, list(options), n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def _check_value(where: str, section: str, key: str, default, value):
+    """Coerce ``value`` to the type of ``default`` or raise a DescriptorError naming ``where``."""
+    name = f"{section}.{key}"
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise DescriptorError(f"{where}: {name} must be true or false, got {value!r}")
+    elif isinstance(default, int):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise DescriptorError(f"{where}: {name} must be a whole number, got {value!r}")
+    elif isinstance(default, float):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise DescriptorError(f"{where}: {name} must be a number, got {value!r}")
+        value = float(value)
+        if value != value or value in (float("inf"), float("-inf")):
+            raise DescriptorError(f"{where}: {name} must be finite, got {value!r}")
+    elif isinstance(default, str):
+        if not isinstance(value, str):
+            raise DescriptorError(f"{where}: {name} must be a string, got {value!r}")
+    elif isinstance(default, list):
+        if (
+            not isinstance(value, list)
+            or len(value) != len(default)
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+        ):
+            raise DescriptorError(f"{where}: {name} must be a list of {len(default)} numbers, got {value!r}")
+        value = [float(v) for v in value]
+        if not all(v == v and abs(v) != float("inf") for v in value):
+            raise DescriptorError(f"{where}: {name} must hold finite numbers, got {value!r}")
+    choices = CHOICES.get((section, key))
+    if choices is not None and value not in choices:
+        raise DescriptorError(
+            f"{where}: {name} = {value!r} is not one of {', '.join(choices)}{_suggest(str(value), choices)}"
+        )
+    bounds = BOUNDS.get((section, key)) or registry.bounds(section, key)
+    if bounds is not None:
+        low, high, inclusive = bounds
+        if low is not None and (value < low or (value == low and not inclusive)):
+            raise DescriptorError(f"{where}: {name} = {value!r} must be {'>=' if inclusive else '>'} {low}")
+        if high is not None and value > high:
+            raise DescriptorError(f"{where}: {name} = {value!r} must be <= {high}")
+    return value
+
+
+def merge(where: str, base: dict, override: dict) -> dict:
+    """Validate ``override`` (parsed TOML) against ``base`` (a full descriptor) and merge it in."""
+    out = copy.deepcopy(base)
+    for section, values in override.items():
+        if section not in out:
+            raise DescriptorError(
+                f"{where}: unknown section [{section}]{_suggest(section, out)}; sections are {', '.join(out)}"
+            )
+        if not isinstance(values, dict):
+            raise DescriptorError(f"{where}: [{section}] must be a table of keys, got {values!r}")
+        for key, value in values.items():
+            if key not in out[section]:
+                raise DescriptorError(
+                    f"{where}: unknown key {section}.{key}{_suggest(key, out[section])}; "
+                    f"[{section}] keys are {', '.join(out[section])}"
+                )
+            out[section][key] = _check_value(where, section, key, out[section][key], value)
+    return out
+
+
+def parse_override(text: str) -> dict:
+    """Turn ``section.key=value`` (value in TOML syntax; bare words are strings) into a nested dict."""
+    if "=" not in text:
+        raise DescriptorError(f"--set {text!r}: expected section.key=value, e.g. wind.velocity=[8,0,0]")
+    path, raw = (part.strip() for part in text.split("=", 1))
+    if path.count(".") != 1 or not all(path.split(".")):
+        raise DescriptorError(f"--set {text!r}: the key must be section.key, e.g. solver.iterations=40")
+    section, key = path.split(".")
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return {section: {key: value}}
+
+
+def load_text(text: str, where: str) -> dict:
+    """Parse and validate descriptor ``text``; ``where`` names its origin in error messages."""
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise DescriptorError(f"{where}: not valid TOML: {err}") from None
+    kind = raw.get("scene", {}).get("object", "flag") if isinstance(raw.get("scene"), dict) else "flag"
+    if kind not in registry.OBJECTS:
+        choices = tuple(registry.OBJECTS)
+        raise DescriptorError(
+            f"{where}: scene.object = {kind!r} is not one of {', '.join(choices)}{_suggest(str(kind), choices)}"
+        )
+    return merge(where, defaults(kind), raw)
+
+
+def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, str, str]:
+    """Find a scene by built-in name or path; returns ``(descriptor, source text, where)``.
+
+    A built-in name (``flag``, ``hang-glider``, ...) gives that object's defaults; a path (or a name
+    found as ``NAME.toml`` in ``search_dirs``) is read and validated.
+    """
+    path = Path(scene)
+    if path.suffix == ".toml" or path.exists():
+        if not path.is_file():
+            raise DescriptorError(f"{scene}: scene file not found")
+        text = path.read_text(encoding="utf-8")
+        return load_text(text, str(path)), text, str(path)
+    if scene in registry.OBJECTS:
+        return defaults(scene), "", f"built-in {scene}"
+    for directory in search_dirs or []:
+        candidate = Path(directory) / f"{scene.replace('-', '_')}.toml"
+        if candidate.is_file():
+            text = candidate.read_text(encoding="utf-8")
+            return load_text(text, str(candidate)), text, str(candidate)
+    names = list(registry.OBJECTS)
+    for directory in search_dirs or []:
+        names += [p.stem for p in sorted(Path(directory).glob("*.toml"))]
+    raise DescriptorError(
+        f"unknown scene '{scene}'{_suggest(scene, names)}: use a built-in object ({', '.join(registry.OBJECTS)}), "
+        "a scene name from `warpsim list`, or a path to a .toml descriptor"
+    )
+
+
+def to_toml(descriptor: dict) -> str:
+    """Write a descriptor back as TOML text (all keys, for recording with outputs)."""
+    lines = []
+    for section, values in descriptor.items():
+        lines.append(f"[{section}]")
+        for key, value in values.items():
+            if isinstance(value, str):
+                lines.append(f'{key} = "{value}"')
+            elif isinstance(value, bool):
+                lines.append(f"{key} = {'true' if value else 'false'}")
+            elif isinstance(value, list):
+                lines.append(f"{key} = [{', '.join(repr(float(v)) for v in value)}]")
+            else:
+                lines.append(f"{key} = {value!r}")
+        lines.append("")
+    return "\n".join(lines)

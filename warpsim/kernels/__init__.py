@@ -1,0 +1,12 @@
+"""Warp kernels of warpsim, one module per concern.
+
+Each module keeps its kernels private and exposes a small host function that launches them;
+shared math lives in ``@wp.func`` helpers. Launch parameters are grouped as model arrays, inputs,
+scalars, then outputs (``_out``).
+"""
+
+from . import aero, collision, constraints, springs, verlet
+
+MODULES = (aero, collision, constraints, springs, verlet)
+
+__all__ = ["MODULES", "aero", "collision", "constraints", "springs", "verlet"]

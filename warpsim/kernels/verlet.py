@@ -1,0 +1,66 @@
+"""Verlet integration (paper Section 3.2, slide 5): position and previous position, no velocity.
+
+``x_new = x + (1 - damping) * (x - x_prev) + a * dt^2``, then ``x_prev = x``. (The paper's Fig. 5
+prints ``2 * (x - x_prev)``; the correct step is the one above with damping 0, as on slide 5.)
+``a`` is gravity plus the air force of the particle's triangles divided by its mass. Nailed
+particles ignore forces and are placed on their nail.
+"""
+
+from __future__ import annotations
+
+import warp as wp
+
+from .aero import gather_air_force
+
+wp.set_module_options({"enable_backward": False})  # forward-only: halves compile time
+
+
+@wp.kernel
+def _integrate_verlet(
+    particle_inv_mass: wp.array(dtype=wp.float32),
+    particle_nail: wp.array(dtype=wp.int32),
+    particle_tri_start: wp.array(dtype=wp.int32),
+    particle_tri_ids: wp.array(dtype=wp.int32),
+    nail_target: wp.array(dtype=wp.vec3),
+    tri_force: wp.array(dtype=wp.vec3),
+    gravity: wp.vec3,
+    dt: float,
+    damping: float,
+    particle_q: wp.array(dtype=wp.vec3),
+    particle_q_prev: wp.array(dtype=wp.vec3),
+):
+    i = wp.tid()
+    x = particle_q[i]
+    x_prev = particle_q_prev[i]
+    particle_q_prev[i] = x
+    nail = particle_nail[i]
+    if nail >= 0:
+        particle_q[i] = nail_target[nail]
+        return
+    inv_mass = particle_inv_mass[i]
+    if inv_mass == 0.0:
+        return
+    force = gather_air_force(i, particle_tri_start, particle_tri_ids, tri_force)
+    acceleration = gravity + force * inv_mass
+    particle_q[i] = x + (x - x_prev) * (1.0 - damping) + acceleration * (dt * dt)
+
+
+def integrate_verlet(model, state, control, tri_force: wp.array, dt: float, damping: float) -> None:
+    """Advance ``state`` by one Verlet step of ``dt`` seconds (in place)."""
+    wp.launch(
+        _integrate_verlet,
+        dim=model.particle_count,
+        inputs=[
+            model.particle_inv_mass,
+            model.particle_nail,
+            model.particle_tri_start,
+            model.particle_tri_ids,
+            control.nail_target,
+            tri_force,
+            model.gravity,
+            float(dt),
+            float(damping),
+        ],
+        outputs=[state.particle_q, state.particle_q_prev],
+        device=model.device,
+    )

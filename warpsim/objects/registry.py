@@ -1,0 +1,59 @@
+"""The built-in objects: config class, builder, scene defaults and value bounds of each."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from .flag import FlagConfig, build_flag
+
+
+@dataclass(frozen=True)
+class ObjectSpec:
+    """How to build one kind of object from its descriptor section.
+
+    Attributes:
+        config: dataclass of the object's parameters (the descriptor section's keys and defaults).
+        build: ``build(builder, config, terrain) -> ObjectRecord``.
+        scene_defaults: overrides of other sections that suit this object (e.g. its wind, its dt).
+        bounds: key -> (low, high, low inclusive?) on the object's numbers.
+        summary: one line for ``warpsim list``.
+    """
+
+    config: type
+    build: Callable
+    scene_defaults: dict = field(default_factory=dict)
+    bounds: dict = field(default_factory=dict)
+    summary: str = ""
+
+
+POSITIVE = (0.0, None, False)
+
+OBJECTS: dict[str, ObjectSpec] = {
+    "flag": ObjectSpec(
+        config=FlagConfig,
+        build=build_flag,
+        scene_defaults={"wind": {"velocity": [4.0, 0.5, 0.0]}},
+        bounds={
+            "width": POSITIVE,
+            "height": POSITIVE,
+            "resolution": (2, 4096, True),
+            "mass_per_area": POSITIVE,
+            "pole_height": POSITIVE,
+        },
+        summary="cloth nailed along a pole, in wind (the paper's Verlet/Euler comparison, slide 15)",
+    ),
+}
+
+
+def section(kind: str) -> str:
+    """Descriptor section name of an object kind (``hang-glider`` -> ``hang_glider``)."""
+    return kind.replace("-", "_")
+
+
+def bounds(section_name: str, key: str):
+    """Bounds of an object section's key, or None."""
+    for kind, spec in OBJECTS.items():
+        if section(kind) == section_name:
+            return spec.bounds.get(key)
+    return None

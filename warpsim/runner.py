@@ -1,0 +1,226 @@
+"""Simulation: builds a scene from its descriptor and runs it frame by frame.
+
+A frame is what outputs see (``fps`` per simulated second); between frames the solver takes as many
+steps of ``dt`` as one frame lasts. Diagnostics are computed on the host once per frame.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import warp as wp
+
+from .builder import ModelBuilder
+from .descriptor import DescriptorError
+from .kernels.aero import AeroModel
+from .kernels.collision import CollisionMode
+from .model import Model
+from .objects import registry
+from .solver import AirSettings, GroundSettings, SolverEuler, SolverVerlet
+from .terrain import Heightfield
+
+
+def make_terrain(cfg: dict, where: str = "scene") -> Heightfield:
+    """The terrain described by a descriptor's ``[terrain]`` section."""
+    if cfg["kind"] == "flat":
+        return Heightfield.flat(size=cfg["size"], height=cfg["height"])
+    if cfg["kind"] == "procedural":
+        return Heightfield.procedural(
+            size=cfg["size"], amplitude=cfg["amplitude"], seed=cfg["seed"], base_height=cfg["height"]
+        )
+    if not cfg["file"]:
+        raise DescriptorError(f"{where}: terrain.kind = 'file' needs terrain.file (a .npy array of heights)")
+    try:
+        return Heightfield.load(Path(cfg["file"]), size=cfg["size"])
+    except (ValueError, OSError) as err:
+        raise DescriptorError(f"{where}: terrain.file: {err}") from None
+
+
+def object_config(kind: str, values: dict):
+    """Instantiate an object's config dataclass from its descriptor section."""
+    cls = registry.OBJECTS[kind].config
+    kwargs = {}
+    for f in dataclasses.fields(cls):
+        v = values[f.name]
+        kwargs[f.name] = tuple(v) if isinstance(v, list) else v
+    return cls(**kwargs)
+
+
+def build_model(descriptor: dict, device: str | None = "cpu", where: str = "scene") -> Model:
+    """Build the model of a validated descriptor on ``device``."""
+    kind = descriptor["scene"]["object"]
+    builder = ModelBuilder(air_density=descriptor["air"]["density"])
+    terrain = make_terrain(descriptor["terrain"], where)
+    builder.set_terrain(terrain)
+    spec = registry.OBJECTS[kind]
+    try:
+        spec.build(builder, object_config(kind, descriptor[registry.section(kind)]), terrain)
+    except ValueError as err:
+        raise DescriptorError(f"{where}: [{registry.section(kind)}]: {err}") from None
+    return builder.finalize(device)
+
+
+@dataclass
+class Frame:
+    """Diagnostics of one output frame.
+
+    Attributes:
+        index: frame number (0 = initial state). time: simulated time [s].
+        positions: host ``[particle_count, 3]`` positions [m].
+        worst_stretch: largest ``|l - r|/r`` over all sticks (dimensionless).
+        kinetic_energy: total kinetic energy [J] of the free particles.
+    """
+
+    index: int
+    time: float
+    positions: np.ndarray
+    worst_stretch: float
+    kinetic_energy: float
+
+
+@dataclass
+class RunSummary:
+    """What a run did: simulated time [s], steps, wall time [s], rates, worst stick stretch seen."""
+
+    simulated_time: float
+    steps: int
+    wall_time: float
+    worst_stretch: float
+    interrupted: bool = False
+
+    @property
+    def steps_per_second(self) -> float:
+        """Solver steps per wall-clock second."""
+        return self.steps / self.wall_time if self.wall_time > 0 else float("inf")
+
+    @property
+    def realtime_factor(self) -> float:
+        """Simulated seconds per wall-clock second."""
+        return self.simulated_time / self.wall_time if self.wall_time > 0 else float("inf")
+
+    def text(self) -> str:
+        """Human-readable summary lines."""
+        status = "interrupted" if self.interrupted else "done"
+        return (
+            f"{status}: simulated {self.simulated_time:.3f} s in {self.steps} steps, wall {self.wall_time:.2f} s\n"
+            f"  {self.steps_per_second:,.0f} steps/s, real-time factor {self.realtime_factor:.1f}x, "
+            f"worst stick stretch {100 * self.worst_stretch:.3f}%"
+        )
+
+
+class Simulation:
+    """A scene ready to run: model, state, control and solver built from a validated descriptor.
+
+    Args:
+        descriptor: validated descriptor (see :mod:`warpsim.descriptor`).
+        device: Warp device (``cpu`` default, ``cuda`` when present).
+        use_graph: replay the step as a captured graph (default True).
+        where: origin of the descriptor for error messages.
+    """
+
+    def __init__(self, descriptor: dict, device: str | None = "cpu", use_graph: bool = True, where: str = "scene"):
+        self.descriptor = descriptor
+        self.model = build_model(descriptor, device, where)
+        solver_cfg = descriptor["solver"]
+        self.dt = float(solver_cfg["dt"])
+        air = AirSettings(
+            model=AeroModel[descriptor["air"]["model"].upper()],
+            scale=descriptor["air"]["scale"],
+            shear_exponent=descriptor["wind"]["shear_exponent"],
+            shear_reference_height=descriptor["wind"]["reference_height"],
+        )
+        ground = GroundSettings(
+            mode=CollisionMode[descriptor["ground"]["collision"].upper()], friction=descriptor["ground"]["friction"]
+        )
+        if solver_cfg["method"] == "verlet":
+            self.solver = SolverVerlet(
+                self.model,
+                iterations=solver_cfg["iterations"],
+                relaxation=solver_cfg["relaxation"],
+                damping=solver_cfg["damping"],
+                air=air,
+                ground=ground,
+                use_graph=use_graph,
+            )
+        else:
+            self.solver = SolverEuler(
+                self.model,
+                stiffness=solver_cfg["spring_stiffness"],
+                damping=solver_cfg["spring_damping"],
+                air=air,
+                ground=ground,
+                use_graph=use_graph,
+            )
+        self.state = self.model.state()
+        self.state.set_velocity(self.model.particle_qd0, self.dt)
+        self.control = self.model.control()
+        self.control.set_wind(descriptor["wind"]["velocity"])
+        self.steps_taken = 0
+        fps = float(descriptor["scene"]["fps"])
+        self.steps_per_frame = max(1, int(round(1.0 / (fps * self.dt))))
+
+    def step(self, count: int = 1) -> None:
+        """Take ``count`` solver steps of ``dt``."""
+        for _ in range(count):
+            self.solver.step(self.state, self.control, self.dt)
+        self.steps_taken += count
+
+    def frame(self, index: int) -> Frame:
+        """Diagnostics of the current state as frame ``index``."""
+        q = self.state.positions()
+        stretch = float(np.abs(self.model.stick_stretch(q, self.control.stick_rest.numpy())).max(initial=0.0))
+        v = self.state.velocities(self.dt)
+        mass = np.where(np.isfinite(self.model.particle_mass), self.model.particle_mass, 0.0)
+        energy = float(0.5 * np.sum(mass * np.einsum("ij,ij->i", v, v)))
+        return Frame(index, self.state.time, q, stretch, energy)
+
+    def run(
+        self,
+        seconds: float,
+        on_frame: Callable[[Frame], None] | None = None,
+        on_progress: Callable[[float, float, int, float], None] | None = None,
+        realtime: bool = False,
+    ) -> RunSummary:
+        """Run for ``seconds`` of simulated time, calling ``on_frame`` on the initial and every later frame.
+
+        ``on_progress(t, seconds, steps, wall)`` is called at most about 5 times per wall second.
+        Ctrl-C stops the run after the current frame; the summary then says ``interrupted``.
+        """
+        total_steps = int(round(seconds / self.dt))
+        worst = 0.0
+        steps = 0
+        start = time.perf_counter()
+        last_report = start
+        interrupted = False
+        try:
+            first = self.frame(0)
+            worst = first.worst_stretch
+            if on_frame:
+                on_frame(first)
+            index = 0
+            while steps < total_steps:
+                index += 1
+                n = min(self.steps_per_frame, total_steps - steps)
+                self.step(n)
+                steps += n
+                frame = self.frame(index)
+                worst = max(worst, frame.worst_stretch)
+                if on_frame:
+                    on_frame(frame)
+                now = time.perf_counter()
+                if realtime:
+                    ahead = steps * self.dt - (now - start)
+                    if ahead > 0:
+                        time.sleep(ahead)
+                if on_progress and now - last_report > 0.2:
+                    on_progress(self.state.time, seconds, steps, now - start)
+                    last_report = now
+        except KeyboardInterrupt:
+            interrupted = True
+        wp.synchronize_device(self.model.device)
+        return RunSummary(self.state.time, steps, time.perf_counter() - start, worst, interrupted)

@@ -1,0 +1,118 @@
+"""Heightfield terrain: a regular grid of heights that particles may not go below.
+
+The paper uses a 256x256 heightfield (Section 6.3). Heights are in metres, Z up; the grid covers
+``[origin_x, origin_x + size_x] x [origin_y, origin_y + size_y]`` and is sampled bilinearly. Outside
+the grid the edge heights are extended.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+DEFAULT_RESOLUTION = 256
+
+
+class Heightfield:
+    """A height grid sampled bilinearly.
+
+    Args:
+        heights: shape ``[ny, nx]`` heights in metres; row ``j`` is at ``y = origin_y + j*cell_y``.
+        size: ``(size_x, size_y)`` extent of the grid in metres (first to last sample).
+        origin: ``(x, y)`` of sample ``[0, 0]`` in metres. Default: grid centred on the origin.
+    """
+
+    def __init__(self, heights: np.ndarray, size: tuple[float, float], origin: tuple[float, float] | None = None):
+        heights = np.asarray(heights, dtype=np.float32)
+        if heights.ndim != 2 or min(heights.shape) < 2:
+            raise ValueError(f"heights must be a 2-D array of at least 2x2 samples, got shape {heights.shape}")
+        if not np.all(np.isfinite(heights)):
+            raise ValueError("heights contain NaN or Inf")
+        size_x, size_y = float(size[0]), float(size[1])
+        if size_x <= 0.0 or size_y <= 0.0:
+            raise ValueError(f"terrain size must be positive, got {size}")
+        self.heights = heights
+        self.size = (size_x, size_y)
+        self.origin = (-0.5 * size_x, -0.5 * size_y) if origin is None else (float(origin[0]), float(origin[1]))
+        ny, nx = heights.shape
+        self.cell = (size_x / (nx - 1), size_y / (ny - 1))
+
+    # ------------------------------------------------------------------ constructors
+    @classmethod
+    def flat(cls, size: float = 1000.0, height: float = 0.0, resolution: int = DEFAULT_RESOLUTION) -> Heightfield:
+        """A level terrain at ``height`` metres covering ``size`` x ``size`` metres."""
+        return cls(np.full((resolution, resolution), height, dtype=np.float32), (size, size))
+
+    @classmethod
+    def procedural(
+        cls,
+        size: float = 1000.0,
+        amplitude: float = 40.0,
+        seed: int = 0,
+        resolution: int = DEFAULT_RESOLUTION,
+        base_height: float = 0.0,
+    ) -> Heightfield:
+        """Seeded rolling hills: a sum of random-phase waves whose amplitude falls with frequency.
+
+        Args:
+            size: side of the square terrain [m].
+            amplitude: approximate peak-to-mean height of the hills [m].
+            seed: random seed; the same seed always gives the same terrain.
+            resolution: samples per side (the paper: 256).
+            base_height: mean height [m].
+        """
+        rng = np.random.default_rng(seed)
+        u = np.linspace(0.0, 1.0, resolution)
+        gx, gy = np.meshgrid(u, u)
+        h = np.zeros_like(gx)
+        for octave in range(1, 6):
+            for _ in range(3):
+                angle = rng.uniform(0.0, 2.0 * np.pi)
+                freq = octave * rng.uniform(0.7, 1.3)
+                phase = rng.uniform(0.0, 2.0 * np.pi)
+                h += np.cos(2.0 * np.pi * freq * (np.cos(angle) * gx + np.sin(angle) * gy) + phase) / octave**1.5
+        h *= amplitude / max(np.abs(h).max(), 1e-9)
+        return cls((h + base_height).astype(np.float32), (size, size))
+
+    @classmethod
+    def load(cls, path: str | Path, size: float = 1000.0, vertical_scale: float = 1.0) -> Heightfield:
+        """Load heights [m] from a ``.npy`` file holding a 2-D array (``vertical_scale`` multiplies them)."""
+        path = Path(path)
+        if path.suffix.lower() != ".npy":
+            raise ValueError(f"{path}: terrain files must be .npy arrays of heights")
+        if not path.exists():
+            raise ValueError(f"{path}: terrain file not found")
+        return cls(np.load(path) * vertical_scale, (size, size))
+
+    # ------------------------------------------------------------------ queries (host, NumPy)
+    def _cell_coords(self, x, y):
+        ny, nx = self.heights.shape
+        fx = np.clip((np.asarray(x, dtype=np.float64) - self.origin[0]) / self.cell[0], 0.0, nx - 1.000001)
+        fy = np.clip((np.asarray(y, dtype=np.float64) - self.origin[1]) / self.cell[1], 0.0, ny - 1.000001)
+        ix, iy = np.floor(fx).astype(int), np.floor(fy).astype(int)
+        return ix, iy, fx - ix, fy - iy
+
+    def height(self, x, y):
+        """Bilinear terrain height [m] at world ``(x, y)`` [m] (scalars or arrays)."""
+        ix, iy, tx, ty = self._cell_coords(x, y)
+        h = self.heights
+        h00, h10, h01, h11 = h[iy, ix], h[iy, ix + 1], h[iy + 1, ix], h[iy + 1, ix + 1]
+        return (1 - ty) * ((1 - tx) * h00 + tx * h10) + ty * ((1 - tx) * h01 + tx * h11)
+
+    def normal(self, x, y):
+        """Unit upward normal of the bilinear surface at ``(x, y)``, shape ``[..., 3]``."""
+        ix, iy, tx, ty = self._cell_coords(x, y)
+        h = self.heights
+        h00, h10, h01, h11 = h[iy, ix], h[iy, ix + 1], h[iy + 1, ix], h[iy + 1, ix + 1]
+        dhdx = ((1 - ty) * (h10 - h00) + ty * (h11 - h01)) / self.cell[0]
+        dhdy = ((1 - tx) * (h01 - h00) + tx * (h11 - h10)) / self.cell[1]
+        n = np.stack([-dhdx, -dhdy, np.ones_like(dhdx)], axis=-1)
+        return n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+    def __repr__(self) -> str:
+        ny, nx = self.heights.shape
+        return (
+            f"Heightfield({nx}x{ny}, size={self.size[0]:g}x{self.size[1]:g} m, "
+            f"heights {self.heights.min():.1f}..{self.heights.max():.1f} m)"
+        )

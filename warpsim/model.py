@@ -134,12 +134,12 @@ class State:
     time: float = 0.0
 
     def positions(self) -> np.ndarray:
-        """Host copy of the positions, shape ``[particle_count, 3]`` [m]."""
-        return self.particle_q.numpy()
+        """Host copy of the positions, shape ``[particle_count, 3]`` [m] (never a view of device memory)."""
+        return self.particle_q.numpy().copy()
 
     def velocities(self, dt: float) -> np.ndarray:
         """Host velocities ``(x - x_prev)/dt`` [m/s] for the step ``dt`` [s] being used."""
-        return (self.particle_q.numpy() - self.particle_q_prev.numpy()) / dt
+        return (self.particle_q.numpy() - self.particle_q_prev.numpy()) / dt  # new array
 
     def set_velocity(self, velocity: np.ndarray, dt: float) -> None:
         """Set ``x_prev = x - velocity * dt`` so that the state moves at ``velocity`` [m/s] with step ``dt`` [s]."""

@@ -1,0 +1,21 @@
+import numpy as np
+import pytest
+import warp as wp
+
+wp.config.log_level = wp.LOG_WARNING
+
+
+@pytest.fixture(scope="session")
+def device():
+    """Tests run on Warp's CPU device (the default everywhere); CUDA is checked separately when present."""
+    return "cpu"
+
+
+def worst_elongation(model, positions) -> float:
+    """Largest relative lengthening of any stick."""
+    return float(model.stick_stretch(positions).max())
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(1234)

@@ -183,7 +183,10 @@ def cmd_info(args) -> int:
             print(f"    part {part:<10} {len(ids):5d} particles, {finite.sum():9.3f} kg")
         paper = record.meta.get("paper_counts")
         if paper:
-            print(f"  paper's counts: {paper}")
+            print(
+                f"  the paper's model: particles {paper['particles']}, sticks {paper['sticks']}, "
+                f"triangles {paper['triangles']} (see README: counts)"
+            )
     print(f"  terrain: {model.terrain}")
     print("settings:")
     print("  " + to_toml(descriptor).replace("\n", "\n  ").rstrip())

@@ -164,6 +164,27 @@ class Simulation:
         fps = float(descriptor["scene"]["fps"])
         self.steps_per_frame = max(1, int(round(1.0 / (fps * self.dt))))
 
+    def set_controls(self, **values: float) -> None:
+        """Set object controls between steps, e.g. ``set_controls(pitch=0.5, roll=-0.2)`` (each in [-1, 1]).
+
+        Raises ``ValueError`` for a control the scene's object does not have or a value outside [-1, 1].
+        """
+        rest = self.control.stick_rest.numpy().copy()
+        for record in self.model.objects:
+            spec = registry.OBJECTS[record.kind]
+            unknown = set(values) - set(spec.controls)
+            if unknown:
+                raise ValueError(
+                    f"{record.kind} has no control {', '.join(sorted(unknown))}; "
+                    f"its controls are: {', '.join(spec.controls) or 'none'}"
+                )
+            for name, value in values.items():
+                if not -1.0 <= float(value) <= 1.0:
+                    raise ValueError(f"control {name} must be in [-1, 1], got {value}")
+            if spec.apply_controls is not None:
+                spec.apply_controls(record, rest, values)
+        self.control.stick_rest.assign(rest)
+
     def step(self, count: int = 1) -> None:
         """Take ``count`` solver steps of ``dt``."""
         for _ in range(count):

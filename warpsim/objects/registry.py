@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from . import hang_glider
 from .flag import FlagConfig, build_flag
 
 
@@ -18,6 +19,8 @@ class ObjectSpec:
         scene_defaults: overrides of other sections that suit this object (e.g. its wind, its dt).
         bounds: key -> (low, high, low inclusive?) on the object's numbers.
         summary: one line for ``warpsim list``.
+        controls: names of the object's controls (each in [-1, 1]).
+        apply_controls: ``apply_controls(record, stick_rest, values)`` writes control rest lengths.
     """
 
     config: type
@@ -25,6 +28,8 @@ class ObjectSpec:
     scene_defaults: dict = field(default_factory=dict)
     bounds: dict = field(default_factory=dict)
     summary: str = ""
+    controls: tuple[str, ...] = ()
+    apply_controls: Callable | None = None
 
 
 POSITIVE = (0.0, None, False)
@@ -42,6 +47,28 @@ OBJECTS: dict[str, ObjectSpec] = {
             "pole_height": POSITIVE,
         },
         summary="cloth nailed along a pole, in wind (the paper's Verlet/Euler comparison, slide 15)",
+    ),
+    "hang-glider": ObjectSpec(
+        config=hang_glider.HangGliderConfig,
+        build=hang_glider.build_hang_glider,
+        scene_defaults={"wind": {"velocity": [0.0, 0.0, 0.0]}, "terrain": {"kind": "procedural"}},
+        bounds={
+            "divisions": (2, 256, True),
+            "span": POSITIVE,
+            "chord": POSITIVE,
+            "glider_mass": POSITIVE,
+            "pilot_mass": POSITIVE,
+            "hang_depth": POSITIVE,
+            "pilot_station": (0.0, 1.0, True),
+            "frame_height": POSITIVE,
+            "pitch_travel": (0.0, None, True),
+            "roll_travel": (0.0, None, True),
+            "altitude": POSITIVE,
+            "speed": (0.0, None, True),
+        },
+        summary="triangular sail, rigid frame, pilot on control sticks (paper Section 6); steer with pitch/roll",
+        controls=("pitch", "roll"),
+        apply_controls=hang_glider.apply_controls,
     ),
 }
 

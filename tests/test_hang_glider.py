@@ -1,0 +1,61 @@
+"""The hang glider: counts, weight-shift pitch control, pilot under the sail."""
+
+import numpy as np
+import pytest
+
+from warpsim.cli import main
+from warpsim.descriptor import defaults
+from warpsim.objects.hang_glider import control_rest_lengths, flight_state
+from warpsim.runner import Simulation
+
+
+def _glider(pitch: float, seconds: float = 5.0, aero: str = "plate"):
+    d = defaults("hang-glider")
+    d["air"]["model"] = aero
+    sim = Simulation(d)
+    sim.set_controls(pitch=pitch)
+    sim.step(int(round(seconds / sim.dt)))
+    rec = sim.model.objects[0]
+    return sim, flight_state(rec, sim.state.positions(), sim.state.particle_q_prev.numpy(), sim.dt, (0, 0, 0))
+
+
+def test_counts_match_info(capsys):
+    sim = Simulation(defaults("hang-glider"))
+    m, rec = sim.model, sim.model.objects[0]
+    assert (m.particle_count, m.tri_count) == (49, 64)  # the paper's 49 particles and 64 triangles
+    assert len(rec.parts["sail"]) == 45 and len(rec.parts["virtual"]) == 3 and len(rec.parts["pilot"]) == 1
+    assert len(rec.stick_groups["control"]) == 7
+    assert main(["info", "hang-glider"]) == 0
+    out = capsys.readouterr().out
+    assert f"particles {m.particle_count}, sticks {m.stick_count}, triangles {m.tri_count}" in out
+    assert "particles 49, sticks 198, triangles 64" in out  # the paper's, printed beside ours
+
+
+def test_pitch_control_shortens_forward_sticks():
+    rec = Simulation(defaults("hang-glider")).model.objects[0]
+    neutral, pulled = control_rest_lengths(rec, 0.0, 0.0), control_rest_lengths(rec, 1.0, 0.0)
+    k = rec.meta["control_forward_count"]
+    assert (pulled[:k] < neutral[:k]).all() and (pulled[k:] > neutral[k:]).all()
+    with pytest.raises(ValueError, match=r"\[-1, 1\]"):
+        control_rest_lengths(rec, 1.5, 0.0)
+
+
+def test_bar_pulled_in_noses_down_and_speeds_up():
+    _, trim = _glider(0.0)
+    _, dive = _glider(1.0)
+    assert dive["pitch_deg"] < trim["pitch_deg"] - 10.0
+    assert dive["airspeed"] > trim["airspeed"] + 5.0
+    assert dive["pilot_forward"] > trim["pilot_forward"] + 0.2
+
+
+def test_pilot_stays_under_the_sail():
+    sim, state = _glider(0.0, seconds=5.0)
+    assert state["pilot_up"] < -0.8  # hanging below the sail plane
+    q = sim.state.positions()
+    assert np.isfinite(q).all()
+
+
+def test_unknown_control_is_refused():
+    sim = Simulation(defaults("hang-glider"))
+    with pytest.raises(ValueError, match="controls are: pitch, roll"):
+        sim.set_controls(anchor=1.0)

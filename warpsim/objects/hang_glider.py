@@ -1,0 +1,203 @@
+"""Hang glider (paper Section 6, slides 21-24).
+
+* Sail: triangle nose A, left tip B, right tip C, cut into ``divisions**2`` small triangles
+  (paper: 8 divisions -> 45 sail particles, 64 triangles).
+* Frame: three virtual particles above, at and below the sail's centre (slide 22), each tied by sticks
+  to every particle of the two leading edges and of the keel; the sail between stays flexible.
+* Pilot: one heavy particle under the sail on seven control sticks, three to forward frame points and
+  four to aft ones (paper Fig. 14). Steering moves the pilot's target position in the glider's frame
+  and sets the control sticks' rest lengths to the distances from that target to their frame points:
+  ``pitch = +1`` (bar pulled in) moves the pilot forward (forward sticks shorten, aft sticks lengthen:
+  nose down, faster); ``roll`` moves the pilot sideways (``+1`` = towards the right tip, +y is left).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..builder import ModelBuilder
+from ..model import ObjectRecord
+from ..terrain import Heightfield
+
+PAPER_COUNTS = {"particles": 49, "sticks": 198, "triangles": 64}
+
+
+@dataclass
+class HangGliderConfig:
+    """Parameters of the hang glider (defaults: the paper's model, a 10 m, ~14 m^2 glider).
+
+    Attributes:
+        divisions: sail subdivisions per side (paper: 8).
+        span: tip-to-tip distance [m].
+        chord: nose to trailing-edge distance along the keel [m].
+        glider_mass: sail + frame mass [kg] (paper: 20-30), spread over sail and virtual particles.
+        pilot_mass: pilot mass [kg] (paper: 55-70).
+        hang_depth: pilot below the keel [m].
+        pilot_station: pilot's neutral position along the keel, fraction of the chord from the nose.
+        frame_height: distance of the upper/lower virtual particles from the sail plane [m].
+        pitch_travel: pilot travel forward/back at |pitch| = 1 [m].
+        roll_travel: pilot travel sideways at |roll| = 1 [m].
+        altitude: start height of the nose above the terrain [m].
+        position: start (x, y) of the nose [m].
+        heading: flight direction, degrees from +x towards +y.
+        speed: start speed along the heading [m/s].
+        nose_up: start pitch of the keel above horizontal [deg].
+    """
+
+    divisions: int = 8
+    span: float = 10.0
+    chord: float = 2.8
+    glider_mass: float = 25.0
+    pilot_mass: float = 65.0
+    hang_depth: float = 1.2
+    pilot_station: float = 0.62
+    frame_height: float = 0.8
+    pitch_travel: float = 0.4
+    roll_travel: float = 0.4
+    altitude: float = 300.0
+    position: tuple[float, float] = (-300.0, 0.0)
+    heading: float = 0.0
+    speed: float = 12.0
+    nose_up: float = 8.0
+
+
+def _body_axes(heading_deg: float, nose_up_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Forward, left and up unit vectors of the glider at build time."""
+    h, p = np.radians(heading_deg), np.radians(nose_up_deg)
+    fwd = np.array([np.cos(h) * np.cos(p), np.sin(h) * np.cos(p), np.sin(p)])
+    left = np.array([-np.sin(h), np.cos(h), 0.0])
+    up = np.cross(fwd, left)
+    return fwd, left, up
+
+
+def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Heightfield) -> ObjectRecord:
+    """Add the hang glider of ``cfg`` above ``terrain``; returns its record (parts, stick groups, controls)."""
+    n = int(cfg.divisions)
+    if n < 2:
+        raise ValueError(f"divisions must be at least 2, got {n}")
+    fwd, left, up = _body_axes(cfg.heading, cfg.nose_up)
+    x0, y0 = cfg.position
+    nose = np.array([x0, y0, float(terrain.height(x0, y0)) + cfg.altitude])
+    tip_l = nose - cfg.chord * fwd + 0.5 * cfg.span * left
+    tip_r = nose - cfg.chord * fwd - 0.5 * cfg.span * left
+    vel = cfg.speed * np.array([np.cos(np.radians(cfg.heading)), np.sin(np.radians(cfg.heading)), 0.0])
+
+    sail_count = (n + 1) * (n + 2) // 2
+    virtual_mass = 0.1 * cfg.glider_mass / 3.0
+    sail_mass = cfg.glider_mass - 3.0 * virtual_mass
+    p0, s0 = builder.particle_count, builder.stick_count
+    rows, sail_sticks, tris = builder.add_subdivided_triangle(nose, tip_l, tip_r, n, sail_mass, vel)
+    sail = np.arange(p0, p0 + sail_count)
+
+    # frame: leading edges (first/last of each row) and keel (middle of the even rows)
+    leading = sorted({r[0] for r in rows} | {r[-1] for r in rows})
+    keel = [rows[r][r // 2] for r in range(0, n + 1, 2)]
+    frame_points = sorted(set(leading) | set(keel))
+    frame_set = set(frame_points)
+    ends = builder.stick_particles
+    frame_edges = [s for s in sail_sticks if ends[s][0] in frame_set and ends[s][1] in frame_set]
+
+    centre = (nose + tip_l + tip_r) / 3.0
+    virtual = [builder.add_particle(centre + k * cfg.frame_height * up, virtual_mass, vel) for k in (1, 0, -1)]
+    v_sticks = [builder.add_stick(v, p) for v in virtual for p in frame_points]
+    v_sticks += [builder.add_stick(virtual[0], virtual[1]), builder.add_stick(virtual[1], virtual[2])]
+
+    # pilot and control sticks
+    keel_length = cfg.chord
+    neutral = nose - cfg.pilot_station * keel_length * fwd - cfg.hang_depth * up
+    pilot = builder.add_particle(neutral, cfg.pilot_mass, vel)
+    q = n // 3
+    forward_points = [rows[0][0], rows[q][0], rows[q][q]]
+    b = (2 * n) // 3
+    aft_points = [rows[n][n // 2], rows[b][0], rows[b][b], rows[n - 2][(n - 2) // 2]]
+    control = [builder.add_stick(pilot, p) for p in forward_points + aft_points]
+
+    positions = np.array(builder.particle_q)
+    attach = positions[forward_points + aft_points]
+    particles = np.arange(p0, builder.particle_count)
+    return builder.add_object(
+        ObjectRecord(
+            name="hang_glider",
+            kind="hang-glider",
+            particles=particles,
+            parts={"sail": sail, "virtual": np.array(virtual), "pilot": np.array([pilot])},
+            tri_parts={"sail": tris},
+            stick_groups={
+                "sail": np.setdiff1d(sail_sticks, frame_edges),
+                "frame": np.concatenate([np.array(frame_edges, dtype=int), v_sticks]),
+                "control": np.array(control),
+            },
+            meta={
+                "paper_counts": PAPER_COUNTS,
+                "nose": rows[0][0],
+                "keel": np.array(keel),
+                "tips": (rows[n][0], rows[n][n]),
+                "pilot": pilot,
+                "control_sticks": np.array(control),
+                "control_forward_count": len(forward_points),
+                "pilot_attach_frame": _to_frame(attach, nose, fwd, left, up),
+                "pilot_neutral_frame": _to_frame(neutral[None], nose, fwd, left, up)[0],
+                "pitch_travel": cfg.pitch_travel,
+                "roll_travel": cfg.roll_travel,
+                "first_stick": s0,
+            },
+        )
+    )
+
+
+def _to_frame(points: np.ndarray, origin, fwd, left, up) -> np.ndarray:
+    d = points - origin
+    return np.stack([d @ fwd, d @ left, d @ up], axis=1)
+
+
+def control_rest_lengths(record: ObjectRecord, pitch: float, roll: float) -> np.ndarray:
+    """Rest lengths [m] of the control sticks for ``pitch`` and ``roll`` in [-1, 1].
+
+    The pilot's target sits ``pitch * pitch_travel`` forward and ``roll * roll_travel`` to the right of
+    the neutral point (glider frame at build time); each control stick's rest length is the distance
+    from that target to its frame point.
+    """
+    for name, value in (("pitch", pitch), ("roll", roll)):
+        if not -1.0 <= value <= 1.0:
+            raise ValueError(f"{name} must be in [-1, 1], got {value}")
+    m = record.meta
+    target = m["pilot_neutral_frame"] + np.array([pitch * m["pitch_travel"], -roll * m["roll_travel"], 0.0])
+    return np.linalg.norm(m["pilot_attach_frame"] - target, axis=1)
+
+
+def apply_controls(record: ObjectRecord, stick_rest: np.ndarray, values: dict) -> None:
+    """Write the control sticks' rest lengths for ``values['pitch']``/``values['roll']`` into ``stick_rest``."""
+    rest = control_rest_lengths(record, float(values.get("pitch", 0.0)), float(values.get("roll", 0.0)))
+    stick_rest[record.meta["control_sticks"]] = rest
+
+
+def flight_state(record: ObjectRecord, q: np.ndarray, q_prev: np.ndarray, dt: float, wind) -> dict:
+    """Diagnostics: nose pitch angle [deg], bank [deg], airspeed [m/s], pilot offset [m] in the sail frame."""
+    m = record.meta
+    nose = q[m["nose"]]
+    keel_end = q[m["keel"][-1]]
+    tip_l, tip_r = q[m["tips"][0]], q[m["tips"][1]]
+    keel_dir = nose - keel_end
+    pitch = np.degrees(np.arctan2(keel_dir[2], np.linalg.norm(keel_dir[:2])))
+    span_dir = tip_l - tip_r
+    bank = np.degrees(np.arctan2(span_dir[2], np.linalg.norm(span_dir[:2])))
+    sail = record.parts["sail"]
+    velocity = (q[sail] - q_prev[sail]).mean(axis=0) / dt
+    airspeed = float(np.linalg.norm(velocity - np.asarray(wind)))
+    fwd = keel_dir / np.linalg.norm(keel_dir)
+    left = span_dir / np.linalg.norm(span_dir)
+    up = np.cross(fwd, left)
+    up /= np.linalg.norm(up)
+    pilot = q[m["pilot"]] - q[sail].mean(axis=0)
+    return {
+        "pitch_deg": float(pitch),
+        "bank_deg": float(bank),
+        "airspeed": airspeed,
+        "velocity": velocity,
+        "pilot_forward": float(pilot @ fwd),
+        "pilot_left": float(pilot @ left),
+        "pilot_up": float(pilot @ up),
+        "altitude": float(q[sail][:, 2].mean()),
+    }

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from . import hang_glider
+from . import hang_glider, parachute
 from .flag import FlagConfig, build_flag
 
 
@@ -69,6 +69,25 @@ OBJECTS: dict[str, ObjectSpec] = {
         summary="triangular sail, rigid frame, pilot on control sticks (paper Section 6); steer with pitch/roll",
         controls=("pitch", "roll"),
         apply_controls=hang_glider.apply_controls,
+    ),
+    "parachute": ObjectSpec(
+        config=parachute.ParachuteConfig,
+        build=parachute.build_parachute,
+        scene_defaults={"wind": {"velocity": [0.0, 0.0, 0.0]}},
+        bounds={
+            "rings": (1, 64, True),
+            "radius": POSITIVE,
+            "dome_angle": (0.0, 90.0, False),
+            "canopy_mass": POSITIVE,
+            "person_mass": POSITIVE,
+            "line_count": (3, 1024, True),
+            "line_particles": (0, 64, True),
+            "line_length": POSITIVE,
+            "line_mass": POSITIVE,
+            "altitude": POSITIVE,
+            "speed": (0.0, None, True),
+        },
+        summary="round canopy of rings, lines, heavy person; hoop = true keeps it open (paper Section 8)",
     ),
 }
 

@@ -1,0 +1,50 @@
+"""The parachute of Section 8: without the rim hoop it closes, with it it stays open and falls slower."""
+
+import numpy as np
+import pytest
+
+from warpsim.descriptor import defaults
+from warpsim.objects.parachute import projected_radius
+from warpsim.runner import Simulation
+
+
+def _drop(hoop: bool, seconds: float = 6.0):
+    d = defaults("parachute")
+    d["parachute"]["hoop"] = hoop
+    sim = Simulation(d)
+    rec = sim.model.objects[0]
+    radii = []
+    for _ in range(int(seconds)):
+        sim.step(100)
+        radii.append(projected_radius(rec, sim.state.positions()))
+    descent = -sim.state.velocities(sim.dt)[rec.meta["person"], 2]
+    return sim, np.array(radii), float(descent)
+
+
+@pytest.fixture(scope="module")
+def drops():
+    return {hoop: _drop(hoop) for hoop in (True, False)}
+
+
+def test_canopy_counts(drops):
+    sim = drops[True][0]
+    rec = sim.model.objects[0]
+    assert len(rec.parts["canopy"]) == 1 + 3 * 6 * 7  # centre + rings of 6, 12, ..., 36
+    assert len(rec.tri_parts["canopy"]) == 6 * 6**2  # 216 triangles
+    assert sim.model.tri_count == 216
+
+
+def test_without_hoop_the_canopy_closes(drops):
+    _, radii, _ = drops[False]
+    assert radii[-1] < 0.5 * 3.5, f"radius {radii[-1]:.2f} m"
+
+
+def test_with_hoop_the_canopy_stays_open(drops):
+    _, radii, _ = drops[True]
+    assert radii.min() > 0.6 * 3.5, f"radius {radii.min():.2f} m"
+
+
+def test_hoop_slows_the_descent(drops):
+    open_descent, closed_descent = drops[True][2], drops[False][2]
+    assert 0.0 < open_descent < closed_descent - 2.0
+    assert np.isfinite(drops[True][0].state.positions()).all()

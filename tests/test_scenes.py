@@ -1,0 +1,49 @@
+"""Every scene file runs; bad descriptors give one clear message naming the file and key."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from warpsim.cli import main
+from warpsim.descriptor import load_text, resolve
+from warpsim.runner import Simulation
+
+SCENES = sorted((Path(__file__).resolve().parent.parent / "scenes").glob("*.toml"))
+
+
+def test_there_are_scenes():
+    assert {p.stem for p in SCENES} >= {"flag", "hang_glider", "parachute", "parachute_no_hoop"}
+
+
+@pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
+def test_scene_runs_two_seconds_without_nan(path):
+    descriptor, _, where = resolve(str(path))
+    sim = Simulation(descriptor, where=where)
+    sim.step(int(round(2.0 / sim.dt)))
+    assert np.isfinite(sim.state.positions()).all()
+
+
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        ("[flag]\nresolutoin = 4\n", "unknown key flag.resolutoin (did you mean 'resolution'?)"),
+        ("[flag]\nresolution = 'four'\n", "flag.resolution must be a whole number"),
+        ("[flag]\nresolution = 0\n", "flag.resolution = 0 must be >= 2"),
+        ("[flag]\nmass_per_area = -1.0\n", "flag.mass_per_area = -1.0 must be > 0.0"),
+        ('[scene]\nobject = "kitten"\n', "scene.object = 'kitten' is not one of"),
+        ('[air]\nmodel = "magic"\n', "air.model = 'magic' is not one of paper, plate"),
+        ("[solvr]\ndt = 0.01\n", "unknown section [solvr] (did you mean 'solver'?)"),
+        ("[solver\n", "not valid TOML"),
+        ('[scene]\nobject = "parachute"\n[parachute]\nperson_mass = -80.0\n', "parachute.person_mass"),
+    ],
+)
+def test_bad_descriptor_messages(tmp_path, capsys, text, expected):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match="bad.toml"):
+        load_text(text, str(path))
+    assert main(["run", str(path), "--seconds", "0.1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert expected in err and str(path) in err
+    assert len(err.splitlines()) == 1

@@ -1,0 +1,167 @@
+"""Round parachute (paper Section 8): canopy of concentric rings of triangles, lines, a heavy person.
+
+The canopy is a spherical cap: a centre particle and ``rings`` rings, ring ``i`` holding ``6 i``
+particles (paper Fig. 19: six rings). Suspension lines run from evenly spaced rim particles to the
+person, built like the kite rope at a lower resolution. Without air pressure in the model the person's
+weight pulls the rim shut (Section 8.2); ``hoop = true`` adds the paper's fix (Section 8.3): a virtual
+particle at the rim's centre tied to every rim particle, plus sticks skipping one rim particle, which
+together make the rim a rigid hoop.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..builder import ModelBuilder
+from ..model import ObjectRecord
+from ..terrain import Heightfield
+
+
+@dataclass
+class ParachuteConfig:
+    """Parameters of the round parachute.
+
+    Attributes:
+        rings: canopy rings (paper: 6).
+        radius: horizontal radius of the built canopy rim [m].
+        dome_angle: polar angle of the rim on the canopy's sphere [deg] (90 = hemisphere).
+        canopy_mass: canopy fabric mass [kg].
+        person_mass: person (and harness) mass [kg].
+        line_count: suspension lines.
+        line_particles: particles per line between rim and person (lower resolution than the kite rope).
+        line_length: rim-to-person distance [m].
+        line_mass: mass of all lines together [kg].
+        hoop: add the rim hoop of Section 8.3.
+        altitude: start height of the canopy apex above the terrain [m].
+        position: start (x, y) [m].
+        speed: start descent speed [m/s].
+    """
+
+    rings: int = 6
+    radius: float = 3.5
+    dome_angle: float = 60.0
+    canopy_mass: float = 8.0
+    person_mass: float = 80.0
+    line_count: int = 12
+    line_particles: int = 3
+    line_length: float = 7.0
+    line_mass: float = 1.0
+    hoop: bool = True
+    altitude: float = 400.0
+    position: tuple[float, float] = (0.0, 0.0)
+    speed: float = 5.0
+
+
+def _zip_rings(inner: list[int], inner_angles: np.ndarray, outer: list[int], outer_angles: np.ndarray):
+    """Triangles joining two closed rings (both starting at angle 0), walking both in angle order."""
+    ni, no = len(inner), len(outer)
+    if ni == 1:
+        return [(inner[0], outer[j], outer[(j + 1) % no]) for j in range(no)]
+
+    def angle(angles, k, count):
+        return angles[k % count] + 2 * np.pi * (k // count)
+
+    tris, i, j = [], 0, 0
+    while i < ni or j < no:
+        advance_outer = i >= ni or (j < no and angle(outer_angles, j + 1, no) <= angle(inner_angles, i + 1, ni))
+        if advance_outer:
+            tris.append((inner[i % ni], outer[j % no], outer[(j + 1) % no]))
+            j += 1
+        else:
+            tris.append((inner[i % ni], outer[j % no], inner[(i + 1) % ni]))
+            i += 1
+    return tris
+
+
+def build_parachute(builder: ModelBuilder, cfg: ParachuteConfig, terrain: Heightfield) -> ObjectRecord:
+    """Add the parachute of ``cfg`` above ``terrain``; returns its record."""
+    if cfg.rings < 1:
+        raise ValueError(f"rings must be at least 1, got {cfg.rings}")
+    if cfg.line_count < 3 or cfg.line_particles < 0:
+        raise ValueError("a parachute needs at least 3 lines and line_particles >= 0")
+    x0, y0 = cfg.position
+    apex = np.array([x0, y0, float(terrain.height(x0, y0)) + cfg.altitude])
+    theta_max = np.radians(cfg.dome_angle)
+    sphere = cfg.radius / np.sin(theta_max)
+    centre = apex - np.array([0.0, 0.0, sphere])
+    vel = (0.0, 0.0, -cfg.speed)
+    particle_count = 1 + 3 * cfg.rings * (cfg.rings + 1)
+    m = cfg.canopy_mass / particle_count
+    p0, t0, s0 = builder.particle_count, builder.tri_count, builder.stick_count
+
+    rings = [[builder.add_particle(apex, m, vel)]]
+    angles = [np.zeros(1)]
+    for i in range(1, cfg.rings + 1):
+        theta = theta_max * i / cfg.rings
+        phi = 2 * np.pi * np.arange(6 * i) / (6 * i)
+        pts = centre + sphere * np.stack(
+            [np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.full_like(phi, np.cos(theta))], axis=1
+        )
+        rings.append([builder.add_particle(p, m, vel) for p in pts])
+        angles.append(phi)
+    edges = set()
+    for i in range(1, cfg.rings + 1):
+        for tri in _zip_rings(rings[i - 1], angles[i - 1], rings[i], angles[i]):
+            builder.add_triangle(*tri)
+            for a, b in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
+                edges.add((min(a, b), max(a, b)))
+    for a, b in sorted(edges):
+        builder.add_stick(a, b)
+    canopy_sticks = np.arange(s0, builder.stick_count)
+    rim = rings[-1]
+
+    rim_centre = centre + np.array([0.0, 0.0, sphere * np.cos(theta_max)])
+    person_pos = rim_centre - np.array([0.0, 0.0, cfg.line_length])
+    person = builder.add_particle(person_pos, cfg.person_mass, vel)
+    line_particles, line_sticks = [], []
+    per_line_mass = cfg.line_mass / (cfg.line_count * max(cfg.line_particles, 1))
+    for k in range(cfg.line_count):
+        top = rim[int(round(k * len(rim) / cfg.line_count)) % len(rim)]
+        start = np.array(builder.particle_q[top])
+        if cfg.line_particles:
+            end = start + (person_pos - start) * (cfg.line_particles / (cfg.line_particles + 1))
+            ids, sticks = builder.add_rope(start, end, cfg.line_particles, per_line_mass * cfg.line_particles, vel, top)
+            line_particles += list(ids[1:])
+            line_sticks += list(sticks)
+            last = ids[-1]
+        else:
+            last = top
+        line_sticks.append(builder.add_stick(last, person))
+
+    virtual, hoop_sticks = [], []
+    if cfg.hoop:
+        hub = builder.add_particle(rim_centre, 0.05 * cfg.canopy_mass, vel)
+        virtual.append(hub)
+        n = len(rim)
+        hoop_sticks = [builder.add_stick(hub, r) for r in rim]
+        hoop_sticks += [builder.add_stick(rim[k], rim[(k + 2) % n]) for k in range(n)]
+
+    return builder.add_object(
+        ObjectRecord(
+            name="parachute",
+            kind="parachute",
+            particles=np.arange(p0, builder.particle_count),
+            parts={
+                "canopy": np.arange(p0, p0 + particle_count),
+                "lines": np.array(line_particles, dtype=int),
+                "person": np.array([person]),
+                "virtual": np.array(virtual, dtype=int),
+            },
+            tri_parts={"canopy": np.arange(t0, builder.tri_count)},
+            stick_groups={
+                "canopy": canopy_sticks,
+                "lines": np.array(line_sticks),
+                "hoop": np.array(hoop_sticks, dtype=int),
+            },
+            meta={"rim": np.array(rim), "built_radius": cfg.radius, "person": person},
+        )
+    )
+
+
+def projected_radius(record: ObjectRecord, q: np.ndarray) -> float:
+    """Mean horizontal distance [m] of the rim particles from their centroid."""
+    rim = q[record.meta["rim"]]
+    d = rim[:, :2] - rim[:, :2].mean(axis=0)
+    return float(np.linalg.norm(d, axis=1).mean())

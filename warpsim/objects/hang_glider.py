@@ -87,7 +87,7 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
     sail_count = (n + 1) * (n + 2) // 2
     virtual_mass = 0.1 * cfg.glider_mass / 3.0
     sail_mass = cfg.glider_mass - 3.0 * virtual_mass
-    p0, s0 = builder.particle_count, builder.stick_count
+    p0 = builder.particle_count
     rows, sail_sticks, tris = builder.add_subdivided_triangle(nose, tip_l, tip_r, n, sail_mass, vel)
     sail = np.arange(p0, p0 + sail_count)
 
@@ -105,8 +105,7 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
     v_sticks += [builder.add_stick(virtual[0], virtual[1]), builder.add_stick(virtual[1], virtual[2])]
 
     # pilot and control sticks
-    keel_length = cfg.chord
-    neutral = nose - cfg.pilot_station * keel_length * fwd - cfg.hang_depth * up
+    neutral = nose - cfg.pilot_station * cfg.chord * fwd - cfg.hang_depth * up
     pilot = builder.add_particle(neutral, cfg.pilot_mass, vel)
     q = n // 3
     forward_points = [rows[0][0], rows[q][0], rows[q][q]]
@@ -141,7 +140,6 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
                 "pilot_neutral_frame": _to_frame(neutral[None], nose, fwd, left, up)[0],
                 "pitch_travel": cfg.pitch_travel,
                 "roll_travel": cfg.roll_travel,
-                "first_stick": s0,
             },
         )
     )

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import warp as wp
@@ -34,6 +34,7 @@ class ModelBuilder:
         self.particle_world: list[int] = []
         self.stick_particles: list[tuple[int, int]] = []
         self.stick_rest: list[float] = []
+        self.stick_weight: list[float] = []
         self.tri_indices: list[tuple[int, int, int]] = []
         self.nail_particles: list[int] = []
         self.nail_target: list[Sequence[float]] = []
@@ -70,9 +71,14 @@ class ModelBuilder:
         self.particle_world.append(self.current_world)
         return self.particle_count - 1
 
-    def add_stick(self, i: int, j: int, rest: float | None = None) -> int:
+    def add_stick(self, i: int, j: int, rest: float | None = None, weight: float = 1.0) -> int:
         """Add a distance constraint between particles ``i`` and ``j``; ``rest`` [m] defaults to their
-        current distance. Returns the stick index."""
+        current distance. Returns the stick index.
+
+        ``weight`` (> 0, default 1) is the stick's share in the per-particle average of corrections: a
+        stick of weight 2 counts exactly like two identical sticks, the paper's way of stiffening its
+        kite rope ("des tiges ont été doublées", Section 7.2) without the cost of a second stick.
+        """
         n = self.particle_count
         if not (0 <= i < n and 0 <= j < n) or i == j:
             raise ValueError(f"stick ({i}, {j}) needs two distinct particles among 0..{n - 1}")
@@ -80,8 +86,11 @@ class ModelBuilder:
             rest = float(np.linalg.norm(np.subtract(self.particle_q[j], self.particle_q[i])))
         if not rest > 0.0:
             raise ValueError(f"stick ({i}, {j}) rest length must be positive, got {rest}")
+        if not (np.isfinite(weight) and weight > 0.0):
+            raise ValueError(f"stick ({i}, {j}) weight must be positive and finite, got {weight}")
         self.stick_particles.append((int(i), int(j)))
         self.stick_rest.append(float(rest))
+        self.stick_weight.append(float(weight))
         return self.stick_count - 1
 
     def add_triangle(self, i: int, j: int, k: int) -> int:
@@ -147,13 +156,15 @@ class ModelBuilder:
         return ids, np.arange(s0, self.stick_count), np.arange(t0, self.tri_count)
 
     def add_subdivided_triangle(
-        self, a, b, c, divisions: int, mass: float, vel=(0.0, 0.0, 0.0)
+        self, a, b, c, divisions: int, mass: float, vel=(0.0, 0.0, 0.0), shape: Callable | None = None
     ) -> tuple[list[list[int]], np.ndarray, np.ndarray]:
         """A triangle A, B, C [m] cut into ``divisions**2`` small triangles (paper Fig. 12).
 
         Row ``r`` (0..divisions) runs from the point on AB to the point on AC at fraction ``r/divisions``
         from A; it holds ``r + 1`` particles. ``mass`` [kg] is spread evenly over the
         ``(divisions+1)(divisions+2)/2`` particles. A stick on every edge of every small triangle.
+        ``shape(points [k, 3]) -> points`` may move the flat points (e.g. to twist a sail) before the
+        particles and sticks are made, so that the rest lengths are those of the shaped surface.
 
         Returns ``(rows, sticks, triangles)``: ``rows[r][k]`` particle indices and index arrays.
         """
@@ -166,9 +177,10 @@ class ModelBuilder:
         for r in range(divisions + 1):
             left = a + (b - a) * (r / divisions)
             right = a + (c - a) * (r / divisions)
-            rows.append(
-                [self.add_particle(left + (right - left) * (k / r if r else 0.0), m, vel) for k in range(r + 1)]
-            )
+            points = np.array([left + (right - left) * (k / r if r else 0.0) for k in range(r + 1)])
+            if shape is not None:
+                points = np.asarray(shape(points), dtype=np.float64)
+            rows.append([self.add_particle(p, m, vel) for p in points])
         s0, t0 = self.stick_count, self.tri_count
         for r in range(divisions):
             for k in range(r + 1):
@@ -182,12 +194,20 @@ class ModelBuilder:
         return rows, np.arange(s0, self.stick_count), np.arange(t0, self.tri_count)
 
     def add_rope(
-        self, start, end, count: int, mass: float, vel=(0.0, 0.0, 0.0), first: int | None = None
+        self,
+        start,
+        end,
+        count: int,
+        mass: float,
+        vel=(0.0, 0.0, 0.0),
+        first: int | None = None,
+        weight: float = 1.0,
     ) -> tuple[np.ndarray, np.ndarray]:
         """A rope of ``count`` new particles from ``start`` to ``end`` [m], sticks in a chain.
 
         ``mass`` [kg] is the rope's total. If ``first`` is given, the chain starts from that existing
         particle (placed at ``start``) and the ``count`` new particles follow it up to ``end``.
+        ``weight`` is the sticks' weight in the constraint average (see :meth:`add_stick`).
 
         Returns ``(particles, sticks)`` (``particles`` includes ``first`` when given).
         """
@@ -202,7 +222,7 @@ class ModelBuilder:
             ids.append(self.add_particle(start + (end - start) * ((k + offset) / steps), m, vel))
         s0 = self.stick_count
         for p, q in zip(ids[:-1], ids[1:], strict=True):
-            self.add_stick(p, q)
+            self.add_stick(p, q, weight=weight)
         return np.array(ids), np.arange(s0, self.stick_count)
 
     # ------------------------------------------------------------------ whole model
@@ -248,6 +268,11 @@ class ModelBuilder:
         m.stick_particles_np = sticks
         m.stick_particles = wp.array(sticks, dtype=wp.vec2i, device=device)
         m.stick_rest = wp.array(np.array(self.stick_rest, dtype=np.float32), dtype=wp.float32, device=device)
+        weight = np.array(self.stick_weight, dtype=np.float32)
+        m.stick_weight = wp.array(weight, dtype=wp.float32, device=device)
+        weight_sum = np.zeros(n, dtype=np.float64)
+        np.add.at(weight_sum, sticks.reshape(-1), np.repeat(weight.astype(np.float64), 2))
+        m.particle_stick_weight = weight_sum
         stick_ids = np.arange(len(sticks), dtype=np.int32)
         start, refs = _csr(sticks.reshape(-1), np.stack([2 * stick_ids, 2 * stick_ids + 1], axis=1).reshape(-1), n)
         m.particle_stick_start = wp.array(start, dtype=wp.int32, device=device)

@@ -4,7 +4,8 @@ A scene is an object + terrain + wind + solver settings (+ control schedules). E
 so a descriptor only lists what it changes. Sections and keys (``warpsim info SCENE`` prints them all):
 
 * ``[scene]`` ``object`` (flag, hang-glider, kite, parachute), ``seconds``, ``fps``
-* ``[solver]`` ``method`` (verlet | euler), ``dt`` [s], ``iterations``, ``relaxation``, ``damping``,
+* ``[solver]`` ``method`` (verlet | euler), ``dt`` [s], ``iterations``, ``relaxation``, ``chebyshev``,
+  ``mass_splitting``, ``damping``,
   ``spring_stiffness`` [N/m], ``spring_damping`` [N s/m] (euler only)
 * ``[air]`` ``model`` (paper | plate), ``scale``, ``density`` [kg/m^3]
 * ``[wind]`` ``velocity`` [m/s, 3 numbers], ``shear_exponent``, ``reference_height`` [m]
@@ -50,6 +51,7 @@ BOUNDS = {
     ("solver", "dt"): (0.0, None, False),
     ("solver", "iterations"): (1, 10000, True),
     ("solver", "relaxation"): (0.0, 2.0, False),
+    ("solver", "chebyshev"): (0.0, 0.999, True),
     ("solver", "damping"): (0.0, 1.0, True),
     ("solver", "spring_stiffness"): (0.0, None, False),
     ("solver", "spring_damping"): (0.0, None, True),
@@ -66,6 +68,8 @@ BASE_DEFAULTS: dict[str, dict[str, Any]] = {
         "dt": 0.01,
         "iterations": 55,
         "relaxation": 1.0,
+        "chebyshev": 0.95,
+        "mass_splitting": False,
         "damping": 0.0,
         "spring_stiffness": 5000.0,
         "spring_damping": 5.0,

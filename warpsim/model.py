@@ -59,6 +59,8 @@ class Model:
         particle_q0, particle_qd0: host ``[particle_count, 3]`` build positions [m] and velocities [m/s].
         stick_particles: ``[stick_count]`` vec2i, the two particle indices of each stick.
         stick_rest: ``[stick_count]`` rest lengths [m] as built (``Control.stick_rest`` starts from them).
+        stick_weight: ``[stick_count]`` weight of each stick in the per-particle average (1 = the paper).
+        particle_stick_weight: host ``[particle_count]`` summed weight of each particle's sticks.
         tri_indices: ``[tri_count]`` vec3i triangle vertices.
         particle_stick_start, particle_stick_refs: CSR adjacency particle -> ``2*stick + end``.
         particle_tri_start, particle_tri_ids: CSR adjacency particle -> triangle.
@@ -100,6 +102,25 @@ class Model:
                 device=self.device,
             ),
             wind=wp.zeros(self.world_count, dtype=wp.vec3, device=self.device),
+        )
+
+    def constraint_weights(self, mass_splitting: bool) -> tuple[wp.array, wp.array]:
+        """Per-particle factors of the Jacobi constraint solver, ``(share, scale)`` ``[particle_count]``.
+
+        A stick ``(a, b)`` splits its error in proportion to ``share``; particle ``a`` moves by ``scale_a``
+        times the sum of its sticks' deltas. Plain averaging (the paper): ``share = w`` (inverse mass),
+        ``scale = w / n`` (``n`` = summed stick weight). Mass splitting: ``share = w n``, ``scale = w``.
+        See :mod:`warpsim.kernels.constraints`.
+        """
+        w = self.particle_inv_mass.numpy().astype(np.float64)
+        n = self.particle_stick_weight
+        if mass_splitting:
+            share, scale = w * n, w
+        else:
+            share, scale = w, np.divide(w, n, out=np.zeros_like(w), where=n > 0)
+        return (
+            wp.array(share.astype(np.float32), dtype=wp.float32, device=self.device),
+            wp.array(scale.astype(np.float32), dtype=wp.float32, device=self.device),
         )
 
     def stick_lengths(self, positions: np.ndarray) -> np.ndarray:

@@ -142,6 +142,8 @@ class Simulation:
                 self.model,
                 iterations=solver_cfg["iterations"],
                 relaxation=solver_cfg["relaxation"],
+                chebyshev=solver_cfg["chebyshev"],
+                mass_splitting=solver_cfg["mass_splitting"],
                 damping=solver_cfg["damping"],
                 air=air,
                 ground=ground,

@@ -44,6 +44,13 @@ class HangGliderConfig:
         heading: flight direction, degrees from +x towards +y.
         speed: start speed along the heading [m/s].
         nose_up: start pitch of the keel above horizontal [deg].
+        washout: twist of the sail towards the tips [deg]: at the tips the sail behind the leading edge
+            is raised by this angle, growing linearly from 0 at the keel (real sails twist this way;
+            it is what lets a swept wing trim with its centre of mass ahead of the sail's centre).
+        frame_mass_fraction: share of ``glider_mass`` carried by the leading-edge and keel particles
+            (the tubes); the rest minus the virtual particles' 10 % is spread over the sail cloth.
+        frame_weight: weight of the virtual particles' sticks in the constraint average (1 = the
+            paper; 3 counts each as three sticks, keeping the frame within 1 % under the pilot's load).
     """
 
     divisions: int = 8
@@ -52,8 +59,8 @@ class HangGliderConfig:
     glider_mass: float = 25.0
     pilot_mass: float = 65.0
     hang_depth: float = 1.2
-    pilot_station: float = 0.62
-    frame_height: float = 0.8
+    pilot_station: float = 0.55
+    frame_height: float = 1.5
     pitch_travel: float = 0.4
     roll_travel: float = 0.4
     altitude: float = 300.0
@@ -61,6 +68,9 @@ class HangGliderConfig:
     heading: float = 0.0
     speed: float = 12.0
     nose_up: float = 8.0
+    washout: float = 10.0
+    frame_mass_fraction: float = 0.6
+    frame_weight: float = 6.0
 
 
 def _body_axes(heading_deg: float, nose_up_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -86,9 +96,17 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
 
     sail_count = (n + 1) * (n + 2) // 2
     virtual_mass = 0.1 * cfg.glider_mass / 3.0
-    sail_mass = cfg.glider_mass - 3.0 * virtual_mass
+    semi = 0.5 * cfg.span
+    tan_max = np.radians(cfg.washout)
+
+    def twist(points: np.ndarray) -> np.ndarray:
+        d = points - nose
+        y = np.abs(d @ left)
+        behind_edge = np.maximum(-cfg.chord * y / semi - d @ fwd, 0.0)
+        return points + np.outer(behind_edge * np.tan(tan_max * y / semi), up)
+
     p0 = builder.particle_count
-    rows, sail_sticks, tris = builder.add_subdivided_triangle(nose, tip_l, tip_r, n, sail_mass, vel)
+    rows, sail_sticks, tris = builder.add_subdivided_triangle(nose, tip_l, tip_r, n, 1.0, vel, shape=twist)
     sail = np.arange(p0, p0 + sail_count)
 
     # frame: leading edges (first/last of each row) and keel (middle of the even rows)
@@ -96,13 +114,22 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
     keel = [rows[r][r // 2] for r in range(0, n + 1, 2)]
     frame_points = sorted(set(leading) | set(keel))
     frame_set = set(frame_points)
+    cloth = [p for p in sail if p not in frame_set]
+    frame_mass = cfg.frame_mass_fraction * cfg.glider_mass
+    for p in frame_points:
+        builder.particle_mass[p] = frame_mass / len(frame_points)
+    for p in cloth:
+        builder.particle_mass[p] = (cfg.glider_mass - frame_mass - 3.0 * virtual_mass) / len(cloth)
     ends = builder.stick_particles
     frame_edges = [s for s in sail_sticks if ends[s][0] in frame_set and ends[s][1] in frame_set]
+    for s in frame_edges:
+        builder.stick_weight[s] = cfg.frame_weight
 
     centre = (nose + tip_l + tip_r) / 3.0
     virtual = [builder.add_particle(centre + k * cfg.frame_height * up, virtual_mass, vel) for k in (1, 0, -1)]
-    v_sticks = [builder.add_stick(v, p) for v in virtual for p in frame_points]
-    v_sticks += [builder.add_stick(virtual[0], virtual[1]), builder.add_stick(virtual[1], virtual[2])]
+    fw = cfg.frame_weight
+    v_sticks = [builder.add_stick(v, p, weight=fw) for v in virtual for p in frame_points]
+    v_sticks += [builder.add_stick(virtual[k], virtual[k + 1], weight=fw) for k in (0, 1)]
 
     # pilot and control sticks
     neutral = nose - cfg.pilot_station * cfg.chord * fwd - cfg.hang_depth * up
@@ -110,7 +137,7 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
     q = n // 3
     forward_points = [rows[0][0], rows[q][0], rows[q][q]]
     b = (2 * n) // 3
-    aft_points = [rows[n][n // 2], rows[b][0], rows[b][b], rows[n - 2][(n - 2) // 2]]
+    aft_points = [rows[n][n // 2], rows[b][0], rows[b][b], virtual[2]]
     control = [builder.add_stick(pilot, p) for p in forward_points + aft_points]
 
     positions = np.array(builder.particle_q)

@@ -34,6 +34,10 @@ class ParachuteConfig:
         line_length: rim-to-person distance [m].
         line_mass: mass of all lines together [kg].
         hoop: add the rim hoop of Section 8.3.
+        hoop_weight: weight of the hoop's sticks in the constraint average (1 = the paper; the paper's
+            own way to stiffen a part is to double its sticks, weight 2).
+        line_weight: weight of the line sticks (the paper doubles the kite rope's sticks for the same
+            reason: light line particles under a heavy load stretch).
         altitude: start height of the canopy apex above the terrain [m].
         position: start (x, y) [m].
         speed: start descent speed [m/s].
@@ -49,6 +53,8 @@ class ParachuteConfig:
     line_length: float = 7.0
     line_mass: float = 1.0
     hoop: bool = True
+    hoop_weight: float = 6.0
+    line_weight: float = 1.0
     altitude: float = 400.0
     position: tuple[float, float] = (0.0, 0.0)
     speed: float = 5.0
@@ -122,21 +128,23 @@ def build_parachute(builder: ModelBuilder, cfg: ParachuteConfig, terrain: Height
         start = np.array(builder.particle_q[top])
         if cfg.line_particles:
             end = start + (person_pos - start) * (cfg.line_particles / (cfg.line_particles + 1))
-            ids, sticks = builder.add_rope(start, end, cfg.line_particles, per_line_mass * cfg.line_particles, vel, top)
+            ids, sticks = builder.add_rope(
+                start, end, cfg.line_particles, per_line_mass * cfg.line_particles, vel, top, weight=cfg.line_weight
+            )
             line_particles += list(ids[1:])
             line_sticks += list(sticks)
             last = ids[-1]
         else:
             last = top
-        line_sticks.append(builder.add_stick(last, person))
+        line_sticks.append(builder.add_stick(last, person, weight=cfg.line_weight))
 
     virtual, hoop_sticks = [], []
     if cfg.hoop:
         hub = builder.add_particle(rim_centre, 0.05 * cfg.canopy_mass, vel)
         virtual.append(hub)
         n = len(rim)
-        hoop_sticks = [builder.add_stick(hub, r) for r in rim]
-        hoop_sticks += [builder.add_stick(rim[k], rim[(k + 2) % n]) for k in range(n)]
+        hoop_sticks = [builder.add_stick(hub, r, weight=cfg.hoop_weight) for r in rim]
+        hoop_sticks += [builder.add_stick(rim[k], rim[(k + 2) % n], weight=cfg.hoop_weight) for k in range(n)]
 
     return builder.add_object(
         ObjectRecord(

@@ -59,3 +59,37 @@ def test_unknown_control_is_refused():
     sim = Simulation(defaults("hang-glider"))
     with pytest.raises(ValueError, match="controls are: pitch, roll"):
         sim.set_controls(anchor=1.0)
+
+
+def test_frame_within_one_percent_over_ten_seconds():
+    d = defaults("hang-glider")
+    d["air"]["model"] = "plate"
+    sim = Simulation(d)
+    frame = sim.model.objects[0].stick_groups["frame"]
+    worst = 0.0
+    for _ in range(100):
+        sim.step(10)
+        worst = max(worst, np.abs(sim.model.stick_stretch(sim.state.positions())[frame]).max())
+    assert sim.solver.iterations == 55
+    assert worst < 0.01, f"frame stretch {100 * worst:.2f}%"
+
+
+@pytest.mark.parametrize("roll", [-1.0, 1.0])
+def test_roll_tilts_the_sail_to_the_pilots_side(roll):
+    d = defaults("hang-glider")
+    d["air"]["model"] = "plate"
+    sim = Simulation(d)
+    sim.set_controls(roll=roll)
+    sim.step(100)
+    rec = sim.model.objects[0]
+    state = flight_state(rec, sim.state.positions(), sim.state.particle_q_prev.numpy(), sim.dt, (0, 0, 0))
+    # roll = +1 moves the pilot to the right (-left); bank > 0 means the right tip is lower
+    assert np.sign(state["pilot_left"]) == -roll and abs(state["pilot_left"]) > 0.3
+    assert roll * state["bank_deg"] > 3.0
+
+
+@pytest.mark.xfail(strict=True, reason="pushed out, the flat-plate glider stalls and falls tail first (README)")
+def test_bar_pushed_out_slows_down():
+    _, trim = _glider(0.0)
+    _, slow = _glider(-1.0)
+    assert slow["airspeed"] < trim["airspeed"]

@@ -156,7 +156,15 @@ class ModelBuilder:
         return ids, np.arange(s0, self.stick_count), np.arange(t0, self.tri_count)
 
     def add_subdivided_triangle(
-        self, a, b, c, divisions: int, mass: float, vel=(0.0, 0.0, 0.0), shape: Callable | None = None
+        self,
+        a,
+        b,
+        c,
+        divisions: int,
+        mass: float,
+        vel=(0.0, 0.0, 0.0),
+        shape: Callable | None = None,
+        last_row: Sequence[int] | None = None,
     ) -> tuple[list[list[int]], np.ndarray, np.ndarray]:
         """A triangle A, B, C [m] cut into ``divisions**2`` small triangles (paper Fig. 12).
 
@@ -165,6 +173,8 @@ class ModelBuilder:
         ``(divisions+1)(divisions+2)/2`` particles. A stick on every edge of every small triangle.
         ``shape(points [k, 3]) -> points`` may move the flat points (e.g. to twist a sail) before the
         particles and sticks are made, so that the rest lengths are those of the shaped surface.
+        ``last_row`` (``divisions + 1`` existing particles, from B to C) joins the triangle to an existing
+        mesh along BC: those particles are used instead of new ones (``mass`` then spreads over the new).
 
         Returns ``(rows, sticks, triangles)``: ``rows[r][k]`` particle indices and index arrays.
         """
@@ -172,9 +182,16 @@ class ModelBuilder:
             raise ValueError(f"a subdivided triangle needs at least 1 division, got {divisions}")
         a, b, c = (np.asarray(p, dtype=np.float64) for p in (a, b, c))
         count = (divisions + 1) * (divisions + 2) // 2
+        if last_row is not None:
+            if len(last_row) != divisions + 1:
+                raise ValueError(f"last_row needs {divisions + 1} particles, got {len(last_row)}")
+            count -= divisions + 1
         m = mass / count
         rows = []
         for r in range(divisions + 1):
+            if r == divisions and last_row is not None:
+                rows.append([int(p) for p in last_row])
+                break
             left = a + (b - a) * (r / divisions)
             right = a + (c - a) * (r / divisions)
             points = np.array([left + (right - left) * (k / r if r else 0.0) for k in range(r + 1)])

@@ -8,11 +8,14 @@ so a descriptor only lists what it changes. Sections and keys (``warpsim info SC
   ``mass_splitting``, ``damping``,
   ``spring_stiffness`` [N/m], ``spring_damping`` [N s/m] (euler only)
 * ``[air]`` ``model`` (paper | plate), ``scale``, ``density`` [kg/m^3]
-* ``[wind]`` ``velocity`` [m/s, 3 numbers], ``shear_exponent``, ``reference_height`` [m]
+* ``[wind]`` ``velocity`` [m/s, 3 numbers], ``shear_exponent``, ``reference_height`` [m],
+  ``gust_intensity`` (fraction of the mean, 0 = steady), ``gust_period`` [s], ``gust_seed``
 * ``[terrain]`` ``kind`` (flat | procedural | file), ``size`` [m], ``height`` [m], ``amplitude`` [m],
   ``seed``, ``file`` (.npy)
 * ``[ground]`` ``collision`` (normal | clamp), ``friction``
 * one section per object, named after it (``[flag]``, ...), with the fields of its config class.
+* ``[[controls]]`` entries: ``time`` [s], ``ramp`` (true = reach linearly), and any of the scene's
+  controls (``pitch``, ``roll``, ``anchor``, ``wind``), see :mod:`warpsim.controls`.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
+from .controls import ControlError, ControlSchedule
 from .objects import registry
 
 
@@ -59,6 +63,9 @@ BOUNDS = {
     ("air", "density"): (0.0, None, True),
     ("terrain", "size"): (0.0, None, False),
     ("ground", "friction"): (0.0, None, True),
+    ("wind", "gust_intensity"): (0.0, None, True),
+    ("wind", "gust_period"): (0.0, None, False),
+    ("wind", "reference_height"): (0.0, None, False),
 }
 
 BASE_DEFAULTS: dict[str, dict[str, Any]] = {
@@ -75,7 +82,14 @@ BASE_DEFAULTS: dict[str, dict[str, Any]] = {
         "spring_damping": 5.0,
     },
     "air": {"model": "paper", "scale": 1.0, "density": 1.294217666},
-    "wind": {"velocity": [4.0, 0.5, 0.0], "shear_exponent": 0.0, "reference_height": 10.0},
+    "wind": {
+        "velocity": [4.0, 0.5, 0.0],
+        "shear_exponent": 0.0,
+        "reference_height": 10.0,
+        "gust_intensity": 0.0,
+        "gust_period": 2.0,
+        "gust_seed": 0,
+    },
     "terrain": {"kind": "flat", "size": 1000.0, "height": 0.0, "amplitude": 40.0, "seed": 0, "file": ""},
     "ground": {"collision": "normal", "friction": 0.5},
 }
@@ -97,6 +111,7 @@ def defaults(kind: str = "flag") -> dict[str, dict[str, Any]]:
     d[registry.section(kind)] = _object_defaults(kind)
     for section, values in registry.OBJECTS[kind].scene_defaults.items():
         d[section].update(copy.deepcopy(values))
+    d["controls"] = []
     return d
 
 
@@ -152,6 +167,9 @@ def merge(where: str, base: dict, override: dict) -> dict:
     """Validate ``override`` (parsed TOML) against ``base`` (a full descriptor) and merge it in."""
     out = copy.deepcopy(base)
     for section, values in override.items():
+        if section == "controls":
+            out["controls"] = _check_controls(where, values, out["scene"]["object"])
+            continue
         if section not in out:
             raise DescriptorError(
                 f"{where}: unknown section [{section}]{_suggest(section, out)}; sections are {', '.join(out)}"
@@ -166,6 +184,18 @@ def merge(where: str, base: dict, override: dict) -> dict:
                 )
             out[section][key] = _check_value(where, section, key, out[section][key], value)
     return out
+
+
+def _check_controls(where: str, entries, kind: str) -> list[dict]:
+    """Validate ``[[controls]]`` entries for an object ``kind``; returns them as plain tables."""
+    if not isinstance(entries, list):
+        raise DescriptorError(f"{where}: controls must be [[controls]] entries (an array of tables), got {entries!r}")
+    allowed = (*registry.OBJECTS[kind].controls, "wind")
+    try:
+        ControlSchedule(entries, allowed, where)
+    except ControlError as err:
+        raise DescriptorError(str(err)) from None
+    return [dict(e) for e in entries]
 
 
 def parse_override(text: str) -> dict:
@@ -226,19 +256,27 @@ def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, st
     )
 
 
+def _toml_value(value) -> str:
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return f"[{', '.join(repr(float(v)) for v in value)}]"
+    return repr(value)
+
+
 def to_toml(descriptor: dict) -> str:
     """Write a descriptor back as TOML text (all keys, for recording with outputs)."""
     lines = []
     for section, values in descriptor.items():
+        if section == "controls":
+            continue
         lines.append(f"[{section}]")
-        for key, value in values.items():
-            if isinstance(value, str):
-                lines.append(f'{key} = "{value}"')
-            elif isinstance(value, bool):
-                lines.append(f"{key} = {'true' if value else 'false'}")
-            elif isinstance(value, list):
-                lines.append(f"{key} = [{', '.join(repr(float(v)) for v in value)}]")
-            else:
-                lines.append(f"{key} = {value!r}")
+        lines += [f"{key} = {_toml_value(value)}" for key, value in values.items()]
+        lines.append("")
+    for entry in descriptor.get("controls", []):
+        lines.append("[[controls]]")
+        lines += [f"{key} = {_toml_value(value)}" for key, value in entry.items()]
         lines.append("")
     return "\n".join(lines)

@@ -16,6 +16,7 @@ import numpy as np
 import warp as wp
 
 from .builder import ModelBuilder
+from .controls import ControlError, ControlSchedule, Gusts, check_value
 from .descriptor import DescriptorError
 from .kernels.aero import AeroModel
 from .kernels.collision import CollisionMode
@@ -163,29 +164,72 @@ class Simulation:
         self.control = self.model.control()
         self.control.set_wind(descriptor["wind"]["velocity"])
         self.steps_taken = 0
+        wind = descriptor["wind"]
+        self.gusts = (
+            Gusts(wind["velocity"], wind["gust_intensity"], wind["gust_period"], wind["gust_seed"])
+            if wind["gust_intensity"] > 0.0
+            else None
+        )
+        try:
+            self.schedule = ControlSchedule(descriptor.get("controls", []), self.control_names(), where)
+        except ControlError as err:
+            raise DescriptorError(str(err)) from None
+        self._applied: dict = {}
         fps = float(descriptor["scene"]["fps"])
         self.steps_per_frame = max(1, int(round(1.0 / (fps * self.dt))))
 
-    def set_controls(self, **values: float) -> None:
-        """Set object controls between steps, e.g. ``set_controls(pitch=0.5, roll=-0.2)`` (each in [-1, 1]).
+    def set_controls(self, **values) -> None:
+        """Set controls between steps, e.g. ``set_controls(pitch=0.5, roll=-0.2)`` (each in [-1, 1]) for the
+        hang glider, ``set_controls(anchor=(10.0, 0.0))`` [m] for the kite, ``set_controls(wind=(6, 0, 0))``
+        [m/s] for any scene. A control not given keeps its value.
 
-        Raises ``ValueError`` for a control the scene's object does not have or a value outside [-1, 1].
+        Raises ``ValueError`` for a control the scene's object does not have or an invalid value.
         """
-        rest = self.control.stick_rest.numpy().copy()
+        allowed = self.control_names()
+        for name, value in values.items():
+            if name not in allowed:
+                raise ValueError(f"this scene has no control {name!r}; its controls are: {', '.join(allowed)}")
+            values[name] = check_value(name, value)
+        if "wind" in values:
+            self.control.set_wind(values["wind"])
+            if self.gusts is not None:
+                self.gusts.mean = np.asarray(values["wind"], dtype=np.float64)
+        object_values = {k: v for k, v in values.items() if k != "wind"}
+        if not object_values:
+            return
+        targets = {
+            "stick_rest": self.control.stick_rest.numpy().copy(),
+            "nail_target": self.control.nail_target.numpy().copy(),
+            "terrain": self.model.terrain,
+        }
         for record in self.model.objects:
             spec = registry.OBJECTS[record.kind]
-            unknown = set(values) - set(spec.controls)
-            if unknown:
-                raise ValueError(
-                    f"{record.kind} has no control {', '.join(sorted(unknown))}; "
-                    f"its controls are: {', '.join(spec.controls) or 'none'}"
-                )
-            for name, value in values.items():
-                if not -1.0 <= float(value) <= 1.0:
-                    raise ValueError(f"control {name} must be in [-1, 1], got {value}")
             if spec.apply_controls is not None:
-                spec.apply_controls(record, rest, values)
-        self.control.stick_rest.assign(rest)
+                spec.apply_controls(record, targets, object_values)
+        self.control.stick_rest.assign(targets["stick_rest"])
+        self.control.nail_target.assign(targets["nail_target"])
+
+    def control_names(self) -> tuple[str, ...]:
+        """Names of the controls this scene accepts (its object's and ``wind``)."""
+        names = []
+        for record in self.model.objects:
+            names += [c for c in registry.OBJECTS[record.kind].controls if c not in names]
+        return (*names, "wind")
+
+    def apply_schedule(self) -> None:
+        """Apply the descriptor's ``[[controls]]`` schedule at the current time, and advance the gusts.
+
+        With gusts, a scheduled ``wind`` sets the mean the gusts blow around.
+        """
+        values = self.schedule.at(self.state.time + 1e-9) if self.schedule else {}
+        if self.gusts is not None:
+            if "wind" in values:
+                self.gusts.mean = np.asarray(values.pop("wind"), dtype=np.float64)
+            self.control.set_wind(self.gusts.advance(self.steps_per_frame * self.dt))
+        changed = {k: v for k, v in values.items() if self._applied.get(k) != v}
+        if changed:
+            self.set_controls(**changed)
+            self._applied.update(changed)
 
     def step(self, count: int = 1) -> None:
         """Take ``count`` solver steps of ``dt``."""
@@ -229,6 +273,7 @@ class Simulation:
             while steps < total_steps:
                 index += 1
                 n = min(self.steps_per_frame, total_steps - steps)
+                self.apply_schedule()
                 self.step(n)
                 steps += n
                 frame = self.frame(index)

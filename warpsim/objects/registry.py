@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from . import hang_glider, parachute
+from . import hang_glider, kite, parachute
 from .flag import FlagConfig, build_flag
 
 
@@ -19,8 +19,9 @@ class ObjectSpec:
         scene_defaults: overrides of other sections that suit this object (e.g. its wind, its dt).
         bounds: key -> (low, high, low inclusive?) on the object's numbers.
         summary: one line for ``warpsim list``.
-        controls: names of the object's controls (each in [-1, 1]).
-        apply_controls: ``apply_controls(record, stick_rest, values)`` writes control rest lengths.
+        controls: names of the object's controls (see :mod:`warpsim.controls`; every scene also has ``wind``).
+        apply_controls: ``apply_controls(record, targets, values)`` writes what the controls change into
+            ``targets`` (host copies of ``stick_rest`` and ``nail_target``, and the ``terrain``).
     """
 
     config: type
@@ -72,6 +73,32 @@ OBJECTS: dict[str, ObjectSpec] = {
         summary="triangular sail, rigid frame, pilot on control sticks (paper Section 6); steer with pitch/roll",
         controls=("pitch", "roll"),
         apply_controls=hang_glider.apply_controls,
+    ),
+    "kite": ObjectSpec(
+        config=kite.KiteConfig,
+        build=kite.build_kite,
+        scene_defaults={"wind": {"velocity": [6.0, 0.0, 0.0]}},
+        bounds={
+            "divisions": (3, 256, True),
+            "keel_divisions": (1, 128, True),
+            "span": POSITIVE,
+            "spine": POSITIVE,
+            "keel_depth": POSITIVE,
+            "tow_point": (0.0, 1.0, True),
+            "mass": POSITIVE,
+            "frame_height": POSITIVE,
+            "frame_weight": POSITIVE,
+            "rope_length": POSITIVE,
+            "rope_particles": (2, 4096, True),
+            "rope_mass": POSITIVE,
+            "rope_doubled": (0, 4096, True),
+            "elevation": (0.0, 90.0, True),
+            "attack": (0.0, 90.0, True),
+            "dihedral": (-45.0, 45.0, True),
+        },
+        summary="delta kite with keel on a particle rope; move the ground end with anchor (paper Section 7)",
+        controls=("anchor",),
+        apply_controls=kite.apply_controls,
     ),
     "parachute": ObjectSpec(
         config=parachute.ParachuteConfig,

@@ -1,0 +1,93 @@
+"""Control schedules ([[controls]]), gusts, and how bad control entries are reported."""
+
+import numpy as np
+import pytest
+
+from warpsim.cli import main
+from warpsim.controls import ControlError, ControlSchedule, Gusts
+from warpsim.descriptor import DescriptorError, load_text
+from warpsim.runner import Simulation
+
+
+def test_schedule_holds_and_ramps():
+    s = ControlSchedule(
+        [
+            {"time": 0.0, "pitch": 0.0},
+            {"time": 2.0, "pitch": 1.0, "ramp": True},
+            {"time": 3.0, "pitch": -0.5, "roll": 0.2},
+            {"time": 5.0, "anchor": [4.0, 0.0], "ramp": True},
+        ],
+        ("pitch", "roll", "anchor", "wind"),
+    )
+    assert s.at(0.0) == {"pitch": 0.0}
+    assert s.at(1.5)["pitch"] == pytest.approx(0.75)  # ramping towards 1 at t = 2
+    assert s.at(2.5)["pitch"] == 1.0  # held
+    assert s.at(3.0) == {"pitch": -0.5, "roll": 0.2}  # jumps (no ramp)
+    assert "anchor" not in s.at(4.0)  # nothing before its first entry to ramp from
+    assert s.at(9.0)["anchor"] == (4.0, 0.0)
+
+
+@pytest.mark.parametrize(
+    "entry, message",
+    [
+        ({"time": 1.0, "pitch": 1.5}, "pitch = 1.5 must be in \\[-1, 1\\]"),
+        ({"time": 1.0, "roll": "left"}, "roll must be a number"),
+        ({"time": -1.0, "pitch": 0.0}, "time must be a number of seconds >= 0"),
+        ({"pitch": 0.0}, "needs a time"),
+        ({"time": 1.0, "anchor": [1.0, 2.0]}, "unknown control 'anchor'"),
+        ({"time": 1.0}, "sets no control"),
+    ],
+)
+def test_bad_entries_are_named(entry, message):
+    with pytest.raises(ControlError, match=message):
+        ControlSchedule([entry], ("pitch", "roll", "wind"), "x.toml")
+
+
+def test_entries_out_of_order_are_refused():
+    with pytest.raises(ControlError, match="time order"):
+        ControlSchedule([{"time": 2.0, "pitch": 0.0}, {"time": 1.0, "pitch": 1.0}], ("pitch", "wind"))
+
+
+def test_control_outside_range_in_a_file_exits_2(tmp_path, capsys):
+    path = tmp_path / "bad.toml"
+    path.write_text('[scene]\nobject = "hang-glider"\n[[controls]]\ntime = 1.0\npitch = 2.0\n')
+    assert main(["run", str(path), "--seconds", "0.1", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(path) in err[0] and "pitch = 2.0 must be in [-1, 1]" in err[0]
+
+
+def test_pitch_schedule_drives_the_glider():
+    text = (
+        '[scene]\nobject = "hang-glider"\n[air]\nmodel = "plate"\n[[controls]]\ntime = 0.5\npitch = 1.0\nramp = true\n'
+    )
+    sim = Simulation(load_text(text, "dive"))
+    rec = sim.model.objects[0]
+    sim.run(1.0)
+    assert rec.meta["controls"]["pitch"] == 1.0
+    rest = sim.control.stick_rest.numpy()[rec.meta["control_sticks"]]
+    from warpsim.objects.hang_glider import control_rest_lengths
+
+    np.testing.assert_allclose(rest, control_rest_lengths(rec, 1.0, 0.0), rtol=1e-6)
+
+
+def test_gusts_are_seeded_and_have_the_asked_strength():
+    a, b, c = (Gusts([6.0, 0.0, 0.0], 0.25, 2.0, seed) for seed in (7, 7, 8))
+    wa = np.array([a.advance(0.1) for _ in range(20000)])
+    wb = np.array([b.advance(0.1) for _ in range(20000)])
+    assert np.array_equal(wa, wb) and not np.array_equal(wa[:10], [c.advance(0.1) for _ in range(10)])
+    assert wa[:, 0].mean() == pytest.approx(6.0, abs=0.2)
+    assert wa[:, 0].std() == pytest.approx(0.25 * 6.0, rel=0.15)
+    assert wa[:, 2].std() == pytest.approx(0.5 * 0.25 * 6.0, rel=0.15)
+
+
+def test_gusty_scene_changes_the_wind_each_frame():
+    text = '[scene]\nobject = "kite"\n[wind]\nvelocity = [6.0, 0.0, 0.0]\ngust_intensity = 0.3\n'
+    sim = Simulation(load_text(text, "gusty"))
+    winds = []
+    sim.run(0.5, on_frame=lambda f: winds.append(sim.control.wind.numpy()[0].copy()))
+    assert len({tuple(w) for w in winds}) > 10
+
+
+def test_unknown_aero_model_is_named():
+    with pytest.raises(DescriptorError, match="air.model = 'lift' is not one of paper, plate"):
+        load_text('[air]\nmodel = "lift"\n', "s.toml")

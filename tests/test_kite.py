@@ -1,0 +1,77 @@
+"""The delta kite: counts, climb and settled line angle, rope end on the anchor, anchor control."""
+
+import numpy as np
+import pytest
+
+from warpsim.cli import main
+from warpsim.descriptor import defaults
+from warpsim.objects.kite import line_state
+from warpsim.runner import Simulation
+
+
+@pytest.fixture(scope="module")
+def flight():
+    """30 s of the default kite in its steady 6 m/s wind; line state sampled every 0.5 s."""
+    sim = Simulation(defaults("kite"))
+    rec = sim.model.objects[0]
+    samples, anchor_err, frame = [], 0.0, 0.0
+    for _ in range(60):
+        sim.step(50)
+        q = sim.state.positions()
+        samples.append(line_state(rec, q)["elevation_deg"])
+        anchor_err = max(anchor_err, np.abs(q[rec.meta["anchor_particle"]] - sim.model.nail_target0[0]).max())
+        frame = max(frame, np.abs(sim.model.stick_stretch(q)[rec.stick_groups["frame"]]).max())
+    return sim, np.array(samples), anchor_err, frame
+
+
+def test_counts_match_info(capsys):
+    m = Simulation(defaults("kite")).model
+    rec = m.objects[0]
+    assert len(rec.parts["sail"]) == 14 * 15 // 2  # 14 particles per side, as the paper
+    assert len(rec.parts["rope"]) == 14 and m.nail_count == 1
+    assert len(rec.parts["keel"]) == 6 * 7 // 2 - 6  # 6 per side; its top edge is the spine's particles
+    assert main(["info", "kite"]) == 0
+    out = capsys.readouterr().out
+    assert f"particles {m.particle_count}, sticks {m.stick_count}, triangles {m.tri_count}" in out
+    assert "particles 152, sticks 458, triangles 221" in out
+
+
+def test_kite_climbs_and_line_angle_settles(flight):
+    _, elevation, _, _ = flight
+    start = defaults("kite")["kite"]["elevation"]
+    assert elevation[:20].max() > start + 10.0  # climbs from its 10 degree launch
+    settled = elevation[40:]  # 20 s .. 30 s
+    assert settled.std() < 1.5 and 15.0 < settled.mean() < 40.0  # README: about 23 degrees
+
+
+def test_rope_end_stays_exactly_on_the_anchor(flight):
+    _, _, anchor_err, _ = flight
+    assert anchor_err == 0.0
+
+
+@pytest.mark.xfail(strict=True, reason="kite spars reach ~1.7 % at 55 iterations (README: limits)")
+def test_kite_frame_within_one_percent(flight):
+    assert flight[3] < 0.01
+
+
+def test_moving_the_anchor_moves_the_kite():
+    sims = []
+    for anchor in ((0.0, 0.0), (10.0, 0.0)):
+        sim = Simulation(defaults("kite"))
+        sim.step(500)
+        sim.set_controls(anchor=anchor)
+        sim.step(1000)
+        rec = sim.model.objects[0]
+        q = sim.state.positions()
+        assert np.array_equal(q[rec.meta["anchor_particle"], :2], np.float32(anchor))
+        sims.append(line_state(rec, q)["tow"])
+    moved = sims[1] - sims[0]
+    assert moved[0] > 5.0  # the kite followed the anchor downwind
+
+
+def test_anchor_control_is_checked():
+    sim = Simulation(defaults("kite"))
+    with pytest.raises(ValueError, match="anchor must be a list of 2 numbers"):
+        sim.set_controls(anchor=(1.0, 2.0, 3.0))
+    with pytest.raises(ValueError, match="controls are: anchor, wind"):
+        sim.set_controls(pitch=0.5)

@@ -1,0 +1,169 @@
+"""Control schedules and wind gusts: what changes the inputs of a running scene over time.
+
+A descriptor may hold ``[[controls]]`` entries, each a time and any of the object's controls::
+
+    [[controls]]
+    time = 2.0           # [s]
+    pitch = 0.8          # hang glider, in [-1, 1]
+    ramp = true          # reach this value linearly from the previous entry (default false: jump at time)
+
+    [[controls]]
+    time = 5.0
+    anchor = [20.0, 0.0] # kite: ground end of the rope, (x, y) [m]; z follows the terrain
+    wind = [8.0, 0.0, 0.0]
+
+Each control keeps its last value until an entry changes it. ``ramp = true`` on an entry makes every
+control it names move linearly from its value at the previous entry naming it, so that it arrives at
+``time``; otherwise the value jumps at ``time``. The runner applies the schedule once per output frame.
+
+Gusts (``[wind] gust_intensity > 0``): the wind is ``mean + intensity * |mean| * (g_x, g_y, g_z / 2)``,
+where ``g`` is a seeded 3-D Ornstein-Uhlenbeck process of unit variance and correlation time
+``gust_period`` [s], advanced once per frame (vertical gusts are half as strong, as near the ground);
+the same seed gives the same gusts.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+UNIT_CONTROLS = ("pitch", "roll")
+"""Controls whose values are dimensionless numbers in [-1, 1]."""
+
+VECTOR_CONTROLS = {"anchor": 2, "wind": 3}
+"""Controls whose values are vectors: name -> number of components ([m] for anchor, [m/s] for wind)."""
+
+
+class ControlError(ValueError):
+    """A control value or schedule entry is invalid; the message names the entry and key."""
+
+
+def check_value(name: str, value, where: str = "control"):
+    """Validate one control value; returns a float (unit controls) or a tuple of floats (vectors)."""
+    if name in UNIT_CONTROLS:
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+            raise ControlError(f"{where}: {name} must be a number in [-1, 1], got {value!r}")
+        value = float(value)
+        if not -1.0 <= value <= 1.0:  # also refuses NaN
+            raise ControlError(f"{where}: {name} = {value!r} must be in [-1, 1]")
+        return value
+    if name in VECTOR_CONTROLS:
+        size = VECTOR_CONTROLS[name]
+        try:
+            vector = tuple(float(v) for v in value)
+        except (TypeError, ValueError):
+            raise ControlError(f"{where}: {name} must be a list of {size} numbers, got {value!r}") from None
+        if len(vector) != size or any(isinstance(v, bool) for v in value):
+            raise ControlError(f"{where}: {name} must be a list of {size} numbers, got {value!r}")
+        if not all(math.isfinite(v) for v in vector):
+            raise ControlError(f"{where}: {name} must hold finite numbers, got {value!r}")
+        return vector
+    raise ControlError(f"{where}: unknown control {name!r}")
+
+
+@dataclass(frozen=True)
+class Keyframe:
+    """One ``[[controls]]`` entry: at ``time`` [s] the controls take ``values``; ``ramp`` = reached linearly."""
+
+    time: float
+    values: dict
+    ramp: bool = False
+
+
+class ControlSchedule:
+    """Time-ordered keyframes; :meth:`at` gives the control values at a time.
+
+    Args:
+        entries: ``[[controls]]`` tables (``time``, ``ramp`` and control values).
+        allowed: control names the scene accepts (the object's own plus ``wind``).
+        where: origin for error messages (the descriptor file).
+    """
+
+    def __init__(self, entries: list[dict], allowed: tuple[str, ...], where: str = "scene"):
+        frames = []
+        for k, entry in enumerate(entries):
+            label = f"{where}: [[controls]] entry {k + 1}"
+            if not isinstance(entry, dict):
+                raise ControlError(f"{label} must be a table, got {entry!r}")
+            if "time" not in entry:
+                raise ControlError(f"{label} needs a time (seconds)")
+            t = entry["time"]
+            if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t) or t < 0:
+                raise ControlError(f"{label}: time must be a number of seconds >= 0, got {t!r}")
+            ramp = entry.get("ramp", False)
+            if not isinstance(ramp, bool):
+                raise ControlError(f"{label}: ramp must be true or false, got {ramp!r}")
+            values = {}
+            for name, value in entry.items():
+                if name in ("time", "ramp"):
+                    continue
+                if name not in allowed:
+                    raise ControlError(
+                        f"{label}: unknown control {name!r}; this scene's controls are {', '.join(allowed)}"
+                    )
+                values[name] = check_value(name, value, f"{label}")
+            if not values:
+                raise ControlError(f"{label} sets no control; give one of {', '.join(allowed)}")
+            frames.append(Keyframe(float(t), values, ramp))
+        times = [f.time for f in frames]
+        if times != sorted(times):
+            raise ControlError(f"{where}: [[controls]] entries must be in time order, got times {times}")
+        self.keyframes = frames
+
+    def __bool__(self) -> bool:
+        return bool(self.keyframes)
+
+    def at(self, t: float) -> dict:
+        """Control values at time ``t`` [s]; controls no entry has set yet are absent."""
+        out = {}
+        names = {n for f in self.keyframes for n in f.values}
+        for name in names:
+            frames = [f for f in self.keyframes if name in f.values]
+            before = [f for f in frames if f.time <= t]
+            after = [f for f in frames if f.time > t]
+            if after and after[0].ramp and before:
+                a, b = before[-1], after[0]
+                s = (t - a.time) / (b.time - a.time)
+                out[name] = _lerp(a.values[name], b.values[name], s)
+            elif before:
+                out[name] = before[-1].values[name]
+        return out
+
+
+def _lerp(a, b, s: float):
+    if isinstance(a, tuple):
+        return tuple(x + (y - x) * s for x, y in zip(a, b, strict=True))
+    return a + (b - a) * s
+
+
+class Gusts:
+    """Seeded gusty wind around a mean: ``mean + intensity * |mean| * (g_x, g_y, g_z / 2)``, ``g`` an
+    Ornstein-Uhlenbeck process of unit variance and correlation time ``period`` [s].
+
+    Args:
+        mean: mean wind [m/s], 3 numbers.
+        intensity: gust strength as a fraction of the mean (0 = steady wind).
+        period: correlation time of the gusts [s] (> 0).
+        seed: random seed; the same seed and frame interval give the same wind.
+    """
+
+    def __init__(self, mean, intensity: float, period: float, seed: int):
+        if not period > 0.0:
+            raise ValueError(f"gust period must be positive, got {period}")
+        self.mean = np.asarray(mean, dtype=np.float64)
+        self.intensity = float(intensity)
+        self.period = float(period)
+        self.rng = np.random.default_rng(seed)
+        self.g = self.rng.standard_normal(3)
+
+    def advance(self, interval: float) -> np.ndarray:
+        """Advance the gusts by ``interval`` [s] and return the wind [m/s] now."""
+        decay = math.exp(-interval / self.period)
+        self.g = self.g * decay + math.sqrt(1.0 - decay * decay) * self.rng.standard_normal(3)
+        return self.wind()
+
+    def wind(self) -> np.ndarray:
+        """The current wind [m/s]."""
+        return self.mean + self.intensity * np.linalg.norm(self.mean) * self.g * np.array([1.0, 1.0, 0.5])

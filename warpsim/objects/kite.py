@@ -1,0 +1,190 @@
+"""Delta kite on its rope (paper Section 7, Figs. 17-18).
+
+* Sail: the main delta triangle cut like the hang glider's (paper: 14 particles per side, 13 divisions).
+* Keel: a triangle at half the resolution standing perpendicular under the spine, set back from the
+  nose (paper: 6 particles per side). Its top edge is made of the spine's own particles (every second
+  row of the sail, from row 2 on), its apex is the tow point.
+* Spars: two virtual particles above and below the sail's centre tied to every particle of the leading
+  edges and the spine keep them rigid; the cloth between stays flexible.
+* Rope: a chain of particles much lighter than the sail from the tow point to the ground (paper: 14);
+  the sticks nearest the keel count double (``rope_doubled``, the paper's doubled sticks). The ground
+  end is a nail whose target is the ``anchor`` control: (x, y) [m], z on the terrain.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..builder import ModelBuilder
+from ..model import ObjectRecord
+from ..terrain import Heightfield
+from .hang_glider import _body_axes
+
+PAPER_COUNTS = {"particles": 152, "sticks": 458, "triangles": 221}
+
+
+@dataclass
+class KiteConfig:
+    """Parameters of the delta kite (defaults: the paper's resolution, a 1.8 m, 0.8 m^2, 200 g kite).
+
+    Attributes:
+        divisions: main-sail subdivisions per side (paper: 14 particles per side -> 13).
+        keel_divisions: keel subdivisions per side (paper: 6 particles per side -> 5); the keel's top
+            edge spans ``2 * keel_divisions`` sail rows from row 2, so it must fit in ``divisions``.
+        span: wing-tip distance [m].
+        spine: nose to trailing edge along the spine [m].
+        keel_depth: tow point below the spine [m].
+        tow_point: position of the tow point along the keel's top edge (0 = front, 1 = back).
+        mass: kite mass [kg] (sail, spars and keel).
+        frame_height: distance of the virtual particles from the sail [m].
+        frame_weight: weight of the spar and keel sticks in the constraint average (1 = the paper).
+        rope_length: tow point to anchor [m].
+        rope_particles: particles of the rope, the nailed ground end included (paper: 14).
+        rope_mass: rope mass [kg] (much lighter than the kite).
+        rope_doubled: rope sticks nearest the keel that count double (the paper's doubled sticks).
+        anchor: ground end of the rope, (x, y) [m].
+        heading: direction from the anchor to the kite [deg from +x towards +y] (downwind).
+        elevation: start angle of the rope above horizontal [deg].
+        attack: start angle of the sail to the horizontal [deg].
+        dihedral: the wings rise from the spine by this angle [deg] towards the sail's back (downwind)
+            side, as a delta kite's sail sets in the wind; it gives the kite its roll and yaw stability.
+    """
+
+    divisions: int = 13
+    keel_divisions: int = 5
+    span: float = 1.8
+    spine: float = 0.9
+    keel_depth: float = 0.3
+    tow_point: float = 0.35
+    mass: float = 0.2
+    frame_height: float = 0.25
+    frame_weight: float = 4.0
+    rope_length: float = 30.0
+    rope_particles: int = 14
+    rope_mass: float = 0.03
+    rope_doubled: int = 4
+    anchor: tuple[float, float] = (0.0, 0.0)
+    heading: float = 0.0
+    elevation: float = 10.0
+    attack: float = 40.0
+    dihedral: float = 10.0
+
+
+def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> ObjectRecord:
+    """Add the kite of ``cfg`` and its rope; returns its record (parts, stick groups, anchor nail)."""
+    n, kd = int(cfg.divisions), int(cfg.keel_divisions)
+    if n < 3 or kd < 1:
+        raise ValueError(f"divisions must be >= 3 and keel_divisions >= 1, got {n} and {kd}")
+    if 2 + 2 * kd > n:
+        raise ValueError(f"keel_divisions = {kd} needs divisions >= {2 + 2 * kd} (the keel spans 2 sail rows each)")
+    if cfg.rope_particles < 2:
+        raise ValueError(f"rope_particles must be at least 2, got {cfg.rope_particles}")
+    fwd, left, up = _body_axes(cfg.heading + 180.0, cfg.attack)  # nose into the wind
+    ax, ay = cfg.anchor
+    anchor = np.array([ax, ay, float(terrain.height(ax, ay))])
+    h, e = np.radians(cfg.heading), np.radians(cfg.elevation)
+    tow = anchor + cfg.rope_length * np.array([np.cos(h) * np.cos(e), np.sin(h) * np.cos(e), np.sin(e)])
+    # spine row r lies r/n of the spine behind the nose; the tow point sits under rows 2 .. 2 + 2 kd
+    front, back = 2 / n, (2 + 2 * kd) / n
+    along = front + cfg.tow_point * (back - front)
+    nose = tow + along * cfg.spine * fwd + cfg.keel_depth * up
+    tip_l = nose - cfg.spine * fwd + 0.5 * cfg.span * left
+    tip_r = nose - cfg.spine * fwd - 0.5 * cfg.span * left
+
+    sail_count = (n + 1) * (n + 2) // 2
+    keel_count = (kd + 1) * (kd + 2) // 2 - (kd + 1)
+    per_particle = cfg.mass * 0.9 / (sail_count + keel_count)
+    p0 = builder.particle_count
+    tan_dihedral = np.tan(np.radians(cfg.dihedral))
+
+    def dihedral(points: np.ndarray) -> np.ndarray:
+        return points + np.outer(np.abs((points - nose) @ left) * tan_dihedral, up)
+
+    rows, sail_sticks, sail_tris = builder.add_subdivided_triangle(
+        nose, tip_l, tip_r, n, per_particle * sail_count, shape=dihedral
+    )
+    spine = [rows[r][r // 2] for r in range(0, n + 1, 2)]
+    keel_top = [rows[r][r // 2] for r in range(2, 3 + 2 * kd, 2)]
+    top_front, top_back = (np.array(builder.particle_q[p]) for p in (keel_top[0], keel_top[-1]))
+    k0 = builder.particle_count
+    keel_rows, keel_sticks, keel_tris = builder.add_subdivided_triangle(
+        tow, top_front, top_back, kd, per_particle * keel_count, last_row=keel_top
+    )
+    for s in keel_sticks:
+        builder.stick_weight[s] = cfg.frame_weight  # the keel is the kite's reinforced part
+    tow_particle = keel_rows[0][0]
+    keel = np.arange(k0, builder.particle_count)
+
+    leading = sorted({r[0] for r in rows} | {r[-1] for r in rows})
+    spars = sorted(set(leading) | set(spine))
+    spar_set = set(spars)
+    ends = builder.stick_particles
+    spar_edges = [s for s in sail_sticks if ends[s][0] in spar_set and ends[s][1] in spar_set]
+    for s in spar_edges:
+        builder.stick_weight[s] = cfg.frame_weight
+    centre = (nose + tip_l + tip_r) / 3.0
+    virtual_mass = cfg.mass * 0.1 / 2.0
+    virtual = [builder.add_particle(centre + k * cfg.frame_height * up, virtual_mass) for k in (1, -1)]
+    frame = spar_edges + [builder.add_stick(v, p, weight=cfg.frame_weight) for v in virtual for p in spars]
+    frame.append(builder.add_stick(virtual[0], virtual[1], weight=cfg.frame_weight))
+
+    # rope: from the tow point down to the anchor; the first sticks count double
+    count = int(cfg.rope_particles)
+    rope, rope_sticks = builder.add_rope(tow, anchor, count, cfg.rope_mass, first=tow_particle)
+    for s in rope_sticks[: cfg.rope_doubled]:
+        builder.stick_weight[s] = 2.0
+    nail = builder.add_nail(rope[-1], anchor)
+
+    return builder.add_object(
+        ObjectRecord(
+            name="kite",
+            kind="kite",
+            particles=np.arange(p0, builder.particle_count),
+            parts={
+                "sail": np.arange(p0, p0 + sail_count),
+                "keel": keel,
+                "virtual": np.array(virtual),
+                "rope": np.array(rope[1:]),
+            },
+            tri_parts={"sail": sail_tris, "keel": keel_tris},
+            stick_groups={
+                "sail": np.setdiff1d(sail_sticks, spar_edges),
+                "frame": np.array(frame),
+                "keel": keel_sticks,
+                "rope": rope_sticks,
+            },
+            meta={
+                "paper_counts": PAPER_COUNTS,
+                "nose": rows[0][0],
+                "tow": tow_particle,
+                "anchor_particle": int(rope[-1]),
+                "anchor_nail": nail,
+                "spine": np.array(spine),
+                "tips": (rows[n][0], rows[n][n]),
+            },
+        )
+    )
+
+
+def apply_controls(record: ObjectRecord, targets: dict, values: dict) -> None:
+    """Move the rope's ground end to ``values['anchor']`` = (x, y) [m], on the terrain.
+
+    ``targets`` holds host copies of ``stick_rest``, ``nail_target`` and the ``terrain``.
+    """
+    if "anchor" in values:
+        x, y = values["anchor"]
+        targets["nail_target"][record.meta["anchor_nail"]] = (x, y, float(targets["terrain"].height(x, y)))
+
+
+def line_state(record: ObjectRecord, q: np.ndarray) -> dict:
+    """Diagnostics: line elevation angle [deg] (anchor to tow point), kite height [m], tow-anchor distance [m]."""
+    m = record.meta
+    d = q[m["tow"]] - q[m["anchor_particle"]]
+    return {
+        "elevation_deg": float(np.degrees(np.arctan2(d[2], np.linalg.norm(d[:2])))),
+        "height": float(q[record.parts["sail"]][:, 2].mean()),
+        "distance": float(np.linalg.norm(d)),
+        "tow": q[m["tow"]].copy(),
+    }

@@ -97,13 +97,13 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
     sail_count = (n + 1) * (n + 2) // 2
     virtual_mass = 0.1 * cfg.glider_mass / 3.0
     semi = 0.5 * cfg.span
-    tan_max = np.radians(cfg.washout)
+    washout_rad = np.radians(cfg.washout)
 
     def twist(points: np.ndarray) -> np.ndarray:
         d = points - nose
         y = np.abs(d @ left)
         behind_edge = np.maximum(-cfg.chord * y / semi - d @ fwd, 0.0)
-        return points + np.outer(behind_edge * np.tan(tan_max * y / semi), up)
+        return points + np.outer(behind_edge * np.tan(washout_rad * y / semi), up)
 
     p0 = builder.particle_count
     rows, sail_sticks, tris = builder.add_subdivided_triangle(nose, tip_l, tip_r, n, 1.0, vel, shape=twist)

@@ -20,6 +20,7 @@ import numpy as np
 from ..builder import ModelBuilder
 from ..model import ObjectRecord
 from ..terrain import Heightfield
+from .delta import add_rigid_frame, body_axes
 
 PAPER_COUNTS = {"particles": 49, "sticks": 198, "triangles": 64}
 
@@ -49,8 +50,9 @@ class HangGliderConfig:
             it is what lets a swept wing trim with its centre of mass ahead of the sail's centre).
         frame_mass_fraction: share of ``glider_mass`` carried by the leading-edge and keel particles
             (the tubes); the rest minus the virtual particles' 10 % is spread over the sail cloth.
-        frame_weight: weight of the virtual particles' sticks in the constraint average (1 = the
-            paper; 3 counts each as three sticks, keeping the frame within 1 % under the pilot's load).
+        frame_weight: weight of the frame's sticks (leading edges, keel, virtual ties) in the constraint
+            average (1 = the paper; 6 counts each as six sticks, keeping the frame within 1 % under the
+            pilot's load).
     """
 
     divisions: int = 8
@@ -73,21 +75,12 @@ class HangGliderConfig:
     frame_weight: float = 6.0
 
 
-def _body_axes(heading_deg: float, nose_up_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Forward, left and up unit vectors of the glider at build time."""
-    h, p = np.radians(heading_deg), np.radians(nose_up_deg)
-    fwd = np.array([np.cos(h) * np.cos(p), np.sin(h) * np.cos(p), np.sin(p)])
-    left = np.array([-np.sin(h), np.cos(h), 0.0])
-    up = np.cross(fwd, left)
-    return fwd, left, up
-
-
 def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Heightfield) -> ObjectRecord:
     """Add the hang glider of ``cfg`` above ``terrain``; returns its record (parts, stick groups, controls)."""
     n = int(cfg.divisions)
     if n < 2:
         raise ValueError(f"divisions must be at least 2, got {n}")
-    fwd, left, up = _body_axes(cfg.heading, cfg.nose_up)
+    fwd, left, up = body_axes(cfg.heading, cfg.nose_up)
     x0, y0 = cfg.position
     nose = np.array([x0, y0, float(terrain.height(x0, y0)) + cfg.altitude])
     tip_l = nose - cfg.chord * fwd + 0.5 * cfg.span * left
@@ -106,30 +99,23 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
         return points + np.outer(behind_edge * np.tan(washout_rad * y / semi), up)
 
     p0 = builder.particle_count
-    rows, sail_sticks, tris = builder.add_subdivided_triangle(nose, tip_l, tip_r, n, 1.0, vel, shape=twist)
+    rows, sail_sticks, tris = builder.add_subdivided_triangle(
+        nose, tip_l, tip_r, n, 1.0, vel, shape=twist
+    )  # masses are set per part below
     sail = np.arange(p0, p0 + sail_count)
 
-    # frame: leading edges (first/last of each row) and keel (middle of the even rows)
-    leading = sorted({r[0] for r in rows} | {r[-1] for r in rows})
-    keel = [rows[r][r // 2] for r in range(0, n + 1, 2)]
-    frame_points = sorted(set(leading) | set(keel))
-    frame_set = set(frame_points)
+    centre = (nose + tip_l + tip_r) / 3.0
+    frame = add_rigid_frame(
+        builder, rows, sail_sticks, centre, cfg.frame_height * up, (1, 0, -1), virtual_mass, cfg.frame_weight, vel
+    )
+    virtual, keel = frame.virtual, frame.keel
+    frame_set = set(frame.points)
     cloth = [p for p in sail if p not in frame_set]
     frame_mass = cfg.frame_mass_fraction * cfg.glider_mass
-    for p in frame_points:
-        builder.particle_mass[p] = frame_mass / len(frame_points)
+    for p in frame.points:
+        builder.particle_mass[p] = frame_mass / len(frame.points)
     for p in cloth:
         builder.particle_mass[p] = (cfg.glider_mass - frame_mass - 3.0 * virtual_mass) / len(cloth)
-    ends = builder.stick_particles
-    frame_edges = [s for s in sail_sticks if ends[s][0] in frame_set and ends[s][1] in frame_set]
-    for s in frame_edges:
-        builder.stick_weight[s] = cfg.frame_weight
-
-    centre = (nose + tip_l + tip_r) / 3.0
-    virtual = [builder.add_particle(centre + k * cfg.frame_height * up, virtual_mass, vel) for k in (1, 0, -1)]
-    fw = cfg.frame_weight
-    v_sticks = [builder.add_stick(v, p, weight=fw) for v in virtual for p in frame_points]
-    v_sticks += [builder.add_stick(virtual[k], virtual[k + 1], weight=fw) for k in (0, 1)]
 
     # pilot and control sticks
     neutral = nose - cfg.pilot_station * cfg.chord * fwd - cfg.hang_depth * up
@@ -151,8 +137,8 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
             parts={"sail": sail, "virtual": np.array(virtual), "pilot": np.array([pilot])},
             tri_parts={"sail": tris},
             stick_groups={
-                "sail": np.setdiff1d(sail_sticks, frame_edges),
-                "frame": np.concatenate([np.array(frame_edges, dtype=int), v_sticks]),
+                "sail": np.setdiff1d(sail_sticks, frame.sticks),
+                "frame": np.array(frame.sticks),
                 "control": np.array(control),
             },
             meta={

@@ -20,7 +20,7 @@ import numpy as np
 from ..builder import ModelBuilder
 from ..model import ObjectRecord
 from ..terrain import Heightfield
-from .hang_glider import _body_axes
+from .delta import add_rigid_frame, body_axes
 
 PAPER_COUNTS = {"particles": 152, "sticks": 458, "triangles": 221}
 
@@ -81,7 +81,7 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
         raise ValueError(f"keel_divisions = {kd} needs divisions >= {2 + 2 * kd} (the keel spans 2 sail rows each)")
     if cfg.rope_particles < 2:
         raise ValueError(f"rope_particles must be at least 2, got {cfg.rope_particles}")
-    fwd, left, up = _body_axes(cfg.heading + 180.0, cfg.attack)  # nose into the wind
+    fwd, left, up = body_axes(cfg.heading + 180.0, cfg.attack)  # nose into the wind
     ax, ay = cfg.anchor
     anchor = np.array([ax, ay, float(terrain.height(ax, ay))])
     h, e = np.radians(cfg.heading), np.radians(cfg.elevation)
@@ -105,7 +105,6 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     rows, sail_sticks, sail_tris = builder.add_subdivided_triangle(
         nose, tip_l, tip_r, n, per_particle * sail_count, shape=dihedral
     )
-    spine = [rows[r][r // 2] for r in range(0, n + 1, 2)]
     keel_top = [rows[r][r // 2] for r in range(2, 3 + 2 * kd, 2)]
     top_front, top_back = (np.array(builder.particle_q[p]) for p in (keel_top[0], keel_top[-1]))
     k0 = builder.particle_count
@@ -117,18 +116,10 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     tow_particle = keel_rows[0][0]
     keel = np.arange(k0, builder.particle_count)
 
-    leading = sorted({r[0] for r in rows} | {r[-1] for r in rows})
-    spars = sorted(set(leading) | set(spine))
-    spar_set = set(spars)
-    ends = builder.stick_particles
-    spar_edges = [s for s in sail_sticks if ends[s][0] in spar_set and ends[s][1] in spar_set]
-    for s in spar_edges:
-        builder.stick_weight[s] = cfg.frame_weight
     centre = (nose + tip_l + tip_r) / 3.0
-    virtual_mass = cfg.mass * 0.1 / 2.0
-    virtual = [builder.add_particle(centre + k * cfg.frame_height * up, virtual_mass) for k in (1, -1)]
-    frame = spar_edges + [builder.add_stick(v, p, weight=cfg.frame_weight) for v in virtual for p in spars]
-    frame.append(builder.add_stick(virtual[0], virtual[1], weight=cfg.frame_weight))
+    spars = add_rigid_frame(
+        builder, rows, sail_sticks, centre, cfg.frame_height * up, (1, -1), cfg.mass * 0.1 / 2.0, cfg.frame_weight
+    )
 
     # rope: from the tow point down to the anchor; the first sticks count double
     count = int(cfg.rope_particles)
@@ -145,13 +136,13 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
             parts={
                 "sail": np.arange(p0, p0 + sail_count),
                 "keel": keel,
-                "virtual": np.array(virtual),
+                "virtual": np.array(spars.virtual),
                 "rope": np.array(rope[1:]),
             },
             tri_parts={"sail": sail_tris, "keel": keel_tris},
             stick_groups={
-                "sail": np.setdiff1d(sail_sticks, spar_edges),
-                "frame": np.array(frame),
+                "sail": np.setdiff1d(sail_sticks, spars.sticks),
+                "frame": np.array(spars.sticks),
                 "keel": keel_sticks,
                 "rope": rope_sticks,
             },
@@ -161,7 +152,7 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
                 "tow": tow_particle,
                 "anchor_particle": int(rope[-1]),
                 "anchor_nail": nail,
-                "spine": np.array(spine),
+                "spine": np.array(spars.keel),
                 "tips": (rows[n][0], rows[n][n]),
             },
         )

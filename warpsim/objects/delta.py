@@ -1,0 +1,75 @@
+"""What the hang glider and the delta kite share: body axes and the rigid frame of a delta sail.
+
+Both are built on :meth:`warpsim.ModelBuilder.add_subdivided_triangle` (rows from the nose). Their frame
+is the two leading edges (first and last particle of every row) and the keel/spine (middle particle of
+every even row), held rigid by virtual particles above/below the sail's centre tied to every frame
+particle (paper slide 22); the cloth between stays flexible.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..builder import ModelBuilder
+
+
+def body_axes(heading_deg: float, nose_up_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Forward, left and up unit vectors of a body heading ``heading_deg`` (from +x towards +y) with its
+    nose raised ``nose_up_deg`` above horizontal."""
+    h, p = np.radians(heading_deg), np.radians(nose_up_deg)
+    fwd = np.array([np.cos(h) * np.cos(p), np.sin(h) * np.cos(p), np.sin(p)])
+    left = np.array([-np.sin(h), np.cos(h), 0.0])
+    up = np.cross(fwd, left)
+    return fwd, left, up
+
+
+@dataclass
+class DeltaFrame:
+    """Indices of a delta sail's rigid frame.
+
+    Attributes:
+        points: frame particles (leading edges and keel), sorted.
+        keel: keel particles from the nose back (middle of every even row).
+        virtual: the virtual particles, in the order of ``offsets``.
+        sticks: frame sticks: sail edges between frame particles, then the virtual particles' ties.
+    """
+
+    points: list[int]
+    keel: list[int]
+    virtual: list[int]
+    sticks: list[int]
+
+
+def add_rigid_frame(
+    builder: ModelBuilder,
+    rows: list[list[int]],
+    sail_sticks,
+    centre,
+    up,
+    offsets: tuple[float, ...],
+    virtual_mass: float,
+    weight: float,
+    vel=(0.0, 0.0, 0.0),
+) -> DeltaFrame:
+    """Make the leading edges and keel of a subdivided delta sail rigid.
+
+    Adds one virtual particle of ``virtual_mass`` [kg] at ``centre + offset * up`` [m] for each of
+    ``offsets``, ties each to every frame particle and chains them; the sail's own sticks between frame
+    particles and every new stick get ``weight`` in the constraint average.
+    """
+    n = len(rows) - 1
+    leading = {r[0] for r in rows} | {r[-1] for r in rows}
+    keel = [rows[r][r // 2] for r in range(0, n + 1, 2)]
+    points = sorted(leading | set(keel))
+    inside = set(points)
+    ends = builder.stick_particles
+    sticks = [int(s) for s in sail_sticks if ends[s][0] in inside and ends[s][1] in inside]
+    for s in sticks:
+        builder.stick_weight[s] = weight
+    centre, up = np.asarray(centre, dtype=np.float64), np.asarray(up, dtype=np.float64)
+    virtual = [builder.add_particle(centre + k * up, virtual_mass, vel) for k in offsets]
+    sticks += [builder.add_stick(v, p, weight=weight) for v in virtual for p in points]
+    sticks += [builder.add_stick(a, b, weight=weight) for a, b in zip(virtual[:-1], virtual[1:], strict=True)]
+    return DeltaFrame(points, keel, virtual, sticks)

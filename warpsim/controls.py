@@ -24,6 +24,7 @@ the same seed gives the same gusts.
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 
@@ -111,6 +112,10 @@ class ControlSchedule:
         if times != sorted(times):
             raise ControlError(f"{where}: [[controls]] entries must be in time order, got times {times}")
         self.keyframes = frames
+        self._by_name: dict[str, list[Keyframe]] = {}
+        for f in frames:
+            for name in f.values:
+                self._by_name.setdefault(name, []).append(f)
 
     def __bool__(self) -> bool:
         return bool(self.keyframes)
@@ -118,17 +123,16 @@ class ControlSchedule:
     def at(self, t: float) -> dict:
         """Control values at time ``t`` [s]; controls no entry has set yet are absent."""
         out = {}
-        names = {n for f in self.keyframes for n in f.values}
-        for name in names:
-            frames = [f for f in self.keyframes if name in f.values]
-            before = [f for f in frames if f.time <= t]
-            after = [f for f in frames if f.time > t]
-            if after and after[0].ramp and before:
-                a, b = before[-1], after[0]
-                s = (t - a.time) / (b.time - a.time)
-                out[name] = _lerp(a.values[name], b.values[name], s)
-            elif before:
-                out[name] = before[-1].values[name]
+        for name, frames in self._by_name.items():
+            k = bisect.bisect_right([f.time for f in frames], t)  # frames[:k] are at or before t
+            if k == 0:
+                continue
+            a = frames[k - 1]
+            if k < len(frames) and frames[k].ramp:
+                b = frames[k]
+                out[name] = _lerp(a.values[name], b.values[name], (t - a.time) / (b.time - a.time))
+            else:
+                out[name] = a.values[name]
         return out
 
 

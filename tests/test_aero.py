@@ -71,3 +71,41 @@ def test_moving_plate_in_still_air_is_braked(device):
         solver.step(s, c, 0.01)
     v = s.velocities(0.01).mean(axis=0)
     assert 0.0 < v[0] < 4.0  # slowed by the air, not reversed
+
+
+def _glider_centre_of_pressure(device, alpha_deg: float, chord_loading: bool) -> tuple[float, float]:
+    """Chord fraction of the flat (no washout) glider sail's centre of pressure, and its total normal force [N]."""
+    from warpsim.objects.hang_glider import HangGliderConfig, build_hang_glider
+
+    b = ws.ModelBuilder()
+    cfg = HangGliderConfig(nose_up=0.0, washout=0.0, position=(0.0, 0.0), altitude=50.0, chord_loading=chord_loading)
+    rec = build_hang_glider(b, cfg, ws.Heightfield.flat())
+    m = b.finalize(device)
+    s, c = m.state(), m.control()
+    s.particle_q_prev.assign(s.particle_q)  # at rest in the wind: the wind is the relative wind
+    a = np.radians(alpha_deg)
+    c.set_wind((-10.0 * np.cos(a), 0.0, 10.0 * np.sin(a)))  # from ahead and below
+    out = ws.SolverVerlet(m).tri_force
+    triangle_air_force(m, s, c, 0.01, ws.AirSettings(model=ws.AeroModel.PLATE), out)
+    lift = 3.0 * out.numpy()[rec.tri_parts["sail"], 2]
+    centres = m.particle_q0[m.tri_indices_np[rec.tri_parts["sail"]]].mean(axis=1)
+    nose_x = m.particle_q0[rec.meta["nose"], 0]
+    return float(((nose_x - centres[:, 0]) * lift).sum() / lift.sum() / cfg.chord), float(lift.sum())
+
+
+def test_chordwise_loading_moves_the_centre_of_pressure_forward(device):
+    """Uniform load: the delta's centre of pressure is its area centroid (2/3 chord) at every angle.
+
+    Thin-aerofoil loading (quarter chord on every strip) puts it at 1/2 chord at small angles; it moves
+    back towards the centroid as the angle grows, and the total force is unchanged.
+    """
+    uniform_5, force_u = _glider_centre_of_pressure(device, 5.0, False)
+    uniform_60, _ = _glider_centre_of_pressure(device, 60.0, False)
+    assert uniform_5 == pytest.approx(2.0 / 3.0, abs=0.01) and uniform_60 == pytest.approx(2.0 / 3.0, abs=0.01)
+    loaded_5, force_l = _glider_centre_of_pressure(device, 5.0, True)
+    loaded_60, _ = _glider_centre_of_pressure(device, 60.0, True)
+    # continuous limit 0.5 (leading edge + c/4, area-averaged over a delta's strips) plus 9 % of the uniform
+    # 2/3 at 5 deg; 8 rows per chord under-resolve the leading-edge peak: 0.545 measured
+    assert 0.5 < loaded_5 < 0.56
+    assert loaded_5 < loaded_60 < uniform_60
+    assert force_l == pytest.approx(force_u, rel=1e-4)

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import warp as wp
 
 from warpsim.cli import main
 from warpsim.descriptor import defaults
@@ -61,9 +62,22 @@ def test_unknown_control_is_refused():
         sim.set_controls(anchor=1.0)
 
 
-def test_frame_within_one_percent_over_ten_seconds():
+@pytest.mark.parametrize(
+    "mass_splitting",
+    [
+        False,
+        pytest.param(
+            True,
+            marks=pytest.mark.xfail(
+                strict=True, reason="with mass splitting the upper virtual ties to the aft keel reach 2-3 % (README)"
+            ),
+        ),
+    ],
+)
+def test_frame_within_one_percent_over_ten_seconds(mass_splitting):
     d = defaults("hang-glider")
     d["air"]["model"] = "plate"
+    d["solver"]["mass_splitting"] = mass_splitting
     sim = Simulation(d)
     frame = sim.model.objects[0].stick_groups["frame"]
     worst = 0.0
@@ -88,8 +102,43 @@ def test_roll_tilts_the_sail_to_the_pilots_side(roll):
     assert roll * state["bank_deg"] > 3.0
 
 
-@pytest.mark.xfail(strict=True, reason="pushed out, the flat-plate glider stalls and falls tail first (README)")
 def test_bar_pushed_out_slows_down():
     _, trim = _glider(0.0)
     _, slow = _glider(-1.0)
-    assert slow["airspeed"] < trim["airspeed"]
+    assert slow["airspeed"] < trim["airspeed"] - 5.0
+    assert slow["pitch_deg"] > trim["pitch_deg"] + 10.0
+
+
+def _angular_momentum(sim) -> np.ndarray:
+    m = sim.model.particle_mass[:, None]
+    q = sim.state.positions().astype(np.float64)
+    v = (q - sim.state.particle_q_prev.numpy()) / sim.dt
+    centre, mean_v = (m * q).sum(0) / m.sum(), (m * v).sum(0) / m.sum()
+    return (m * np.cross(q - centre, v - mean_v)).sum(0)
+
+
+@pytest.mark.parametrize("mass_splitting", [False, True])
+def test_pilot_moving_alone_does_not_spin_the_glider(mass_splitting):
+    """No gravity, no air: moving the pilot is an internal force and must not create angular momentum.
+
+    The paper's plain per-particle average breaks this between the 65 kg pilot and the light frame (a
+    spurious pitch torque that decided the glider's pitch); mass splitting, the glider's default, keeps it.
+    Near the origin, because float32 rounding of coordinates of hundreds of metres also breaks it.
+    """
+    d = defaults("hang-glider")
+    d["air"]["density"] = 0.0
+    d["terrain"]["kind"] = "flat"
+    d["hang_glider"].update(position=[0.0, 0.0], altitude=20.0)
+    d["solver"]["mass_splitting"] = mass_splitting
+    sim = Simulation(d)
+    sim.model.gravity = wp.vec3(0.0, 0.0, 0.0)  # before the first step, which captures the graph
+    sim.set_controls(pitch=1.0)
+    spin = 0.0
+    for _ in range(10):
+        sim.step(10)
+        spin = max(spin, abs(_angular_momentum(sim)[1]))  # about the span axis (+y): pitch
+    # pitch inertia is about 70 kg m^2 (pilot 0.9 m below the centre of mass): 1 kg m^2/s ~ 0.8 deg/s
+    if mass_splitting:
+        assert spin < 2.5
+    else:
+        assert spin > 10.0

@@ -36,6 +36,7 @@ class ModelBuilder:
         self.stick_rest: list[float] = []
         self.stick_weight: list[float] = []
         self.tri_indices: list[tuple[int, int, int]] = []
+        self.tri_loading: list[float] = []
         self.nail_particles: list[int] = []
         self.nail_target: list[Sequence[float]] = []
         self.objects: list[ObjectRecord] = []
@@ -93,13 +94,32 @@ class ModelBuilder:
         self.stick_weight.append(float(weight))
         return self.stick_count - 1
 
-    def add_triangle(self, i: int, j: int, k: int) -> int:
-        """Add an aerodynamic triangle (i, j, k); returns its index."""
+    def add_triangle(self, i: int, j: int, k: int, loading: float = 1.0) -> int:
+        """Add an aerodynamic triangle (i, j, k); returns its index.
+
+        ``loading`` is the triangle's share of its sail's attached-flow load (1 = uniform; see
+        :meth:`set_triangle_loading`).
+        """
         n = self.particle_count
         if len({i, j, k}) != 3 or not all(0 <= v < n for v in (i, j, k)):
             raise ValueError(f"triangle ({i}, {j}, {k}) needs three distinct particles among 0..{n - 1}")
         self.tri_indices.append((int(i), int(j), int(k)))
+        self.tri_loading.append(_check_loading(loading))
         return self.tri_count - 1
+
+    def set_triangle_loading(self, tri_ids, loading) -> None:
+        """Set the chordwise loading factor of triangles ``tri_ids`` (dimensionless, >= 0).
+
+        Used by the ``plate`` air model only: at small angles of attack a triangle's normal force is
+        multiplied by its factor, fading to 1 as the flow separates (see :mod:`warpsim.kernels.aero`).
+        A sail's factors should average 1 over its area so that its total force is unchanged.
+        """
+        tri_ids = np.atleast_1d(np.asarray(tri_ids, dtype=np.int64))
+        loading = np.broadcast_to(np.asarray(loading, dtype=np.float64), tri_ids.shape)
+        for t, value in zip(tri_ids, loading, strict=True):
+            if not 0 <= t < self.tri_count:
+                raise ValueError(f"triangle {t} does not exist")
+            self.tri_loading[t] = _check_loading(value)
 
     def add_nail(self, i: int, target=None) -> int:
         """Fix particle ``i`` at ``target`` [m] (default: where it is); returns the nail index.
@@ -298,6 +318,7 @@ class ModelBuilder:
         tris = np.array(self.tri_indices, dtype=np.int32).reshape(-1, 3)
         m.tri_indices_np = tris
         m.tri_indices = wp.array(tris, dtype=wp.vec3i, device=device)
+        m.tri_loading = wp.array(np.array(self.tri_loading, dtype=np.float32), dtype=wp.float32, device=device)
         start, ids = _csr(tris.reshape(-1), np.repeat(np.arange(len(tris), dtype=np.int32), 3), n)
         m.particle_tri_start = wp.array(start, dtype=wp.int32, device=device)
         m.particle_tri_ids = wp.array(ids, dtype=wp.int32, device=device)
@@ -308,3 +329,10 @@ class ModelBuilder:
         m.air_density = self.air_density
         m.objects = list(self.objects)
         return m
+
+
+def _check_loading(value: float) -> float:
+    value = float(value)
+    if not (np.isfinite(value) and value >= 0.0):
+        raise ValueError(f"triangle loading must be finite and >= 0, got {value}")
+    return value

@@ -62,6 +62,7 @@ class Model:
         stick_weight: ``[stick_count]`` weight of each stick in the per-particle average (1 = the paper).
         particle_stick_weight: host ``[particle_count]`` summed weight of each particle's sticks.
         tri_indices: ``[tri_count]`` vec3i triangle vertices.
+        tri_loading: ``[tri_count]`` chordwise loading factor of each triangle (``plate`` air model; 1 = uniform).
         particle_stick_start, particle_stick_refs: CSR adjacency particle -> ``2*stick + end``.
         particle_tri_start, particle_tri_ids: CSR adjacency particle -> triangle.
         nail_particles: host ``[nail_count]`` particle index of each nail.

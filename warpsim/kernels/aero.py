@@ -13,6 +13,16 @@ to the triangle and pushed the way the wind blows through it:
   *Fluid-Dynamic Lift*, 1985, ch. 21 flat-plate fit; ``C_N(90 deg) = 1.98``, about the paper's 2),
   ``F = 0.5 * rho * |w|^2 * area * C_N * sign(n.w) * n``.
 
+  A uniform load per unit area would put every sail's centre of pressure at its area centroid at every
+  angle of attack. A real plate or sail is loaded most near its leading edge: thin-aerofoil theory gives
+  a pressure difference ``~ sqrt((1 - xi) / xi)`` at chord fraction ``xi``, with its centre at the quarter
+  chord, and as the flow separates the load evens out towards the half chord (Hoerner & Borst, ch. 2 and
+  21: the plate's centre of pressure moves from about 0.25 to 0.5 chord between 0 and 90 degrees). A
+  builder may give each triangle a static loading factor ``L`` (area-weighted mean 1 over its sail, see
+  :func:`warpsim.objects.delta.chordwise_loading`); the plate force is multiplied by
+  ``L + (1 - L) * sin(alpha)``, which keeps the sail's total force and moves its centre of pressure from
+  near the quarter chord at small angles to the area centroid at 90 degrees. The ``paper`` model ignores it.
+
 Each vertex receives one third of its triangle's force. The wind may grow with height above the
 terrain by a power law ``(h / h_ref)^shear_exponent`` (exponent 0 = uniform wind).
 """
@@ -36,8 +46,11 @@ class AeroModel(enum.IntEnum):
 
 
 @wp.func
-def normal_force(n: wp.vec3, area: float, w_rel: wp.vec3, air_density: float, aero_model: int) -> wp.vec3:
-    """Air force [N] on a flat triangle of unit normal ``n`` and ``area`` [m^2] in relative wind ``w_rel`` [m/s]."""
+def normal_force(
+    n: wp.vec3, area: float, w_rel: wp.vec3, air_density: float, aero_model: int, loading: float
+) -> wp.vec3:
+    """Air force [N] on a flat triangle of unit normal ``n`` and ``area`` [m^2] in relative wind ``w_rel`` [m/s];
+    ``loading`` is its chordwise loading factor (``plate`` only, 1 = uniform)."""
     wn = wp.dot(n, w_rel)
     if aero_model == 0:
         return n * (air_density * wn * wp.abs(wn) * area)
@@ -47,7 +60,7 @@ def normal_force(n: wp.vec3, area: float, w_rel: wp.vec3, air_density: float, ae
     sin_alpha = wp.abs(wn) / speed
     if sin_alpha < 1.0e-6:
         return wp.vec3(0.0)
-    c_n = 1.0 / (0.222 + 0.283 / sin_alpha)
+    c_n = (1.0 / (0.222 + 0.283 / sin_alpha)) * (loading + (1.0 - loading) * sin_alpha)
     return n * (0.5 * air_density * speed * speed * area * c_n * wp.sign(wn))
 
 
@@ -63,6 +76,7 @@ def wind_at(wind: wp.vec3, height_above_ground: float, reference_height: float, 
 @wp.kernel
 def _triangle_air_force(
     tri_indices: wp.array(dtype=wp.vec3i),
+    tri_loading: wp.array(dtype=wp.float32),
     particle_world: wp.array(dtype=wp.int32),
     hf: HeightfieldData,
     particle_q: wp.array(dtype=wp.vec3),
@@ -92,7 +106,7 @@ def _triangle_air_force(
     centre = (a + b + c) / 3.0
     ground = terrain_height(hf, centre[0], centre[1])
     w = wind_at(wind[particle_world[idx[0]]], centre[2] - ground, shear_reference_height, shear_exponent)
-    force = normal_force(cross / cross_len, 0.5 * cross_len, w - velocity, air_density, aero_model)
+    force = normal_force(cross / cross_len, 0.5 * cross_len, w - velocity, air_density, aero_model, tri_loading[t])
     tri_force_out[t] = force * (aero_scale / 3.0)
 
 
@@ -122,6 +136,7 @@ def triangle_air_force(model, state, control, dt: float, params, tri_force_out: 
         dim=model.tri_count,
         inputs=[
             model.tri_indices,
+            model.tri_loading,
             model.particle_world,
             model.terrain_data,
             state.particle_q,

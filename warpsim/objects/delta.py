@@ -73,3 +73,29 @@ def add_rigid_frame(
     sticks += [builder.add_stick(v, p, weight=weight) for v in virtual for p in points]
     sticks += [builder.add_stick(a, b, weight=weight) for a, b in zip(virtual[:-1], virtual[1:], strict=True)]
     return DeltaFrame(points, keel, virtual, sticks)
+
+
+def chordwise_loading(
+    builder: ModelBuilder, tris, nose, fwd, left, chord: float, semi_span: float, xi_min: float = 0.02
+) -> np.ndarray:
+    """Thin-aerofoil chordwise loading factors of a delta sail's triangles (area-weighted mean 1).
+
+    Each triangle's centroid is placed at chord fraction ``xi`` of its chordwise strip (0 at the leading
+    edge, 1 at the trailing edge; the nose at ``nose``, the trailing edge ``chord`` [m] behind it along
+    ``-fwd``, the tips ``semi_span`` [m] out along ``+-left``) and gets ``sqrt((1 - xi) / xi)``, the
+    flat-plate pressure difference of thin-aerofoil theory, whose centre lies at the quarter chord;
+    ``xi`` is clipped to ``[xi_min, 1 - xi_min]``. The factors are scaled so that their area-weighted
+    mean is 1. Returns the ``[len(tris)]`` factors (also written into the builder).
+    """
+    tris = np.asarray(tris, dtype=np.int64)
+    q = np.asarray(builder.particle_q, dtype=np.float64)
+    corners = q[np.asarray(builder.tri_indices, dtype=np.int64)[tris]]
+    d = corners.mean(axis=1) - np.asarray(nose, dtype=np.float64)
+    behind = -(d @ np.asarray(fwd))
+    leading = chord * np.minimum(np.abs(d @ np.asarray(left)) / semi_span, 1.0)
+    xi = np.clip((behind - leading) / np.maximum(chord - leading, 1e-9), xi_min, 1.0 - xi_min)
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    loading = np.sqrt((1.0 - xi) / xi)
+    loading *= area.sum() / (area * loading).sum()
+    builder.set_triangle_loading(tris, loading)
+    return loading

@@ -20,7 +20,7 @@ import numpy as np
 from ..builder import ModelBuilder
 from ..model import ObjectRecord
 from ..terrain import Heightfield
-from .delta import add_rigid_frame, body_axes
+from .delta import add_rigid_frame, body_axes, chordwise_loading
 
 PAPER_COUNTS = {"particles": 49, "sticks": 198, "triangles": 64}
 
@@ -49,10 +49,14 @@ class HangGliderConfig:
             is raised by this angle, growing linearly from 0 at the keel (real sails twist this way;
             it is what lets a swept wing trim with its centre of mass ahead of the sail's centre).
         frame_mass_fraction: share of ``glider_mass`` carried by the leading-edge and keel particles
-            (the tubes); the rest minus the virtual particles' 10 % is spread over the sail cloth.
+            (the tubes), at most 0.85; the rest minus the virtual particles' 10 % is spread over the sail cloth.
         frame_weight: weight of the frame's sticks (leading edges, keel, virtual ties) in the constraint
             average (1 = the paper; 6 counts each as six sticks, keeping the frame within 1 % under the
             pilot's load).
+        chord_loading: load the sail most near its leading edge under the ``plate`` air model (thin-aerofoil
+            loading, centre of pressure near the quarter chord; see :mod:`warpsim.kernels.aero`). Off:
+            uniform load, centre of pressure at the area centroid, and the glider has almost no pitch
+            stiffness.
     """
 
     divisions: int = 8
@@ -73,6 +77,7 @@ class HangGliderConfig:
     washout: float = 10.0
     frame_mass_fraction: float = 0.6
     frame_weight: float = 6.0
+    chord_loading: bool = True
 
 
 def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Heightfield) -> ObjectRecord:
@@ -103,6 +108,8 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
         nose, tip_l, tip_r, n, 1.0, vel, shape=twist
     )  # masses are set per part below
     sail = np.arange(p0, p0 + sail_count)
+    if cfg.chord_loading:
+        chordwise_loading(builder, tris, nose, fwd, left, cfg.chord, semi)
 
     centre = (nose + tip_l + tip_r) / 3.0
     frame = add_rigid_frame(

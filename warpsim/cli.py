@@ -1,4 +1,4 @@
-"""The ``warpsim`` command: list, info, run.
+"""The ``warpsim`` command: list, info, run, convert.
 
 Every error a user can cause ends with one line ``warpsim <command>: error: ...`` and exit code 2.
 """
@@ -98,8 +98,12 @@ def build_parser() -> argparse.ArgumentParser:
         "simulated time, steps, wall time, steps per second, real-time factor, worst stick "
         "stretch. Shows progress on a terminal; Ctrl-C stops cleanly.",
     )
-    run.add_argument("scene", metavar="SCENE")
-    run.add_argument("--seconds", type=_positive_float("--seconds"), help="simulated time [s] (default: scene's)")
+    run.add_argument("scene", metavar="SCENE", nargs="?", help="the scene (not with --resume)")
+    run.add_argument(
+        "--seconds",
+        type=_positive_float("--seconds"),
+        help="simulated time [s] (default: scene's); with --resume, the time to add",
+    )
     run.add_argument("--dt", type=_positive_float("--dt"), help="time step [s] (default: scene's, 0.01)")
     run.add_argument("--iterations", type=_iterations, help="constraint iterations per step (default 55)")
     run.add_argument("--fps", type=_positive_float("--fps"), help="output frames per simulated second")
@@ -113,6 +117,31 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--realtime", action="store_true", help="pace the run to the wall clock")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    run.add_argument(
+        "--usd",
+        metavar="OUT",
+        help="write an animated USD stage (.usda text, .usdc binary, .usdz package), one time sample per frame; "
+        "written when the run ends, also on Ctrl-C",
+    )
+    run.add_argument(
+        "--h5",
+        metavar="OUT.h5",
+        help="stream a recording (positions, diagnostics, topology, descriptor) frame by frame; "
+        "an interrupted run keeps every completed frame",
+    )
+    run.add_argument(
+        "--resume",
+        metavar="REC.h5",
+        help="continue a recording from its last frame, appending to it (scene and settings come from it)",
+    )
+
+    convert = sub.add_parser(
+        "convert",
+        help="turn a recording into a USD stage",
+        description="Write the frames of an HDF5 recording as an animated USD stage (same layout as run --usd).",
+    )
+    convert.add_argument("recording", metavar="REC.h5")
+    convert.add_argument("output", metavar="OUT.usda|.usdc|.usdz")
     return parser
 
 
@@ -193,33 +222,167 @@ def cmd_info(args) -> int:
     return 0
 
 
+H5_EXTENSIONS = (".h5", ".hdf5")
+
+
+def _check_h5_output(path: str) -> Path:
+    out = Path(path)
+    if out.suffix.lower() not in H5_EXTENSIONS:
+        raise UsageError(f"--h5 {path}: unknown extension {out.suffix!r}; use .h5 or .hdf5")
+    if not out.parent.resolve().is_dir():
+        raise UsageError(f"--h5 {path}: directory {out.parent} does not exist")
+    return out
+
+
+class _StopRequests:
+    """SIGINT (Ctrl-C) and SIGTERM ask a run to stop after the current frame; a second one stops at once."""
+
+    def __init__(self):
+        import signal
+
+        self.requested = False
+        self.previous = {}
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            try:
+                self.previous[sig] = signal.signal(sig, self._handle)
+            except ValueError:  # not the main thread (e.g. a test runner's worker): leave signals alone
+                pass
+
+    def _handle(self, signum, frame):
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+
+    def __call__(self) -> bool:
+        return self.requested
+
+    def restore(self) -> None:
+        import signal
+
+        for sig, handler in self.previous.items():
+            signal.signal(sig, handler)
+
+
 def cmd_run(args) -> int:
-    """Run a scene and print the summary."""
+    """Run a scene (or continue a recording) and print the summary."""
+    from .descriptor import load_text, to_toml
+    from .io.hdf5 import H5Recorder, Recording, RecordingError
+    from .io.usd import UsdOutputError, UsdWriter, check_output_path
     from .runner import Simulation
 
-    descriptor, _, where = _load(args)
+    if args.resume and args.scene:
+        raise UsageError("give either SCENE or --resume REC.h5, not both (a recording holds its scene)")
+    if not args.resume and not args.scene:
+        raise UsageError("missing SCENE (a built-in object, a scene name or a .toml path), or --resume REC.h5")
+    if args.resume and args.h5:
+        raise UsageError("--resume appends to its recording; --h5 is not needed")
+    try:
+        usd_path = check_output_path(args.usd) if args.usd else None
+    except UsdOutputError as err:
+        raise UsageError(f"--usd {err}") from None
+    h5_path = _check_h5_output(args.h5) if args.h5 else None
     device = _check_device(args.device)
-    seconds = descriptor["scene"]["seconds"]
+
+    checkpoint = None
+    if args.resume:
+        try:
+            with Recording(args.resume) as recording:
+                checkpoint = recording.checkpoint()
+                text, where = recording.descriptor_text, f"{args.resume} (resumed)"
+        except RecordingError as err:
+            raise UsageError(f"--resume {err}") from None
+        for name in ("set", "dt", "iterations", "fps"):
+            if getattr(args, name):
+                raise UsageError(f"--{name} cannot change a resumed run; it continues with the recording's settings")
+        descriptor = load_text(text, where)
+        seconds = args.seconds if args.seconds is not None else descriptor["scene"]["seconds"]
+    else:
+        descriptor, _, where = _load(args)
+        seconds = descriptor["scene"]["seconds"]
     show_progress = not args.quiet and sys.stderr.isatty()
     sim = Simulation(descriptor, device=device, where=where)
+    if checkpoint is not None:
+        sim.restore(checkpoint)
     if not args.quiet:
         m = sim.model
         print(
             f"{where}: {m.particle_count} particles, {m.stick_count} sticks, {m.tri_count} triangles; "
             f"dt {sim.dt:g} s, {descriptor['solver']['method']}, device {device}"
+            + (f"; from t = {sim.state.time:.3f} s, frame {checkpoint['frame']}" if checkpoint else "")
         )
 
     def progress(t, total, steps, wall):
         rate = steps / wall if wall > 0 else 0.0
-        sys.stderr.write(f"\r  t = {t:8.2f} / {total:.2f} s  ({100 * t / total:5.1f}%)  {rate:10,.0f} steps/s")
+        sys.stderr.write(f"\r  t = {t:8.2f} s  ({100 * steps * sim.dt / total:5.1f}%)  {rate:10,.0f} steps/s")
         sys.stderr.flush()
 
-    summary = sim.run(seconds, on_progress=progress if show_progress else None, realtime=args.realtime)
+    stop = _StopRequests()
+    recorder = usd = None
+    try:
+        if args.resume:
+            recorder = H5Recorder(args.resume, sim, resume=True)
+        elif h5_path:
+            recorder = H5Recorder(h5_path, sim, to_toml(descriptor), where)
+        if usd_path:
+            usd = UsdWriter(usd_path, sim.model, sim.steps_per_frame * sim.dt)
+
+        def on_frame(frame):
+            if recorder:
+                recorder.write(frame)
+            if usd:
+                usd.write(frame.time, frame.positions)
+
+        summary = sim.run(
+            seconds,
+            on_frame=on_frame if (recorder or usd) else None,
+            on_progress=progress if show_progress else None,
+            realtime=args.realtime,
+            stop=stop,
+        )
+    finally:
+        if recorder:
+            recorder.close()
+        if usd:
+            usd.close()
+        stop.restore()
     if show_progress:
         sys.stderr.write("\r" + " " * 70 + "\r")
     if not args.quiet:
         print(summary.text())
+        for label, path in (("recording", args.resume or h5_path), ("USD stage", usd_path)):
+            if path:
+                print(f"  {label}: {path}")
     return 130 if summary.interrupted else 0
+
+
+def cmd_convert(args) -> int:
+    """Write a recording's frames as a USD stage."""
+    from .io.hdf5 import RecordingError
+    from .io.usd import UsdOutputError, check_output_path
+
+    try:
+        check_output_path(args.output)
+        path = convert(args.recording, args.output)
+    except (RecordingError, UsdOutputError) as err:
+        raise UsageError(str(err)) from None
+    print(f"{args.recording} -> {path}")
+    return 0
+
+
+def convert(recording_path, output) -> Path:
+    """Write the frames of the recording at ``recording_path`` to the USD stage ``output``; returns its path."""
+    from .descriptor import load_text
+    from .io.hdf5 import Recording
+    from .io.usd import UsdWriter
+    from .runner import build_model
+
+    with Recording(recording_path) as recording:
+        descriptor = load_text(recording.descriptor_text, f"{recording_path}: descriptor")
+        model = build_model(descriptor, "cpu", str(recording_path))
+        writer = UsdWriter(output, model, float(recording.file.attrs["frame_interval"]))
+        for k in range(recording.frame_count):
+            writer.write(float(recording.time[k]), recording.positions(k))
+        return writer.close()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -231,7 +394,7 @@ def main(argv: list[str] | None = None) -> int:
     wp.config.log_level = wp.LOG_WARNING  # no per-module load lines on the user's terminal
     from .descriptor import DescriptorError
 
-    commands = {"list": cmd_list, "info": cmd_info, "run": cmd_run}
+    commands = {"list": cmd_list, "info": cmd_info, "run": cmd_run, "convert": cmd_convert}
     try:
         return commands[args.command](args)
     except (DescriptorError, UsageError) as err:

@@ -33,7 +33,8 @@ class ObjectRecord:
         parts: part name -> particle indices (e.g. ``"sail"``, ``"pilot"``, ``"virtual"``).
         tri_parts: part name -> triangle indices.
         stick_groups: group name -> stick indices (e.g. ``"frame"``, ``"control"``).
-        meta: object-specific values (paper counts, control-stick tables, reference points).
+        meta: object-specific values (paper counts, control-stick tables, reference points); ``curves``:
+            part name -> list of particle chains drawn as curves in outputs (ropes, lines).
     """
 
     name: str

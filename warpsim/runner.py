@@ -7,6 +7,7 @@ steps of ``dt`` as one frame lasts. Diagnostics are computed on the host once pe
 from __future__ import annotations
 
 import dataclasses
+import json
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -75,6 +76,7 @@ class Frame:
         positions: host ``[particle_count, 3]`` positions [m].
         worst_stretch: largest ``|l - r|/r`` over all sticks (dimensionless).
         kinetic_energy: total kinetic energy [J] of the free particles.
+        velocities: host ``[particle_count, 3]`` velocities ``(x - x_prev)/dt`` [m/s].
     """
 
     index: int
@@ -82,6 +84,7 @@ class Frame:
     positions: np.ndarray
     worst_stretch: float
     kinetic_energy: float
+    velocities: np.ndarray | None = None
 
 
 @dataclass
@@ -244,7 +247,50 @@ class Simulation:
         v = self.state.velocities(self.dt)
         mass = np.where(np.isfinite(self.model.particle_mass), self.model.particle_mass, 0.0)
         energy = float(0.5 * np.sum(mass * np.einsum("ij,ij->i", v, v)))
-        return Frame(index, self.state.time, q, stretch, energy)
+        return Frame(index, self.state.time, q, stretch, energy, v)
+
+    def checkpoint(self) -> dict:
+        """Everything needed to continue this run exactly: state, control arrays, gusts, step count.
+
+        Host copies: ``q``/``q_prev`` ``[particle_count, 3]`` float32 [m], ``time`` [s], ``steps``,
+        ``stick_rest`` [m], ``nail_target`` [m], ``wind`` [m/s], ``gusts`` (JSON text or ``""``),
+        ``applied`` (JSON text of the scheduled control values in force).
+        """
+        gusts = ""
+        if self.gusts is not None:
+            g = self.gusts
+            gusts = json.dumps({"g": g.g.tolist(), "mean": g.mean.tolist(), "rng": g.rng.bit_generator.state})
+        return {
+            "q": self.state.particle_q.numpy().copy(),
+            "q_prev": self.state.particle_q_prev.numpy().copy(),
+            "time": float(self.state.time),
+            "steps": int(self.steps_taken),
+            "stick_rest": self.control.stick_rest.numpy().copy(),
+            "nail_target": self.control.nail_target.numpy().copy(),
+            "wind": self.control.wind.numpy().copy(),
+            "gusts": gusts,
+            "applied": json.dumps({k: list(v) if isinstance(v, tuple) else v for k, v in self._applied.items()}),
+        }
+
+    def restore(self, checkpoint: dict) -> None:
+        """Continue from a :meth:`checkpoint` of a simulation of the same descriptor (bit for bit)."""
+        self.state.particle_q.assign(np.asarray(checkpoint["q"], dtype=np.float32))
+        self.state.particle_q_prev.assign(np.asarray(checkpoint["q_prev"], dtype=np.float32))
+        self.state.time = float(checkpoint["time"])
+        self.steps_taken = int(checkpoint["steps"])
+        self.control.stick_rest.assign(np.asarray(checkpoint["stick_rest"], dtype=np.float32))
+        self.control.nail_target.assign(np.asarray(checkpoint["nail_target"], dtype=np.float32))
+        self.control.wind.assign(np.asarray(checkpoint["wind"], dtype=np.float32))
+        if checkpoint.get("gusts") and self.gusts is not None:
+            g = json.loads(checkpoint["gusts"])
+            self.gusts.g = np.asarray(g["g"], dtype=np.float64)
+            self.gusts.mean = np.asarray(g["mean"], dtype=np.float64)
+            self.gusts.rng.bit_generator.state = g["rng"]
+        applied = json.loads(checkpoint.get("applied") or "{}")
+        self._applied = {k: tuple(v) if isinstance(v, list) else v for k, v in applied.items()}
+        for record in self.model.objects:  # objects remember their control values (e.g. pitch and roll)
+            names = registry.OBJECTS[record.kind].controls
+            record.meta.setdefault("controls", {}).update({k: v for k, v in self._applied.items() if k in names})
 
     def run(
         self,
@@ -252,30 +298,45 @@ class Simulation:
         on_frame: Callable[[Frame], None] | None = None,
         on_progress: Callable[[float, float, int, float], None] | None = None,
         realtime: bool = False,
+        stop: Callable[[], bool] | None = None,
     ) -> RunSummary:
         """Run for ``seconds`` of simulated time, calling ``on_frame`` on the initial and every later frame.
 
+        Frames lie on a fixed grid: frame ``k`` ends after ``k * steps_per_frame`` steps counted from the
+        start of the scene; controls and gusts change at frame starts. A run that ends between two grid
+        points emits a last, shorter frame with the next index; a run continued from there (after
+        :meth:`restore`) first completes that frame and emits it again under the same index, so a run
+        cut in two and continued gives the same frames, bit for bit, as one run. When continuing, the
+        current state is not passed to ``on_frame`` again.
+
         ``on_progress(t, seconds, steps, wall)`` is called at most about 5 times per wall second.
-        Ctrl-C stops the run after the current frame; the summary then says ``interrupted``.
+        ``stop()`` is asked before every frame (the CLI's answers True after SIGINT/SIGTERM); True, or a
+        ``KeyboardInterrupt``, ends the run there and the summary says ``interrupted``.
         """
         total_steps = int(round(seconds / self.dt))
+        spf = self.steps_per_frame
         worst = 0.0
         steps = 0
         start = time.perf_counter()
         last_report = start
         interrupted = False
         try:
-            first = self.frame(0)
+            index = -(-self.steps_taken // spf)  # ceil: the frame the current state belongs to
+            first = self.frame(index)
             worst = first.worst_stretch
-            if on_frame:
+            if on_frame and self.steps_taken == 0:
                 on_frame(first)
-            index = 0
             while steps < total_steps:
-                index += 1
-                n = min(self.steps_per_frame, total_steps - steps)
-                self.apply_schedule()
+                if stop is not None and stop():
+                    interrupted = True
+                    break
+                into = self.steps_taken % spf
+                if into == 0:  # a frame starts: controls and gusts move
+                    self.apply_schedule()
+                n = min(spf - into, total_steps - steps)
                 self.step(n)
                 steps += n
+                index = -(-self.steps_taken // spf)
                 frame = self.frame(index)
                 worst = max(worst, frame.worst_stretch)
                 if on_frame:
@@ -291,4 +352,4 @@ class Simulation:
         except KeyboardInterrupt:
             interrupted = True
         wp.synchronize_device(self.model.device)
-        return RunSummary(self.state.time, steps, time.perf_counter() - start, worst, interrupted)
+        return RunSummary(steps * self.dt, steps, time.perf_counter() - start, worst, interrupted)

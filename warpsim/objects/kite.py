@@ -154,6 +154,7 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
                 "anchor_nail": nail,
                 "spine": np.array(spars.keel),
                 "tips": (rows[n][0], rows[n][n]),
+                "curves": {"rope": [[int(i) for i in rope]]},
             },
         )
     )

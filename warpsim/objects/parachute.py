@@ -121,7 +121,7 @@ def build_parachute(builder: ModelBuilder, cfg: ParachuteConfig, terrain: Height
     rim_centre = centre + np.array([0.0, 0.0, sphere * np.cos(theta_max)])
     person_pos = rim_centre - np.array([0.0, 0.0, cfg.line_length])
     person = builder.add_particle(person_pos, cfg.person_mass, vel)
-    line_particles, line_sticks = [], []
+    line_particles, line_sticks, chains = [], [], []
     per_line_mass = cfg.line_mass / (cfg.line_count * max(cfg.line_particles, 1))
     for k in range(cfg.line_count):
         top = rim[int(round(k * len(rim) / cfg.line_count)) % len(rim)]
@@ -134,8 +134,10 @@ def build_parachute(builder: ModelBuilder, cfg: ParachuteConfig, terrain: Height
             line_particles += list(ids[1:])
             line_sticks += list(sticks)
             last = ids[-1]
+            chains.append([int(i) for i in ids] + [person])
         else:
             last = top
+            chains.append([int(top), person])
         line_sticks.append(builder.add_stick(last, person, weight=cfg.line_weight))
 
     virtual, hoop_sticks = [], []
@@ -163,7 +165,7 @@ def build_parachute(builder: ModelBuilder, cfg: ParachuteConfig, terrain: Height
                 "lines": np.array(line_sticks),
                 "hoop": np.array(hoop_sticks, dtype=int),
             },
-            meta={"rim": np.array(rim), "built_radius": cfg.radius, "person": person},
+            meta={"rim": np.array(rim), "built_radius": cfg.radius, "person": person, "curves": {"lines": chains}},
         )
     )
 

@@ -1,0 +1,316 @@
+"""Streaming HDF5 recordings: one frame appended at a time, readable while written, resumable.
+
+Layout (``F`` frames, ``N`` particles, ``M`` sticks, ``T`` triangles, ``O`` objects; SI units)::
+
+    /time                        [F]        float64  simulated time of each frame [s]
+    /positions                   [F, N, 3]  float32  particle positions [m] (chunk = 1 frame, gzip)
+    /diagnostics/worst_stretch   [F]        float32  largest |l - r| / r over all sticks
+    /diagnostics/kinetic_energy  [F]        float64  kinetic energy of the free particles [J]
+    /diagnostics/centre          [F, O, 3]  float32  mass centre of each object [m]
+    /diagnostics/altitude        [F, O]     float32  height of that centre above the terrain [m]
+    /diagnostics/airspeed        [F, O]     float32  |mean velocity - wind| of each object [m/s]
+    /topology/sticks             [M, 2]     int32    particle indices of each stick
+    /topology/stick_rest         [M]        float32  built rest lengths [m]
+    /topology/triangles          [T, 3]     int32    particle indices of each air-force triangle
+    /topology/particle_mass      [N]        float64  [kg] (inf = nailed)
+    /topology/particle_object    [N]        int32    object of each particle (index into attr ``objects``)
+    /topology/particle_part      [N]        int32    part of each particle (index into attr ``parts``; -1 none)
+    /topology/triangle_part      [T]        int32    part of each triangle (index into attr ``parts``)
+    /checkpoint/...                                  the state after the last frame, for ``--resume``
+
+Root attributes: ``format`` (``warpsim-recording``), ``format_version``, ``descriptor`` (the full scene
+descriptor as TOML), ``scene`` (where it came from), ``solver`` (JSON), ``warpsim_version``,
+``warp_version``, ``dt`` [s], ``steps_per_frame``, ``frame_interval`` [s]; on ``/topology``:
+``objects`` and ``parts`` (names, parts as ``object/part``).
+
+The file is written in HDF5's single-writer/multiple-reader (SWMR) mode and flushed after every
+frame: another process can open it while it grows, and an interrupted run leaves every completed
+frame readable. The checkpoint is written after its frame; on resume, frames after the checkpoint's
+(a frame whose checkpoint was not written) are dropped.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import signal
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+FORMAT = "warpsim-recording"
+FORMAT_VERSION = 1
+_GUSTS_BYTES = 4096  # JSON of the gust generator's state, zero-padded
+
+
+@contextlib.contextmanager
+def signals_held():
+    """Hold SIGINT/SIGTERM inside the block (they are delivered right after it), so that an interrupted run
+    never leaves a frame half-written: without its checkpoint, or in one output and not the other."""
+    held = {signal.SIGINT, signal.SIGTERM}
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+class RecordingError(ValueError):
+    """The file is not a warpsim recording, or cannot be continued."""
+
+
+def _names(sim) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray]:
+    """Object names, part names (``object/part``), part of each particle, of each triangle, object of each particle."""
+    model = sim.model
+    objects, parts = [], []
+    particle_part = np.full(model.particle_count, -1, dtype=np.int32)
+    particle_object = np.full(model.particle_count, -1, dtype=np.int32)
+    triangle_part = np.full(model.tri_count, -1, dtype=np.int32)
+    for k, record in enumerate(model.objects):
+        objects.append(record.name)
+        particle_object[record.particles] = k
+        for part, ids in record.parts.items():
+            parts.append(f"{record.name}/{part}")
+            particle_part[ids] = len(parts) - 1
+        for part, ids in record.tri_parts.items():
+            name = f"{record.name}/{part}"
+            if name not in parts:
+                parts.append(name)
+            triangle_part[ids] = parts.index(name)
+    return objects, parts, particle_part, triangle_part, particle_object
+
+
+def object_diagnostics(sim, positions: np.ndarray, velocities: np.ndarray) -> dict:
+    """Per-object mass centre [m], altitude above the terrain [m] and airspeed [m/s] of one frame."""
+    model = sim.model
+    mass = np.where(np.isfinite(model.particle_mass), model.particle_mass, 0.0)
+    wind = sim.control.wind.numpy()
+    centre, altitude, airspeed = [], [], []
+    for record in model.objects:
+        ids = record.particles
+        m = mass[ids]
+        total = m.sum() if m.sum() > 0 else 1.0
+        c = (m[:, None] * positions[ids]).sum(axis=0) / total
+        v = (m[:, None] * velocities[ids]).sum(axis=0) / total
+        centre.append(c)
+        altitude.append(c[2] - float(model.terrain.height(c[0], c[1])))
+        airspeed.append(np.linalg.norm(v - wind[record.world]))
+    return {"centre": np.array(centre), "altitude": np.array(altitude), "airspeed": np.array(airspeed)}
+
+
+class H5Recorder:
+    """Append the frames of a :class:`warpsim.runner.Simulation` to an HDF5 recording.
+
+    Args:
+        path: the ``.h5`` file to create (``resume=False``) or to continue (``resume=True``).
+        sim: the simulation being recorded.
+        descriptor_text: the full descriptor as TOML (see :func:`warpsim.descriptor.to_toml`).
+        scene: where the scene came from (a path or ``built-in NAME``), stored as an attribute.
+        resume: open an existing recording and append after its checkpoint's frame.
+
+    Use as a context manager, or call :meth:`close`; call :meth:`write` with each frame.
+    """
+
+    def __init__(self, path, sim, descriptor_text: str = "", scene: str = "", resume: bool = False):
+        import warp as wp
+
+        from .. import __version__
+
+        self.path = Path(path)
+        self.sim = sim
+        model = sim.model
+        n, objects = model.particle_count, len(model.objects)
+        if resume:
+            self.file = h5py.File(self.path, "r+", libver="latest")
+            last = int(self.file["checkpoint/frame"][0])
+            for name in _FRAME_DATASETS:
+                self.file[name].resize(last + 1, axis=0)
+            self.frames = last + 1
+            self.file.swmr_mode = True
+            return
+        self.file = h5py.File(self.path, "w", libver="latest")
+        f = self.file
+        try:
+            object_names, parts, particle_part, triangle_part, particle_object = _names(sim)
+            f.attrs.update(
+                {
+                    "format": FORMAT,
+                    "format_version": FORMAT_VERSION,
+                    "descriptor": descriptor_text,
+                    "scene": scene,
+                    "solver": json.dumps(sim.descriptor["solver"]),
+                    "warpsim_version": __version__,
+                    "warp_version": wp.config.version,
+                    "dt": sim.dt,
+                    "steps_per_frame": sim.steps_per_frame,
+                    "frame_interval": sim.steps_per_frame * sim.dt,
+                }
+            )
+            top = f.create_group("topology")
+            top.attrs["objects"] = object_names
+            top.attrs["parts"] = parts
+            top["sticks"] = model.stick_particles_np
+            top["stick_rest"] = model.stick_rest.numpy()
+            top["triangles"] = model.tri_indices_np
+            top["particle_mass"] = model.particle_mass
+            top["particle_object"] = particle_object
+            top["particle_part"] = particle_part
+            top["triangle_part"] = triangle_part
+            gz = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+            f.create_dataset("time", (0,), maxshape=(None,), dtype="f8", chunks=(256,))
+            f.create_dataset("positions", (0, n, 3), maxshape=(None, n, 3), dtype="f4", chunks=(1, n, 3), **gz)
+            d = f.create_group("diagnostics")
+            d.create_dataset("worst_stretch", (0,), maxshape=(None,), dtype="f4", chunks=(256,))
+            d.create_dataset("kinetic_energy", (0,), maxshape=(None,), dtype="f8", chunks=(256,))
+            shape3 = {"maxshape": (None, objects, 3), "chunks": (64, objects, 3)}
+            d.create_dataset("centre", (0, objects, 3), dtype="f4", **shape3)
+            d.create_dataset("altitude", (0, objects), maxshape=(None, objects), dtype="f4", chunks=(64, objects))
+            d.create_dataset("airspeed", (0, objects), maxshape=(None, objects), dtype="f4", chunks=(64, objects))
+            c = f.create_group("checkpoint")
+            c.create_dataset("frame", data=np.array([-1], dtype=np.int64))
+            c.create_dataset("time", data=np.zeros(1))
+            c.create_dataset("steps", data=np.zeros(1, dtype=np.int64))
+            c.create_dataset("q", (n, 3), dtype="f4")
+            c.create_dataset("q_prev", (n, 3), dtype="f4")
+            c.create_dataset("stick_rest", data=model.stick_rest.numpy())
+            c.create_dataset("nail_target", data=sim.control.nail_target.numpy())
+            c.create_dataset("wind", data=sim.control.wind.numpy())
+            c.create_dataset("gusts", (_GUSTS_BYTES,), dtype="u1")
+            c.create_dataset("applied", (_GUSTS_BYTES,), dtype="u1")
+            self.frames = 0
+            f.swmr_mode = True
+        except BaseException:
+            self.file.close()
+            self.path.unlink(missing_ok=True)
+            raise
+
+    def write(self, frame) -> None:
+        """Store one :class:`warpsim.runner.Frame` as row ``frame.index`` (the next row, or the last one again
+        when a resumed run completes a shorter last frame) and the simulation's state after it; flush."""
+        k = int(frame.index)
+        if not self.frames - 1 <= k <= self.frames:
+            raise ValueError(f"frame {k} does not follow the recording's last frame {self.frames - 1}")
+        diag = object_diagnostics(self.sim, frame.positions, frame.velocities)
+        cp = self.sim.checkpoint()
+        with signals_held():
+            self._write(k, frame, diag, cp)
+
+    def _write(self, k: int, frame, diag: dict, cp: dict) -> None:
+        f = self.file
+        for name in _FRAME_DATASETS:
+            f[name].resize(k + 1, axis=0)
+        f["time"][k] = frame.time
+        f["positions"][k] = frame.positions
+        f["diagnostics/worst_stretch"][k] = frame.worst_stretch
+        f["diagnostics/kinetic_energy"][k] = frame.kinetic_energy
+        f["diagnostics/centre"][k] = diag["centre"]
+        f["diagnostics/altitude"][k] = diag["altitude"]
+        f["diagnostics/airspeed"][k] = diag["airspeed"]
+        c = f["checkpoint"]
+        for name in ("q", "q_prev", "stick_rest", "nail_target", "wind"):
+            c[name][...] = cp[name]
+        c["time"][0] = cp["time"]
+        c["steps"][0] = cp["steps"]
+        c["gusts"][...] = _pad(cp["gusts"])
+        c["applied"][...] = _pad(cp["applied"])
+        c["frame"][0] = frame.index
+        self.frames = k + 1
+        f.flush()
+
+    def close(self) -> None:
+        """Flush and close the file (safe to call twice)."""
+        if self.file.id.valid:
+            self.file.flush()
+            self.file.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+_FRAME_DATASETS = (
+    "time",
+    "positions",
+    "diagnostics/worst_stretch",
+    "diagnostics/kinetic_energy",
+    "diagnostics/centre",
+    "diagnostics/altitude",
+    "diagnostics/airspeed",
+)
+
+
+def _pad(text: str) -> np.ndarray:
+    data = text.encode("utf-8")
+    if len(data) > _GUSTS_BYTES:
+        raise ValueError(f"checkpoint text too long ({len(data)} bytes)")
+    out = np.zeros(_GUSTS_BYTES, dtype=np.uint8)
+    out[: len(data)] = np.frombuffer(data, dtype=np.uint8)
+    return out
+
+
+def _unpad(data: np.ndarray) -> str:
+    return bytes(np.asarray(data, dtype=np.uint8)).rstrip(b"\0").decode("utf-8")
+
+
+class Recording:
+    """Read a recording (also while another process is still writing it).
+
+    Attributes:
+        path: the file. descriptor_text: the scene descriptor (TOML). scene: where it came from.
+        time: ``[F]`` frame times [s]. frame_count: ``F``.
+    """
+
+    def __init__(self, path):
+        self.path = Path(path)
+        if not self.path.is_file():
+            raise RecordingError(f"{path}: no such file")
+        try:
+            self.file = h5py.File(self.path, "r", libver="latest", swmr=True)
+        except OSError:
+            raise RecordingError(f"{path}: not an HDF5 file (expected a warpsim recording)") from None
+        if self.file.attrs.get("format") != FORMAT:
+            self.file.close()
+            raise RecordingError(f"{path}: an HDF5 file but not a warpsim recording (no format = {FORMAT!r})")
+        self.descriptor_text = str(self.file.attrs["descriptor"])
+        self.scene = str(self.file.attrs.get("scene", ""))
+        self.time = self.file["time"][:]
+        self.frame_count = len(self.time)
+
+    def positions(self, frame: int | slice = slice(None)) -> np.ndarray:
+        """Positions [m] of one frame ``[N, 3]`` or a slice of frames ``[F, N, 3]``."""
+        return self.file["positions"][frame]
+
+    def checkpoint(self) -> dict:
+        """The saved state after the last checkpointed frame (see :meth:`warpsim.runner.Simulation.restore`)."""
+        c = self.file["checkpoint"]
+        frame = int(c["frame"][0])
+        if frame < 0:
+            raise RecordingError(f"{self.path}: the recording has no frame to resume from")
+        return {
+            "frame": frame,
+            "q": c["q"][:],
+            "q_prev": c["q_prev"][:],
+            "time": float(c["time"][0]),
+            "steps": int(c["steps"][0]),
+            "stick_rest": c["stick_rest"][:],
+            "nail_target": c["nail_target"][:],
+            "wind": c["wind"][:],
+            "gusts": _unpad(c["gusts"][:]),
+            "applied": _unpad(c["applied"][:]),
+        }
+
+    def close(self) -> None:
+        """Close the file."""
+        self.file.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()

@@ -1,0 +1,234 @@
+"""Animated USD stages of a run, for external viewers (usdview, Blender, Omniverse).
+
+Layout: stage metadata ``upAxis = Z``, ``metersPerUnit = 1``, ``timeCodesPerSecond`` = the frame rate
+(one time code per output frame, frame ``k`` at time code ``k``), start/end time codes; ``/World`` is the
+default prim. ``/World/Terrain`` is a static mesh of the heightfield. Each object is an Xform
+``/World/<object>`` holding:
+
+* one Mesh per triangle part (sail, keel, canopy, cloth): topology written once, ``points`` and
+  ``extent`` time-sampled at every frame;
+* ``BasisCurves`` (linear) for its ropes and lines, with constant widths and time-sampled points;
+* a Sphere per heavy point (pilot, person) with a time-sampled translate.
+
+Virtual particles (the frame's helpers) are not drawn. Display colours tell the parts apart.
+
+The stage is built in memory and exported when the run ends (also on Ctrl-C/SIGTERM): first to a
+temporary file beside the target, then renamed over it, so a viewer never sees a half-written stage and
+a run killed outright leaves no file at all. ``.usdz`` packages a ``.usdc`` layer.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdUtils, Vt
+
+EXTENSIONS = (".usda", ".usdc", ".usdz")
+
+COLOURS = {
+    "terrain": (0.42, 0.50, 0.32),
+    "sail": (0.15, 0.45, 0.85),
+    "cloth": (0.85, 0.20, 0.20),
+    "keel": (0.90, 0.35, 0.15),
+    "canopy": (0.95, 0.75, 0.20),
+    "rope": (0.15, 0.15, 0.15),
+    "lines": (0.25, 0.25, 0.25),
+    "pilot": (0.95, 0.55, 0.10),
+    "person": (0.95, 0.55, 0.10),
+}
+SPHERE_PARTS = {"pilot": 0.3, "person": 0.3}  # radius [m]
+CURVE_WIDTH = {"rope": 0.03, "lines": 0.02}  # [m]
+
+
+class UsdOutputError(ValueError):
+    """An output path that cannot be written (missing directory, unknown extension)."""
+
+
+def check_output_path(path) -> Path:
+    """Check that ``path`` has a USD extension and an existing directory; returns it as a Path."""
+    path = Path(path)
+    if path.suffix.lower() not in EXTENSIONS:
+        raise UsdOutputError(f"{path}: unknown USD extension {path.suffix!r}; use one of {', '.join(EXTENSIONS)}")
+    if not path.parent.resolve().is_dir():
+        raise UsdOutputError(f"{path}: directory {path.parent} does not exist")
+    return path
+
+
+def _vec3f_array(points: np.ndarray) -> Vt.Vec3fArray:
+    return Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(points, dtype=np.float32))
+
+
+def _extent(points: np.ndarray) -> Vt.Vec3fArray:
+    return Vt.Vec3fArray([Gf.Vec3f(*map(float, points.min(axis=0))), Gf.Vec3f(*map(float, points.max(axis=0)))])
+
+
+def _colour(prim, part: str) -> None:
+    rgb = COLOURS.get(part, (0.7, 0.7, 0.7))
+    UsdGeom.Gprim(prim).CreateDisplayColorAttr(Vt.Vec3fArray([Gf.Vec3f(*rgb)]))
+
+
+def _prim_name(text: str) -> str:
+    name = "".join(c if c.isalnum() or c == "_" else "_" for c in text)
+    return name if name and not name[0].isdigit() else f"_{name}"
+
+
+class UsdWriter:
+    """Write the frames of a run as an animated USD stage.
+
+    Args:
+        path: output ``.usda``, ``.usdc`` or ``.usdz`` (checked by :func:`check_output_path`).
+        model: the :class:`warpsim.Model` (its objects' parts, triangles and curves say what to draw).
+        frame_interval: simulated time between frames [s]; ``timeCodesPerSecond = 1 / frame_interval``.
+
+    Call :meth:`write` with each frame's time and positions, then :meth:`close` (which exports). The time
+    code of a frame at time ``t`` is ``t / frame_interval``: whole numbers on the frame grid (a run's
+    shorter last frame falls between two).
+    """
+
+    def __init__(self, path, model, frame_interval: float):
+        self.path = check_output_path(path)
+        self.model = model
+        self.frame_interval = float(frame_interval)
+        self.stage = Usd.Stage.CreateInMemory()
+        stage = self.stage
+        UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+        UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+        fps = 1.0 / float(frame_interval)
+        stage.SetTimeCodesPerSecond(fps)
+        stage.SetFramesPerSecond(fps)
+        world = UsdGeom.Xform.Define(stage, "/World")
+        stage.SetDefaultPrim(world.GetPrim())
+        stage.GetRootLayer().customLayerData = {"creator": "warpsim"}
+        self._terrain(model.terrain)
+        self.meshes: list[tuple[UsdGeom.Mesh, np.ndarray]] = []  # mesh, particle ids of its points
+        self.curves: list[tuple[UsdGeom.BasisCurves, np.ndarray]] = []
+        self.spheres: list[tuple[Usd.Prim, int, UsdGeom.XformOp]] = []
+        for record in model.objects:
+            self._object(record)
+        self.first: int | None = None
+        self.last: int | None = None
+        self.closed = False
+
+    def _terrain(self, terrain) -> None:
+        ny, nx = terrain.heights.shape
+        xs = terrain.origin[0] + terrain.cell[0] * np.arange(nx)
+        ys = terrain.origin[1] + terrain.cell[1] * np.arange(ny)
+        gx, gy = np.meshgrid(xs, ys)
+        points = np.stack([gx, gy, terrain.heights], axis=-1).reshape(-1, 3)
+        i = np.arange(ny - 1)[:, None] * nx + np.arange(nx - 1)[None, :]
+        quads = np.stack([i, i + 1, i + nx + 1, i + nx], axis=-1).reshape(-1)
+        mesh = UsdGeom.Mesh.Define(self.stage, "/World/Terrain")
+        mesh.CreatePointsAttr(_vec3f_array(points))
+        mesh.CreateExtentAttr(_extent(points))
+        mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full((ny - 1) * (nx - 1), 4, dtype=np.int32)))
+        mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(quads.astype(np.int32)))
+        mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+        _colour(mesh.GetPrim(), "terrain")
+
+    def _object(self, record) -> None:
+        stage, model = self.stage, self.model
+        root = f"/World/{_prim_name(record.name)}"
+        UsdGeom.Xform.Define(stage, root)
+        for part, tri_ids in record.tri_parts.items():
+            tris = model.tri_indices_np[np.asarray(tri_ids, dtype=np.int64)]
+            ids, local = np.unique(tris.reshape(-1), return_inverse=True)
+            mesh = UsdGeom.Mesh.Define(stage, f"{root}/{_prim_name(part)}")
+            mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(tris), 3, dtype=np.int32)))
+            mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(local.astype(np.int32)))
+            mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+            mesh.CreateDoubleSidedAttr(True)
+            mesh.CreatePointsAttr()
+            mesh.CreateExtentAttr()
+            _colour(mesh.GetPrim(), part)
+            self.meshes.append((mesh, ids))
+        for part, chains in record.meta.get("curves", {}).items():
+            chains = [np.asarray(c, dtype=np.int64) for c in chains]
+            curves = UsdGeom.BasisCurves.Define(stage, f"{root}/{_prim_name(part)}")
+            curves.CreateTypeAttr(UsdGeom.Tokens.linear)
+            curves.CreateCurveVertexCountsAttr(Vt.IntArray([len(c) for c in chains]))
+            curves.CreateWidthsAttr(Vt.FloatArray([CURVE_WIDTH.get(part, 0.02)]))
+            curves.SetWidthsInterpolation(UsdGeom.Tokens.constant)
+            curves.CreatePointsAttr()
+            curves.CreateExtentAttr()
+            _colour(curves.GetPrim(), part)
+            self.curves.append((curves, np.concatenate(chains)))
+        for part, radius in SPHERE_PARTS.items():
+            for k, p in enumerate(record.parts.get(part, [])):
+                name = _prim_name(part) if k == 0 else f"{_prim_name(part)}_{k}"
+                sphere = UsdGeom.Sphere.Define(stage, f"{root}/{name}")
+                sphere.CreateRadiusAttr(radius)
+                sphere.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(-radius), Gf.Vec3f(radius)]))
+                _colour(sphere.GetPrim(), part)
+                op = sphere.AddTranslateOp()
+                self.spheres.append((sphere.GetPrim(), int(p), op))
+
+    def time_code(self, time: float) -> float:
+        """Time code of simulated ``time`` [s] (frame grid points are whole numbers)."""
+        code = time / self.frame_interval
+        return float(round(code)) if abs(code - round(code)) < 1e-6 else code
+
+    def write(self, time: float, positions: np.ndarray) -> None:
+        """Time-sample every drawn part at simulated ``time`` [s] from ``positions`` ``[particle_count, 3]`` [m]."""
+        index = self.time_code(time)
+        t = Usd.TimeCode(index)
+        for mesh, ids in self.meshes:
+            pts = positions[ids]
+            mesh.GetPointsAttr().Set(_vec3f_array(pts), t)
+            mesh.GetExtentAttr().Set(_extent(pts), t)
+        for curves, ids in self.curves:
+            pts = positions[ids]
+            curves.GetPointsAttr().Set(_vec3f_array(pts), t)
+            curves.GetExtentAttr().Set(_extent(pts), t)
+        for _, p, op in self.spheres:
+            op.Set(Gf.Vec3d(*map(float, positions[p])), t)
+        self.first = index if self.first is None else min(self.first, index)
+        self.last = index if self.last is None else max(self.last, index)
+
+    def close(self) -> Path | None:
+        """Export the stage atomically to :attr:`path`; returns it (None when no frame was written)."""
+        if self.closed:
+            return self.path
+        self.closed = True
+        if self.first is None:
+            return None
+        self.stage.SetStartTimeCode(self.first)
+        self.stage.SetEndTimeCode(self.last)
+        suffix = self.path.suffix.lower()
+        directory = self.path.resolve().parent
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{self.path.stem}.", suffix=suffix, dir=directory)
+        os.close(fd)
+        tmp = Path(tmp_name)
+        umask = os.umask(0)
+        os.umask(umask)
+        try:
+            if suffix == ".usdz":
+                with tempfile.TemporaryDirectory() as scratch:
+                    layer = Path(scratch) / f"{self.path.stem}.usdc"
+                    self.stage.GetRootLayer().Export(str(layer))
+                    tmp.unlink()
+                    if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(layer)), str(tmp)):
+                        raise OSError(f"could not package {self.path}")
+            elif not self.stage.GetRootLayer().Export(str(tmp)):
+                raise OSError(f"could not write {self.path}")
+            os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; the stage is an ordinary output
+            os.replace(tmp, self.path)
+        finally:
+            tmp.unlink(missing_ok=True)
+        return self.path
+
+
+def validate(path) -> tuple[list[str], list[str]]:
+    """Run every validator registered with ``pxr.UsdValidation`` on the stage at ``path``.
+
+    Returns ``(names of the validators run, error messages)``; an empty error list means it passed.
+    """
+    from pxr import UsdValidation
+
+    registry = UsdValidation.ValidationRegistry()
+    validators = registry.GetOrLoadAllValidators()
+    stage = Usd.Stage.Open(str(path))
+    errors = UsdValidation.ValidationContext(validators).Validate(stage)
+    return [v.GetMetadata().name for v in validators], [e.GetMessage() for e in errors]

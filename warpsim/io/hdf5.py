@@ -23,10 +23,11 @@ descriptor as TOML), ``scene`` (where it came from), ``solver`` (JSON), ``warpsi
 ``warp_version``, ``dt`` [s], ``steps_per_frame``, ``frame_interval`` [s]; on ``/topology``:
 ``objects`` and ``parts`` (names, parts as ``object/part``).
 
-The file is written in HDF5's single-writer/multiple-reader (SWMR) mode and flushed after every
-frame: another process can open it while it grows, and an interrupted run leaves every completed
-frame readable. The checkpoint is written after its frame; on resume, frames after the checkpoint's
-(a frame whose checkpoint was not written) are dropped.
+The file is written in HDF5's single-writer/multiple-reader (SWMR) mode: another process can open it
+while it grows. Frames are flushed, with a checkpoint of the state after the last of them, every
+``H5Recorder.sync_interval`` (0.5) wall seconds and when the recorder closes, which the CLI does on
+Ctrl-C and SIGTERM: an interrupted run keeps every completed frame, and a killed one (SIGKILL, power
+loss) keeps those of the last sync. On resume, frames after the checkpoint's are dropped and redone.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from __future__ import annotations
 import contextlib
 import json
 import signal
+import time
 from pathlib import Path
 
 import h5py
@@ -115,6 +117,8 @@ class H5Recorder:
     Use as a context manager, or call :meth:`close`; call :meth:`write` with each frame.
     """
 
+    sync_interval = 0.5  # [s] of wall time between checkpoints/flushes
+
     def __init__(self, path, sim, descriptor_text: str = "", scene: str = "", resume: bool = False):
         import warp as wp
 
@@ -131,6 +135,7 @@ class H5Recorder:
                 self.file[name].resize(last + 1, axis=0)
             self.frames = last + 1
             self.file.swmr_mode = True
+            self._cache()
             return
         self.file = h5py.File(self.path, "w", libver="latest")
         f = self.file
@@ -183,49 +188,73 @@ class H5Recorder:
             c.create_dataset("applied", (_GUSTS_BYTES,), dtype="u1")
             self.frames = 0
             f.swmr_mode = True
+            self._cache()
         except BaseException:
             self.file.close()
             self.path.unlink(missing_ok=True)
             raise
 
+    def _cache(self) -> None:
+        self._datasets = {name: self.file[name] for name in _FRAME_DATASETS}
+        self._checkpoint = {name: self.file[f"checkpoint/{name}"] for name in self.file["checkpoint"]}
+        self._unsaved: tuple[int, int] | None = None
+        self._last_sync = -float("inf")
+
     def write(self, frame) -> None:
         """Store one :class:`warpsim.runner.Frame` as row ``frame.index`` (the next row, or the last one again
-        when a resumed run completes a shorter last frame) and the simulation's state after it; flush."""
+        when a resumed run completes a shorter last frame).
+
+        The frame is flushed, and the simulation's state saved as the checkpoint, at most every
+        ``sync_interval`` wall seconds and always by :meth:`close` (which the CLI reaches on Ctrl-C and
+        SIGTERM too); a frame written after the last checkpoint stays readable and is redone by a resume.
+        """
         k = int(frame.index)
         if not self.frames - 1 <= k <= self.frames:
             raise ValueError(f"frame {k} does not follow the recording's last frame {self.frames - 1}")
         diag = object_diagnostics(self.sim, frame.positions, frame.velocities)
-        cp = self.sim.checkpoint()
         with signals_held():
-            self._write(k, frame, diag, cp)
+            d = self._datasets
+            if k == self.frames:
+                for name in _FRAME_DATASETS:
+                    d[name].resize(k + 1, axis=0)
+            d["time"][k] = frame.time
+            d["positions"][k] = frame.positions
+            d["diagnostics/worst_stretch"][k] = frame.worst_stretch
+            d["diagnostics/kinetic_energy"][k] = frame.kinetic_energy
+            d["diagnostics/centre"][k] = diag["centre"]
+            d["diagnostics/altitude"][k] = diag["altitude"]
+            d["diagnostics/airspeed"][k] = diag["airspeed"]
+            self.frames = k + 1
+            self._unsaved = (k, self.sim.steps_taken)
+            now = time.monotonic()
+            if now - self._last_sync >= self.sync_interval:
+                self._save_checkpoint()
+                self._last_sync = now
 
-    def _write(self, k: int, frame, diag: dict, cp: dict) -> None:
-        f = self.file
-        for name in _FRAME_DATASETS:
-            f[name].resize(k + 1, axis=0)
-        f["time"][k] = frame.time
-        f["positions"][k] = frame.positions
-        f["diagnostics/worst_stretch"][k] = frame.worst_stretch
-        f["diagnostics/kinetic_energy"][k] = frame.kinetic_energy
-        f["diagnostics/centre"][k] = diag["centre"]
-        f["diagnostics/altitude"][k] = diag["altitude"]
-        f["diagnostics/airspeed"][k] = diag["airspeed"]
-        c = f["checkpoint"]
-        for name in ("q", "q_prev", "stick_rest", "nail_target", "wind"):
-            c[name][...] = cp[name]
-        c["time"][0] = cp["time"]
-        c["steps"][0] = cp["steps"]
-        c["gusts"][...] = _pad(cp["gusts"])
-        c["applied"][...] = _pad(cp["applied"])
-        c["frame"][0] = frame.index
-        self.frames = k + 1
-        f.flush()
+    def _save_checkpoint(self) -> None:
+        """Write the simulation's current state as the checkpoint of the last written frame, and flush."""
+        if self._unsaved is None:
+            return
+        k, steps = self._unsaved
+        if steps == self.sim.steps_taken:  # the simulation is still at that frame
+            cp = self.sim.checkpoint()
+            c = self._checkpoint
+            for name in ("q", "q_prev", "stick_rest", "nail_target", "wind"):
+                c[name][...] = cp[name]
+            c["time"][0] = cp["time"]
+            c["steps"][0] = cp["steps"]
+            c["gusts"][...] = _pad(cp["gusts"])
+            c["applied"][...] = _pad(cp["applied"])
+            c["frame"][0] = k
+        self._unsaved = None
+        self.file.flush()
 
     def close(self) -> None:
-        """Flush and close the file (safe to call twice)."""
+        """Save the checkpoint, flush and close the file (safe to call twice)."""
         if self.file.id.valid:
-            self.file.flush()
-            self.file.close()
+            with signals_held():
+                self._save_checkpoint()
+                self.file.close()
 
     def __enter__(self):
         return self

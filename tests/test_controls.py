@@ -63,7 +63,7 @@ def test_pitch_schedule_drives_the_glider():
     sim = Simulation(load_text(text, "dive"))
     rec = sim.model.objects[0]
     sim.run(1.0)
-    assert rec.meta["controls"]["pitch"] == 1.0
+    assert sim.controls["pitch"] == 1.0
     rest = sim.control.stick_rest.numpy()[rec.meta["control_sticks"]]
     from warpsim.objects.hang_glider import control_rest_lengths
 

@@ -290,6 +290,8 @@ class ModelBuilder:
         inv_mass[nails] = 0.0
         m.particle_mass = mass.copy()
         m.particle_mass[nails] = np.inf
+        m.particle_free_mass = mass.copy()
+        m.particle_free_mass[nails] = 0.0
         m.particle_inv_mass = wp.array(inv_mass.astype(np.float32), dtype=wp.float32, device=device)
         m.particle_world_np = np.array(self.particle_world, dtype=np.int32)
         m.particle_world = wp.array(m.particle_world_np, dtype=wp.int32, device=device)

@@ -222,16 +222,16 @@ def cmd_info(args) -> int:
     return 0
 
 
-H5_EXTENSIONS = (".h5", ".hdf5")
+def _checked_output(check, value: str | None, flag: str) -> Path | None:
+    """``check(value)`` for an output option given as ``flag``; a bad path becomes a usage error."""
+    from .io import OutputPathError
 
-
-def _check_h5_output(path: str) -> Path:
-    out = Path(path)
-    if out.suffix.lower() not in H5_EXTENSIONS:
-        raise UsageError(f"--h5 {path}: unknown extension {out.suffix!r}; use .h5 or .hdf5")
-    if not out.parent.resolve().is_dir():
-        raise UsageError(f"--h5 {path}: directory {out.parent} does not exist")
-    return out
+    if not value:
+        return None
+    try:
+        return check(value)
+    except OutputPathError as err:
+        raise UsageError(f"{flag} {err}") from None
 
 
 class _StopRequests:
@@ -266,8 +266,8 @@ class _StopRequests:
 def cmd_run(args) -> int:
     """Run a scene (or continue a recording) and print the summary."""
     from .descriptor import load_text, to_toml
-    from .io.hdf5 import H5Recorder, Recording, RecordingError
-    from .io.usd import UsdOutputError, UsdWriter, check_output_path
+    from .io.hdf5 import H5Recorder, Recording, RecordingError, check_recording_path
+    from .io.usd import UsdWriter, check_stage_path
     from .runner import Simulation
 
     if args.resume and args.scene:
@@ -276,11 +276,8 @@ def cmd_run(args) -> int:
         raise UsageError("missing SCENE (a built-in object, a scene name or a .toml path), or --resume REC.h5")
     if args.resume and args.h5:
         raise UsageError("--resume appends to its recording; --h5 is not needed")
-    try:
-        usd_path = check_output_path(args.usd) if args.usd else None
-    except UsdOutputError as err:
-        raise UsageError(f"--usd {err}") from None
-    h5_path = _check_h5_output(args.h5) if args.h5 else None
+    usd_path = _checked_output(check_stage_path, args.usd, "--usd")
+    h5_path = _checked_output(check_recording_path, args.h5, "--h5")
     device = _check_device(args.device)
 
     checkpoint = None
@@ -357,32 +354,16 @@ def cmd_run(args) -> int:
 
 def cmd_convert(args) -> int:
     """Write a recording's frames as a USD stage."""
+    from .io import OutputPathError
     from .io.hdf5 import RecordingError
-    from .io.usd import UsdOutputError, check_output_path
+    from .io.usd import recording_to_stage
 
     try:
-        check_output_path(args.output)
-        path = convert(args.recording, args.output)
-    except (RecordingError, UsdOutputError) as err:
+        path = recording_to_stage(args.recording, args.output)
+    except (RecordingError, OutputPathError) as err:
         raise UsageError(str(err)) from None
     print(f"{args.recording} -> {path}")
     return 0
-
-
-def convert(recording_path, output) -> Path:
-    """Write the frames of the recording at ``recording_path`` to the USD stage ``output``; returns its path."""
-    from .descriptor import load_text
-    from .io.hdf5 import Recording
-    from .io.usd import UsdWriter
-    from .runner import build_model
-
-    with Recording(recording_path) as recording:
-        descriptor = load_text(recording.descriptor_text, f"{recording_path}: descriptor")
-        model = build_model(descriptor, "cpu", str(recording_path))
-        writer = UsdWriter(output, model, float(recording.file.attrs["frame_interval"]))
-        for k in range(recording.frame_count):
-            writer.write(float(recording.time[k]), recording.positions(k))
-        return writer.close()
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -54,6 +54,8 @@ class Model:
         device: Warp device the arrays live on.
         particle_count, stick_count, tri_count, nail_count, world_count: sizes.
         particle_mass: host ``[particle_count]`` masses [kg] (``inf`` for nailed particles).
+        particle_free_mass: host ``[particle_count]`` masses [kg] with nailed particles 0 (for momentum,
+            energy and mass centres of what moves freely).
         particle_inv_mass: ``[particle_count]`` inverse masses [1/kg]; 0 = nailed or kinematic.
         particle_world: ``[particle_count]`` world index of each particle.
         particle_nail: ``[particle_count]`` index into ``Control.nail_target``, -1 when free.

@@ -84,7 +84,7 @@ class Frame:
     positions: np.ndarray
     worst_stretch: float
     kinetic_energy: float
-    velocities: np.ndarray | None = None
+    velocities: np.ndarray
 
 
 @dataclass
@@ -177,7 +177,8 @@ class Simulation:
             self.schedule = ControlSchedule(descriptor.get("controls", []), self.control_names(), where)
         except ControlError as err:
             raise DescriptorError(str(err)) from None
-        self._applied: dict = {}
+        self.controls: dict = {}  # every control set so far, by name (what is in force now)
+        self._scheduled: dict = {}  # the schedule's last values, so that held values are not set again
         fps = float(descriptor["scene"]["fps"])
         self.steps_per_frame = max(1, int(round(1.0 / (fps * self.dt))))
 
@@ -197,9 +198,10 @@ class Simulation:
             self.control.set_wind(values["wind"])
             if self.gusts is not None:
                 self.gusts.mean = np.asarray(values["wind"], dtype=np.float64)
-        object_values = {k: v for k, v in values.items() if k != "wind"}
-        if not object_values:
+        self.controls.update(values)
+        if set(values) <= {"wind"}:
             return
+        object_values = {k: v for k, v in self.controls.items() if k != "wind"}
         targets = {
             "stick_rest": self.control.stick_rest.numpy().copy(),
             "nail_target": self.control.nail_target.numpy().copy(),
@@ -229,10 +231,10 @@ class Simulation:
             if "wind" in values:
                 self.gusts.mean = np.asarray(values.pop("wind"), dtype=np.float64)
             self.control.set_wind(self.gusts.advance(self.steps_per_frame * self.dt))
-        changed = {k: v for k, v in values.items() if self._applied.get(k) != v}
+        changed = {k: v for k, v in values.items() if self._scheduled.get(k) != v}
         if changed:
             self.set_controls(**changed)
-            self._applied.update(changed)
+            self._scheduled.update(changed)
 
     def step(self, count: int = 1) -> None:
         """Take ``count`` solver steps of ``dt``."""
@@ -245,8 +247,7 @@ class Simulation:
         q = self.state.positions()
         stretch = float(np.abs(self.model.stick_stretch(q, self.control.stick_rest.numpy())).max(initial=0.0))
         v = self.state.velocities(self.dt)
-        mass = np.where(np.isfinite(self.model.particle_mass), self.model.particle_mass, 0.0)
-        energy = float(0.5 * np.sum(mass * np.einsum("ij,ij->i", v, v)))
+        energy = float(0.5 * np.sum(self.model.particle_free_mass * np.einsum("ij,ij->i", v, v)))
         return Frame(index, self.state.time, q, stretch, energy, v)
 
     def checkpoint(self) -> dict:
@@ -254,7 +255,7 @@ class Simulation:
 
         Host copies: ``q``/``q_prev`` ``[particle_count, 3]`` float32 [m], ``time`` [s], ``steps``,
         ``stick_rest`` [m], ``nail_target`` [m], ``wind`` [m/s], ``gusts`` (JSON text or ``""``),
-        ``applied`` (JSON text of the scheduled control values in force).
+        ``controls`` (JSON text: the controls in force and the schedule's last values).
         """
         gusts = ""
         if self.gusts is not None:
@@ -269,7 +270,7 @@ class Simulation:
             "nail_target": self.control.nail_target.numpy().copy(),
             "wind": self.control.wind.numpy().copy(),
             "gusts": gusts,
-            "applied": json.dumps({k: list(v) if isinstance(v, tuple) else v for k, v in self._applied.items()}),
+            "controls": json.dumps({"in_force": self.controls, "scheduled": self._scheduled}),
         }
 
     def restore(self, checkpoint: dict) -> None:
@@ -286,11 +287,9 @@ class Simulation:
             self.gusts.g = np.asarray(g["g"], dtype=np.float64)
             self.gusts.mean = np.asarray(g["mean"], dtype=np.float64)
             self.gusts.rng.bit_generator.state = g["rng"]
-        applied = json.loads(checkpoint.get("applied") or "{}")
-        self._applied = {k: tuple(v) if isinstance(v, list) else v for k, v in applied.items()}
-        for record in self.model.objects:  # objects remember their control values (e.g. pitch and roll)
-            names = registry.OBJECTS[record.kind].controls
-            record.meta.setdefault("controls", {}).update({k: v for k, v in self._applied.items() if k in names})
+        controls = json.loads(checkpoint["controls"])
+        self.controls = {k: _from_json(v) for k, v in controls["in_force"].items()}
+        self._scheduled = {k: _from_json(v) for k, v in controls["scheduled"].items()}
 
     def run(
         self,
@@ -353,3 +352,8 @@ class Simulation:
             interrupted = True
         wp.synchronize_device(self.model.device)
         return RunSummary(steps * self.dt, steps, time.perf_counter() - start, worst, interrupted)
+
+
+def _from_json(value):
+    """A control value read back from JSON (vectors were tuples)."""
+    return tuple(value) if isinstance(value, list) else value

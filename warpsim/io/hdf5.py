@@ -41,9 +41,16 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from . import check_output_path
+
+EXTENSIONS = (".h5", ".hdf5")
 FORMAT = "warpsim-recording"
 FORMAT_VERSION = 1
-_GUSTS_BYTES = 4096  # JSON of the gust generator's state, zero-padded
+_TEXT_BYTES = 4096  # checkpoint texts (JSON) are stored zero-padded in fixed-size byte datasets (SWMR-safe)
+# the parts of :meth:`warpsim.runner.Simulation.checkpoint`, by how they are stored
+_CHECKPOINT_ARRAYS = ("q", "q_prev", "stick_rest", "nail_target", "wind")
+_CHECKPOINT_SCALARS = ("time", "steps")
+_CHECKPOINT_TEXTS = ("gusts", "controls")
 
 
 @contextlib.contextmanager
@@ -63,6 +70,11 @@ def signals_held():
 
 class RecordingError(ValueError):
     """The file is not a warpsim recording, or cannot be continued."""
+
+
+def check_recording_path(path) -> Path:
+    """Check that ``path`` is an HDF5 file name in an existing directory (raises ``OutputPathError``)."""
+    return check_output_path(path, EXTENSIONS, "HDF5")
 
 
 def _names(sim) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray]:
@@ -89,7 +101,7 @@ def _names(sim) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarra
 def object_diagnostics(sim, positions: np.ndarray, velocities: np.ndarray) -> dict:
     """Per-object mass centre [m], altitude above the terrain [m] and airspeed [m/s] of one frame."""
     model = sim.model
-    mass = np.where(np.isfinite(model.particle_mass), model.particle_mass, 0.0)
+    mass = model.particle_free_mass
     wind = sim.control.wind.numpy()
     centre, altitude, airspeed = [], [], []
     for record in model.objects:
@@ -176,16 +188,14 @@ class H5Recorder:
             d.create_dataset("altitude", (0, objects), maxshape=(None, objects), dtype="f4", chunks=(64, objects))
             d.create_dataset("airspeed", (0, objects), maxshape=(None, objects), dtype="f4", chunks=(64, objects))
             c = f.create_group("checkpoint")
-            c.create_dataset("frame", data=np.array([-1], dtype=np.int64))
-            c.create_dataset("time", data=np.zeros(1))
-            c.create_dataset("steps", data=np.zeros(1, dtype=np.int64))
-            c.create_dataset("q", (n, 3), dtype="f4")
-            c.create_dataset("q_prev", (n, 3), dtype="f4")
-            c.create_dataset("stick_rest", data=model.stick_rest.numpy())
-            c.create_dataset("nail_target", data=sim.control.nail_target.numpy())
-            c.create_dataset("wind", data=sim.control.wind.numpy())
-            c.create_dataset("gusts", (_GUSTS_BYTES,), dtype="u1")
-            c.create_dataset("applied", (_GUSTS_BYTES,), dtype="u1")
+            c.create_dataset("frame", data=np.array([-1], dtype=np.int64))  # -1: no frame checkpointed yet
+            cp = sim.checkpoint()  # shapes and types of what later checkpoints write
+            for name in _CHECKPOINT_ARRAYS:
+                c.create_dataset(name, data=cp[name])
+            for name in _CHECKPOINT_SCALARS:
+                c.create_dataset(name, data=np.array([cp[name]]))
+            for name in _CHECKPOINT_TEXTS:
+                c.create_dataset(name, (_TEXT_BYTES,), dtype="u1")
             self.frames = 0
             f.swmr_mode = True
             self._cache()
@@ -239,12 +249,12 @@ class H5Recorder:
         if steps == self.sim.steps_taken:  # the simulation is still at that frame
             cp = self.sim.checkpoint()
             c = self._checkpoint
-            for name in ("q", "q_prev", "stick_rest", "nail_target", "wind"):
+            for name in _CHECKPOINT_ARRAYS:
                 c[name][...] = cp[name]
-            c["time"][0] = cp["time"]
-            c["steps"][0] = cp["steps"]
-            c["gusts"][...] = _pad(cp["gusts"])
-            c["applied"][...] = _pad(cp["applied"])
+            for name in _CHECKPOINT_SCALARS:
+                c[name][0] = cp[name]
+            for name in _CHECKPOINT_TEXTS:
+                c[name][...] = _pad(cp[name])
             c["frame"][0] = k
         self._unsaved = None
         self.file.flush()
@@ -276,9 +286,9 @@ _FRAME_DATASETS = (
 
 def _pad(text: str) -> np.ndarray:
     data = text.encode("utf-8")
-    if len(data) > _GUSTS_BYTES:
+    if len(data) > _TEXT_BYTES:
         raise ValueError(f"checkpoint text too long ({len(data)} bytes)")
-    out = np.zeros(_GUSTS_BYTES, dtype=np.uint8)
+    out = np.zeros(_TEXT_BYTES, dtype=np.uint8)
     out[: len(data)] = np.frombuffer(data, dtype=np.uint8)
     return out
 
@@ -292,7 +302,7 @@ class Recording:
 
     Attributes:
         path: the file. descriptor_text: the scene descriptor (TOML). scene: where it came from.
-        time: ``[F]`` frame times [s]. frame_count: ``F``.
+        time: ``[F]`` frame times [s]. frame_count: ``F``. frame_interval: time between frames [s].
     """
 
     def __init__(self, path):
@@ -308,6 +318,7 @@ class Recording:
             raise RecordingError(f"{path}: an HDF5 file but not a warpsim recording (no format = {FORMAT!r})")
         self.descriptor_text = str(self.file.attrs["descriptor"])
         self.scene = str(self.file.attrs.get("scene", ""))
+        self.frame_interval = float(self.file.attrs["frame_interval"])
         self.time = self.file["time"][:]
         self.frame_count = len(self.time)
 
@@ -321,18 +332,11 @@ class Recording:
         frame = int(c["frame"][0])
         if frame < 0:
             raise RecordingError(f"{self.path}: the recording has no frame to resume from")
-        return {
-            "frame": frame,
-            "q": c["q"][:],
-            "q_prev": c["q_prev"][:],
-            "time": float(c["time"][0]),
-            "steps": int(c["steps"][0]),
-            "stick_rest": c["stick_rest"][:],
-            "nail_target": c["nail_target"][:],
-            "wind": c["wind"][:],
-            "gusts": _unpad(c["gusts"][:]),
-            "applied": _unpad(c["applied"][:]),
-        }
+        out = {"frame": frame}
+        out.update({name: c[name][:] for name in _CHECKPOINT_ARRAYS})
+        out.update({name: c[name][0].item() for name in _CHECKPOINT_SCALARS})
+        out.update({name: _unpad(c[name][:]) for name in _CHECKPOINT_TEXTS})
+        return out
 
     def close(self) -> None:
         """Close the file."""

@@ -26,6 +26,8 @@ from pathlib import Path
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdUtils, Vt
 
+from . import check_output_path
+
 EXTENSIONS = (".usda", ".usdc", ".usdz")
 
 COLOURS = {
@@ -43,18 +45,9 @@ SPHERE_PARTS = {"pilot": 0.3, "person": 0.3}  # radius [m]
 CURVE_WIDTH = {"rope": 0.03, "lines": 0.02}  # [m]
 
 
-class UsdOutputError(ValueError):
-    """An output path that cannot be written (missing directory, unknown extension)."""
-
-
-def check_output_path(path) -> Path:
-    """Check that ``path`` has a USD extension and an existing directory; returns it as a Path."""
-    path = Path(path)
-    if path.suffix.lower() not in EXTENSIONS:
-        raise UsdOutputError(f"{path}: unknown USD extension {path.suffix!r}; use one of {', '.join(EXTENSIONS)}")
-    if not path.parent.resolve().is_dir():
-        raise UsdOutputError(f"{path}: directory {path.parent} does not exist")
-    return path
+def check_stage_path(path) -> Path:
+    """Check that ``path`` is a USD file name in an existing directory (raises ``OutputPathError``)."""
+    return check_output_path(path, EXTENSIONS, "USD")
 
 
 def _vec3f_array(points: np.ndarray) -> Vt.Vec3fArray:
@@ -79,7 +72,7 @@ class UsdWriter:
     """Write the frames of a run as an animated USD stage.
 
     Args:
-        path: output ``.usda``, ``.usdc`` or ``.usdz`` (checked by :func:`check_output_path`).
+        path: output ``.usda``, ``.usdc`` or ``.usdz`` (checked by :func:`check_stage_path`).
         model: the :class:`warpsim.Model` (its objects' parts, triangles and curves say what to draw).
         frame_interval: simulated time between frames [s]; ``timeCodesPerSecond = 1 / frame_interval``.
 
@@ -89,7 +82,7 @@ class UsdWriter:
     """
 
     def __init__(self, path, model, frame_interval: float):
-        self.path = check_output_path(path)
+        self.path = check_stage_path(path)
         self.model = model
         self.frame_interval = float(frame_interval)
         self.stage = Usd.Stage.CreateInMemory()
@@ -218,6 +211,22 @@ class UsdWriter:
         finally:
             tmp.unlink(missing_ok=True)
         return self.path
+
+
+def recording_to_stage(recording_path, output) -> Path:
+    """Write the frames of the HDF5 recording at ``recording_path`` as the stage ``output`` (same layout and
+    time codes as a direct export); returns its path."""
+    from ..descriptor import load_text
+    from ..runner import build_model
+    from .hdf5 import Recording
+
+    check_stage_path(output)
+    with Recording(recording_path) as recording:
+        descriptor = load_text(recording.descriptor_text, f"{recording_path}: descriptor")
+        writer = UsdWriter(output, build_model(descriptor, "cpu", str(recording_path)), recording.frame_interval)
+        for k in range(recording.frame_count):
+            writer.write(float(recording.time[k]), recording.positions(k))
+        return writer.close()
 
 
 def validate(path) -> tuple[list[str], list[str]]:

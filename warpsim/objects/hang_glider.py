@@ -186,13 +186,10 @@ def control_rest_lengths(record: ObjectRecord, pitch: float, roll: float) -> np.
 
 
 def apply_controls(record: ObjectRecord, targets: dict, values: dict) -> None:
-    """Write the control sticks' rest lengths for ``values['pitch']``/``values['roll']`` into
-    ``targets['stick_rest']`` (a host copy of ``Control.stick_rest``); a control not given keeps its value."""
-    m = record.meta
-    pitch = float(values.get("pitch", m.setdefault("controls", {}).get("pitch", 0.0)))
-    roll = float(values.get("roll", m["controls"].get("roll", 0.0)))
-    targets["stick_rest"][m["control_sticks"]] = control_rest_lengths(record, pitch, roll)
-    m["controls"].update(pitch=pitch, roll=roll)
+    """Write the control sticks' rest lengths for ``values['pitch']``/``values['roll']`` (every control in
+    force; one never set is 0) into ``targets['stick_rest']`` (a host copy of ``Control.stick_rest``)."""
+    pitch, roll = float(values.get("pitch", 0.0)), float(values.get("roll", 0.0))
+    targets["stick_rest"][record.meta["control_sticks"]] = control_rest_lengths(record, pitch, roll)
 
 
 def flight_state(record: ObjectRecord, q: np.ndarray, q_prev: np.ndarray, dt: float, wind) -> dict:

@@ -20,8 +20,9 @@ class ObjectSpec:
         bounds: key -> (low, high, low inclusive?) on the object's numbers.
         summary: one line for ``warpsim list``.
         controls: names of the object's controls (see :mod:`warpsim.controls`; every scene also has ``wind``).
-        apply_controls: ``apply_controls(record, targets, values)`` writes what the controls change into
-            ``targets`` (host copies of ``stick_rest`` and ``nail_target``, and the ``terrain``).
+        apply_controls: ``apply_controls(record, targets, values)`` writes what the controls in force
+            (``values``: every control set so far but ``wind``) change into ``targets`` (host copies of
+            ``stick_rest`` and ``nail_target``, and the ``terrain``).
     """
 
     config: type

@@ -108,24 +108,19 @@ class Model:
             wind=wp.zeros(self.world_count, dtype=wp.vec3, device=self.device),
         )
 
-    def constraint_weights(self, mass_splitting: bool) -> tuple[wp.array, wp.array]:
-        """Per-particle factors of the Jacobi constraint solver, ``(share, scale)`` ``[particle_count]``.
+    def constraint_weights(self, mass_splitting: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Per-particle factors of the Jacobi constraint solver, host ``(share, scale)`` ``[particle_count]``.
 
         A stick ``(a, b)`` splits its error in proportion to ``share``; particle ``a`` moves by ``scale_a``
-        times the sum of its sticks' deltas. Plain averaging (the paper): ``share = w`` (inverse mass),
+        times the sum of its sticks' corrections. Plain averaging (the paper): ``share = w`` (inverse mass),
         ``scale = w / n`` (``n`` = summed stick weight). Mass splitting: ``share = w n``, ``scale = w``.
         See :mod:`warpsim.kernels.constraints`.
         """
         w = self.particle_inv_mass.numpy().astype(np.float64)
         n = self.particle_stick_weight
         if mass_splitting:
-            share, scale = w * n, w
-        else:
-            share, scale = w, np.divide(w, n, out=np.zeros_like(w), where=n > 0)
-        return (
-            wp.array(share.astype(np.float32), dtype=wp.float32, device=self.device),
-            wp.array(scale.astype(np.float32), dtype=wp.float32, device=self.device),
-        )
+            return w * n, w
+        return w, np.divide(w, n, out=np.zeros_like(w), where=n > 0)
 
     def stick_lengths(self, positions: np.ndarray) -> np.ndarray:
         """Current stick lengths [m] for host ``positions`` ``[particle_count, 3]``."""

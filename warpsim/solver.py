@@ -16,7 +16,7 @@ import warp as wp
 from .kernels import MODULES
 from .kernels.aero import AeroModel, triangle_air_force
 from .kernels.collision import CollisionMode, collide_heightfield
-from .kernels.constraints import project_sticks
+from .kernels.constraints import StickProjector
 from .kernels.springs import integrate_euler_springs
 from .kernels.verlet import integrate_verlet
 from .model import Control, Model, State
@@ -113,6 +113,8 @@ class SolverVerlet(_Solver):
         damping: fraction of the velocity removed per step (0 = none, the paper).
         air: :class:`AirSettings`. ground: :class:`GroundSettings`.
         use_graph: capture the step as a graph and replay it (default); False launches kernel by kernel.
+        constraint_scheme: ``"scatter"`` or ``"gather"`` (:class:`~warpsim.kernels.constraints.StickProjector`);
+            None = scatter on the CPU, gather on CUDA.
     """
 
     def __init__(
@@ -126,6 +128,7 @@ class SolverVerlet(_Solver):
         use_graph: bool = True,
         chebyshev: float = 0.95,
         mass_splitting: bool = False,
+        constraint_scheme: str | None = None,
     ):
         super().__init__(model, air, ground, use_graph)
         if not 0.0 <= chebyshev < 1.0:
@@ -139,27 +142,15 @@ class SolverVerlet(_Solver):
         self.iterations = int(iterations)
         self.relaxation = float(relaxation)
         self.damping = float(damping)
-        self.stick_delta = wp.zeros(max(model.stick_count, 1), dtype=wp.vec3, device=model.device)
-        self.q_iter = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)
         self.chebyshev = float(chebyshev)
         self.mass_splitting = bool(mass_splitting)
-        self.weights = model.constraint_weights(self.mass_splitting)
+        self.projector = StickProjector(model, self.relaxation, self.mass_splitting, self.chebyshev, constraint_scheme)
 
     def _launch(self, state: State, control: Control, dt: float) -> None:
         m = self.model
         triangle_air_force(m, state, control, dt, self.air, self.tri_force)
         integrate_verlet(m, state, control, self.tri_force, dt, self.damping)
-        project_sticks(
-            m,
-            state,
-            control,
-            self.iterations,
-            self.relaxation,
-            self.stick_delta,
-            self.q_iter,
-            self.weights,
-            self.chebyshev,
-        )
+        self.projector.project(state, control, self.iterations)
         collide_heightfield(m, state, self.ground.mode, self.ground.friction)
 
 

@@ -22,13 +22,28 @@ push an object as a whole. A stick of weight ``k`` counts exactly as ``k`` ident
 the sum of the weights), the paper's way of stiffening its kite rope ("des tiges ont été doublées",
 Section 7.2) without the cost of a second stick.
 
-Two kernels per iteration: one thread per stick writes
-``stick_delta = k d (|d| - r) / (|d| (n_a w_a + n_b w_b))``, then one thread per particle sums the
-deltas of its sticks through a CSR adjacency (no atomics) and multiplies by ``w_a``.
+Both ends share one per-stick factor ``c_s = k / (n_a w_a + n_b w_b)`` (computed once; 0 for a stick
+between two immovable particles), so a stick's correction is ``c_s (|d| - r) d / |d|``.
+
+Two schemes compute the same iteration (they differ only in the order of float additions):
+
+- ``scatter`` (the default on the CPU): one thread per stick computes its correction once and adds it
+  to its two particles' accumulators, then one thread per particle applies and clears its accumulator.
+  A CPU launch runs its threads one after another, so the additions happen in stick-list order and the
+  result is bit-identical from run to run.
+- ``gather`` (the default on CUDA, where concurrent float atomics would add in a varying order): one
+  thread per particle walks its sticks through a CSR adjacency (no atomics), measuring each stick from
+  its own end, and writes the next iterate into a second buffer (ping-pong: the buffer written still
+  holds the iterate before the one read, which is what Chebyshev acceleration needs). Each stick is
+  measured twice, once from each end; the per-particle order is fixed, so this is bit-identical too.
+
+On the 2-core CPU the scatter scheme costs about 1.0 us per iteration for the hang glider's 180 sticks,
+the gather scheme about 1.75 us (each stick measured twice).
 """
 
 from __future__ import annotations
 
+import numpy as np
 import warp as wp
 
 wp.set_module_options({"enable_backward": False})  # forward-only: halves compile time
@@ -56,42 +71,53 @@ def gather_stick_values(
     return total
 
 
+@wp.func
+def stick_correction(d: wp.vec3, rest: float, coef: float) -> wp.vec3:
+    """Correction ``coef (|d| - rest) d / |d|`` of a stick whose ends are ``d`` apart (zero if ``d`` is zero)."""
+    length = wp.length(d)
+    if length == 0.0:
+        return wp.vec3(0.0)
+    return d * (coef * (length - rest) / length)
+
+
+@wp.func
+def next_iterate(x: wp.vec3, total: wp.vec3, step: float, omega: float, older: wp.vec3) -> wp.vec3:
+    """``x`` moved by ``step * total``, then Chebyshev-extrapolated from ``older`` when ``omega != 1``."""
+    y = x + total * step
+    if omega != 1.0:
+        y = older + (y - older) * omega
+    return y
+
+
 @wp.kernel
-def _stick_deltas(
+def _scatter_corrections(
     stick_particles: wp.array(dtype=wp.vec2i),
-    particle_share: wp.array(dtype=wp.float32),
     stick_rest: wp.array(dtype=wp.float32),
-    stick_weight: wp.array(dtype=wp.float32),
+    stick_coef: wp.array(dtype=wp.float32),
     particle_q: wp.array(dtype=wp.vec3),
-    stick_delta_out: wp.array(dtype=wp.vec3),
+    accum: wp.array(dtype=wp.vec3),
 ):
     s = wp.tid()
     ends = stick_particles[s]
-    a = ends[0]
-    b = ends[1]
-    w = particle_share[a] + particle_share[b]
-    d = particle_q[b] - particle_q[a]
-    length = wp.length(d)
-    if w == 0.0 or length == 0.0:
-        stick_delta_out[s] = wp.vec3(0.0)
-        return
-    stick_delta_out[s] = d * (stick_weight[s] * (length - stick_rest[s]) / (length * w))
+    c = stick_correction(particle_q[ends[1]] - particle_q[ends[0]], stick_rest[s], stick_coef[s])
+    wp.atomic_add(accum, ends[0], c)
+    wp.atomic_sub(accum, ends[1], c)
 
 
 @wp.kernel
-def _apply_averaged_corrections(
-    particle_stick_start: wp.array(dtype=wp.int32),
-    particle_stick_refs: wp.array(dtype=wp.int32),
+def _apply_accumulated(
     particle_scale: wp.array(dtype=wp.float32),
     particle_nail: wp.array(dtype=wp.int32),
     nail_target: wp.array(dtype=wp.vec3),
-    stick_delta: wp.array(dtype=wp.vec3),
     relaxation: float,
     omega: float,
+    accum: wp.array(dtype=wp.vec3),
     particle_q: wp.array(dtype=wp.vec3),
-    particle_q_iter: wp.array(dtype=wp.vec3),
+    particle_q_older: wp.array(dtype=wp.vec3),
 ):
     i = wp.tid()
+    total = accum[i]
+    accum[i] = wp.vec3(0.0)
     nail = particle_nail[i]
     if nail >= 0:
         particle_q[i] = nail_target[nail]
@@ -99,14 +125,55 @@ def _apply_averaged_corrections(
     scale = particle_scale[i]
     if scale == 0.0:
         return
-    total = gather_stick_values(i, particle_stick_start, particle_stick_refs, stick_delta)
     x = particle_q[i]
-    y = x + total * (relaxation * scale)
-    if omega != 1.0:
-        older = particle_q_iter[i]
-        y = older + (y - older) * omega
-    particle_q_iter[i] = x
-    particle_q[i] = y
+    particle_q[i] = next_iterate(x, total, relaxation * scale, omega, particle_q_older[i])
+    particle_q_older[i] = x
+
+
+@wp.kernel
+def _gather_iteration(
+    particle_stick_start: wp.array(dtype=wp.int32),
+    particle_stick_refs: wp.array(dtype=wp.int32),
+    stick_particles: wp.array(dtype=wp.vec2i),
+    stick_rest: wp.array(dtype=wp.float32),
+    stick_coef: wp.array(dtype=wp.float32),
+    particle_scale: wp.array(dtype=wp.float32),
+    particle_nail: wp.array(dtype=wp.int32),
+    nail_target: wp.array(dtype=wp.vec3),
+    relaxation: float,
+    omega: float,
+    q_in: wp.array(dtype=wp.vec3),
+    q_out: wp.array(dtype=wp.vec3),
+):
+    i = wp.tid()
+    nail = particle_nail[i]
+    if nail >= 0:
+        q_out[i] = nail_target[nail]
+        return
+    x = q_in[i]
+    scale = particle_scale[i]
+    if scale == 0.0:
+        q_out[i] = x
+        return
+    total = wp.vec3(0.0)
+    for k in range(particle_stick_start[i], particle_stick_start[i + 1]):
+        ref = particle_stick_refs[k]
+        s = ref >> 1
+        ends = stick_particles[s]
+        other = ends[1]
+        if (ref & 1) == 1:
+            other = ends[0]
+        total += stick_correction(q_in[other] - x, stick_rest[s], stick_coef[s])
+    q_out[i] = next_iterate(x, total, relaxation * scale, omega, q_out[i])  # q_out holds the older iterate
+
+
+@wp.kernel
+def _copy_positions(src: wp.array(dtype=wp.vec3), dst: wp.array(dtype=wp.vec3)):
+    i = wp.tid()
+    dst[i] = src[i]
+
+
+SCHEMES = ("scatter", "gather")
 
 
 def chebyshev_weights(iterations: int, rho: float, delay: int = 10) -> list[float]:
@@ -128,58 +195,113 @@ def chebyshev_weights(iterations: int, rho: float, delay: int = 10) -> list[floa
     return weights
 
 
+class StickProjector:
+    """Jacobi projection of a model's sticks, with its per-stick factors and scratch buffers made once.
+
+    Args:
+        model: the :class:`~warpsim.model.Model`.
+        relaxation: over-relaxation factor on the averaged correction (1.0 = the paper; in (0, 2)).
+        mass_splitting: split masses (momentum-conserving) instead of the paper's plain average.
+        chebyshev: spectral-radius estimate ``rho`` in [0, 1) for :func:`chebyshev_weights` (0 = plain Jacobi).
+        scheme: ``"scatter"`` or ``"gather"`` (see the module text); ``None`` picks scatter on the CPU and
+            gather on CUDA.
+    """
+
+    def __init__(
+        self,
+        model,
+        relaxation: float = 1.0,
+        mass_splitting: bool = False,
+        chebyshev: float = 0.0,
+        scheme: str | None = None,
+    ):
+        if scheme is None:
+            scheme = "scatter" if wp.get_device(model.device).is_cpu else "gather"
+        if scheme not in SCHEMES:
+            raise ValueError(f"constraint scheme must be one of {', '.join(SCHEMES)}, got {scheme!r}")
+        self.model = model
+        self.scheme = scheme
+        self.relaxation = float(relaxation)
+        self.chebyshev = float(chebyshev)
+        share, scale = model.constraint_weights(mass_splitting)
+        self.particle_scale = wp.array(scale.astype(np.float32), dtype=wp.float32, device=model.device)
+        ends = model.stick_particles_np
+        total = share[ends[:, 0]] + share[ends[:, 1]] if len(ends) else np.zeros(0)
+        coef = np.divide(model.stick_weight.numpy(), total, out=np.zeros(len(ends)), where=total > 0)
+        self.stick_coef = wp.array(coef if len(coef) else np.zeros(1), dtype=wp.float32, device=model.device)
+        n = model.particle_count
+        self.scratch = wp.zeros(n, dtype=wp.vec3, device=model.device)  # older iterate / ping-pong buffer
+        self.accum = wp.zeros(n, dtype=wp.vec3, device=model.device) if scheme == "scatter" else None
+
+    def project(self, state, control, iterations: int) -> None:
+        """Run ``iterations`` Jacobi iterations on ``state.particle_q`` in place.
+
+        Rest lengths come from ``control.stick_rest`` and nail targets from ``control.nail_target``, so both
+        can change between steps (and a captured graph sees the new values).
+        """
+        m = self.model
+        if m.stick_count == 0:
+            return
+        omegas = chebyshev_weights(iterations, self.chebyshev)
+        if self.scheme == "scatter":
+            for omega in omegas:
+                wp.launch(
+                    _scatter_corrections,
+                    dim=m.stick_count,
+                    inputs=[m.stick_particles, control.stick_rest, self.stick_coef, state.particle_q],
+                    outputs=[self.accum],
+                    device=m.device,
+                )
+                wp.launch(
+                    _apply_accumulated,
+                    dim=m.particle_count,
+                    inputs=[self.particle_scale, m.particle_nail, control.nail_target, self.relaxation, float(omega)],
+                    outputs=[self.accum, state.particle_q, self.scratch],
+                    device=m.device,
+                )
+            return
+        buffers = (state.particle_q, self.scratch)
+        if omegas[0] != 1.0:  # an over-relaxed first iteration needs an older iterate: start from the same one
+            wp.launch(_copy_positions, m.particle_count, [state.particle_q], [self.scratch], device=m.device)
+        for k, omega in enumerate(omegas):
+            wp.launch(
+                _gather_iteration,
+                dim=m.particle_count,
+                inputs=[
+                    m.particle_stick_start,
+                    m.particle_stick_refs,
+                    m.stick_particles,
+                    control.stick_rest,
+                    self.stick_coef,
+                    self.particle_scale,
+                    m.particle_nail,
+                    control.nail_target,
+                    self.relaxation,
+                    float(omega),
+                    buffers[k % 2],
+                ],
+                outputs=[buffers[(k + 1) % 2]],
+                device=m.device,
+            )
+        if len(omegas) % 2 == 1:
+            wp.launch(
+                _copy_positions,
+                dim=m.particle_count,
+                inputs=[self.scratch],
+                outputs=[state.particle_q],
+                device=m.device,
+            )
+
+
 def project_sticks(
     model,
     state,
     control,
     iterations: int,
-    relaxation: float,
-    stick_delta: wp.array,
-    q_iter: wp.array | None = None,
-    weights: tuple[wp.array, wp.array] | None = None,
+    relaxation: float = 1.0,
+    mass_splitting: bool = False,
     chebyshev: float = 0.0,
+    scheme: str | None = None,
 ) -> None:
-    """Run ``iterations`` Jacobi iterations on ``state.particle_q`` in place.
-
-    ``stick_delta`` (``[stick_count]`` vec3) and ``q_iter`` (``[particle_count]`` vec3) are scratch arrays
-    owned by the caller; ``weights`` is ``model.constraint_weights(mass_splitting)`` (default: the
-    paper's plain average); ``chebyshev`` is the spectral-radius estimate of :func:`chebyshev_weights`.
-    Rest lengths come from ``control.stick_rest`` so that control sticks can change while running.
-    Passing ``None`` allocates (fine for a one-off call, not inside a captured step).
-    """
-    if model.stick_count == 0:
-        return
-    if q_iter is None:
-        q_iter = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)
-    if weights is None:
-        weights = model.constraint_weights(False)
-    for omega in chebyshev_weights(iterations, chebyshev):
-        wp.launch(
-            _stick_deltas,
-            dim=model.stick_count,
-            inputs=[
-                model.stick_particles,
-                weights[0],
-                control.stick_rest,
-                model.stick_weight,
-                state.particle_q,
-            ],
-            outputs=[stick_delta],
-            device=model.device,
-        )
-        wp.launch(
-            _apply_averaged_corrections,
-            dim=model.particle_count,
-            inputs=[
-                model.particle_stick_start,
-                model.particle_stick_refs,
-                weights[1],
-                model.particle_nail,
-                control.nail_target,
-                stick_delta,
-                float(relaxation),
-                float(omega),
-            ],
-            outputs=[state.particle_q, q_iter],
-            device=model.device,
-        )
+    """One-off :meth:`StickProjector.project` (allocates its buffers: not for use inside a captured step)."""
+    StickProjector(model, relaxation, mass_splitting, chebyshev, scheme).project(state, control, iterations)

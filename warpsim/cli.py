@@ -90,6 +90,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="KEY=VALUE",
         help="override a descriptor value, e.g. --set flag.resolution=8 (repeatable)",
     )
+    _world_arguments(info)
 
     run = sub.add_parser(
         "run",
@@ -115,6 +116,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="KEY=VALUE",
         help="override a descriptor value, e.g. --set wind.velocity=[8,0,0] (repeatable)",
     )
+    _world_arguments(run)
     run.add_argument("--realtime", action="store_true", help="pace the run to the wall clock")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
     run.add_argument(
@@ -145,12 +147,41 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _world_arguments(parser) -> None:
+    parser.add_argument(
+        "--worlds",
+        type=_world_count,
+        metavar="N",
+        help="simulate N copies of the scene in one model, stepped by the same launches (default: scene's, 1)",
+    )
+    parser.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        metavar="KEY=VALUES",
+        help="a value that differs between worlds: START:STOP spread over the N worlds, or one value per "
+        "world, e.g. --vary wind.speed=4:12, --vary wind.gust_seed=0:255, --vary kite.line_length=20,30 "
+        "(keys of [wind] or of the object's section; repeatable)",
+    )
+
+
 def _load(args) -> tuple[dict, str, str]:
-    from .descriptor import merge, parse_override, resolve
+    from .descriptor import merge, parse_override, parse_vary, resolve
 
     descriptor, text, where = resolve(args.scene, scene_dirs())
     for item in args.set:
         descriptor = merge(f"--set {item}", descriptor, parse_override(item))
+    count = getattr(args, "worlds", None)
+    worlds: dict = {}
+    for item in getattr(args, "vary", []):
+        section, key, values = parse_vary(item, count)
+        count = count or len(values)
+        worlds.setdefault(section, {})[key] = values
+    if count is not None:
+        worlds["count"] = count
+    if worlds:
+        flags = " ".join([f"--worlds {count}"] + [f"--vary {v}" for v in getattr(args, "vary", [])])
+        descriptor = merge(flags, descriptor, {"worlds": worlds})
     overrides = {
         ("solver", "dt"): getattr(args, "dt", None),
         ("solver", "iterations"): getattr(args, "iterations", None),
@@ -161,6 +192,18 @@ def _load(args) -> tuple[dict, str, str]:
         if value is not None:
             descriptor[section][key] = value
     return descriptor, text, where
+
+
+def _world_count(text: str) -> int:
+    from .descriptor import MAX_WORLDS
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= MAX_WORLDS:
+        raise argparse.ArgumentTypeError(f"must be a whole number from 1 to {MAX_WORLDS}, got {text!r}")
+    return value
 
 
 def _check_device(name: str) -> str:
@@ -288,7 +331,7 @@ def cmd_run(args) -> int:
                 text, where = recording.descriptor_text, f"{args.resume} (resumed)"
         except RecordingError as err:
             raise UsageError(f"--resume {err}") from None
-        for name in ("set", "dt", "iterations", "fps"):
+        for name in ("set", "dt", "iterations", "fps", "worlds", "vary"):
             if getattr(args, name):
                 raise UsageError(f"--{name} cannot change a resumed run; it continues with the recording's settings")
         descriptor = load_text(text, where)

@@ -16,6 +16,10 @@ so a descriptor only lists what it changes. Sections and keys (``warpsim info SC
 * one section per object, named after it (``[flag]``, ...), with the fields of its config class.
 * ``[[controls]]`` entries: ``time`` [s], ``ramp`` (true = reach linearly), and any of the scene's
   controls (``pitch``, ``roll``, ``anchor``, ``wind``), see :mod:`warpsim.controls`.
+* ``[worlds]`` ``count`` (how many copies of the scene one launch steps, default 1), and per-world values
+  as dotted keys holding one value per world: any key of the object's section or of ``[wind]``, plus
+  ``wind.speed`` [m/s] (the magnitude of ``wind.velocity``, direction kept), e.g.
+  ``wind.speed = [4.0, 6.0, 8.0]`` with ``count = 3``. Solver, air, terrain and ground settings are shared.
 """
 
 from __future__ import annotations
@@ -92,7 +96,11 @@ BASE_DEFAULTS: dict[str, dict[str, Any]] = {
     },
     "terrain": {"kind": "flat", "size": 1000.0, "height": 0.0, "amplitude": 40.0, "seed": 0, "file": ""},
     "ground": {"collision": "normal", "friction": 0.5},
+    "worlds": {"count": 1},
 }
+
+MAX_WORLDS = 65536
+VARIABLE_SECTIONS = ("wind",)  # besides the object's own section
 
 
 def _object_defaults(kind: str) -> dict[str, Any]:
@@ -166,9 +174,13 @@ def _check_value(where: str, section: str, key: str, default, value):
 def merge(where: str, base: dict, override: dict) -> dict:
     """Validate ``override`` (parsed TOML) against ``base`` (a full descriptor) and merge it in."""
     out = copy.deepcopy(base)
+    worlds = None
     for section, values in override.items():
         if section == "controls":
             out["controls"] = _check_controls(where, values, out["scene"]["object"])
+            continue
+        if section == "worlds":
+            worlds = values  # checked last: its per-world values are checked against the merged sections
             continue
         if section not in out:
             raise DescriptorError(
@@ -183,6 +195,64 @@ def merge(where: str, base: dict, override: dict) -> dict:
                     f"[{section}] keys are {', '.join(out[section])}"
                 )
             out[section][key] = _check_value(where, section, key, out[section][key], value)
+    if worlds is not None:
+        out["worlds"] = _check_worlds(where, worlds, out)
+    return out
+
+
+def _check_worlds(where: str, worlds, descriptor: dict) -> dict:
+    """Validate a ``[worlds]`` table against the merged ``descriptor``: a count and per-world value lists."""
+    if not isinstance(worlds, dict):
+        raise DescriptorError(f"{where}: [worlds] must be a table of keys, got {worlds!r}")
+    out = copy.deepcopy(descriptor.get("worlds", {"count": 1}))
+    if "count" in worlds:
+        count = worlds["count"]
+        if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= MAX_WORLDS:
+            raise DescriptorError(f"{where}: worlds.count must be a whole number from 1 to {MAX_WORLDS}, got {count!r}")
+        out["count"] = count
+    count = out["count"]
+    variable = (registry.section(descriptor["scene"]["object"]), *VARIABLE_SECTIONS)
+    for section, values in worlds.items():
+        if section == "count":
+            continue
+        if section not in variable:
+            raise DescriptorError(
+                f"{where}: worlds.{section}: only keys of [{'], ['.join(variable)}] can differ between worlds "
+                "(one launch steps every world with the same solver, air, terrain and ground settings)"
+            )
+        if not isinstance(values, dict):
+            raise DescriptorError(f"{where}: worlds.{section} must name a key, e.g. worlds.wind.speed = [4.0, 8.0]")
+        keys = {**descriptor[section], **({"speed": 0.0} if section == "wind" else {})}
+        for key, per_world in values.items():
+            name = f"worlds.{section}.{key}"
+            if key not in keys:
+                raise DescriptorError(
+                    f"{where}: unknown key {name}{_suggest(key, keys)}; [{section}] keys are {', '.join(keys)}"
+                )
+            if not isinstance(per_world, list) or len(per_world) != count:
+                raise DescriptorError(f"{where}: {name} must list one value per world ({count}), got {per_world!r}")
+            checked = [_check_value(where, section, key, keys[key], v) for v in per_world]
+            if key == "speed" and min(checked) < 0.0:
+                raise DescriptorError(f"{where}: {name} must be >= 0 (a wind speed in m/s), got {min(checked)}")
+            out.setdefault(section, {})[key] = checked
+    return out
+
+
+def world_descriptor(descriptor: dict, world: int) -> dict:
+    """The descriptor of world ``world`` (0-based): the shared one with that world's ``[worlds]`` values."""
+    out = copy.deepcopy(descriptor)
+    for section, values in descriptor.get("worlds", {}).items():
+        if section == "count":
+            continue
+        for key, per_world in values.items():
+            if section == "wind" and key == "speed":
+                velocity = out["wind"]["velocity"]
+                norm = sum(v * v for v in velocity) ** 0.5
+                direction = [v / norm for v in velocity] if norm > 0 else [1.0, 0.0, 0.0]
+                out["wind"]["velocity"] = [per_world[world] * v for v in direction]
+            else:
+                out[section][key] = copy.deepcopy(per_world[world])
+    out["worlds"] = {"count": 1}
     return out
 
 
@@ -211,6 +281,40 @@ def parse_override(text: str) -> dict:
     except tomllib.TOMLDecodeError:
         value = raw
     return {section: {key: value}}
+
+
+def parse_vary(text: str, count: int | None) -> tuple[str, str, list]:
+    """Turn ``--vary section.key=VALUES`` into ``(section, key, one value per world)``.
+
+    VALUES is ``START:STOP`` (evenly spaced over ``count`` worlds, both ends included; whole numbers
+    stay whole when both ends are) or a comma-separated / TOML list (``4,6,8`` or ``[[4,0,0],[8,0,0]]``).
+    """
+    if "=" not in text:
+        raise DescriptorError(f"--vary {text!r}: expected section.key=VALUES, e.g. wind.speed=4:12 or wind.speed=4,8")
+    path, raw = (part.strip() for part in text.split("=", 1))
+    if path.count(".") != 1 or not all(path.split(".")):
+        raise DescriptorError(f"--vary {text!r}: the key must be section.key, e.g. wind.speed")
+    section, key = path.split(".")
+    if ":" in raw and not raw.startswith("["):
+        ends = raw.split(":")
+        try:
+            start, stop = (tomllib.loads(f"v = {e.strip()}")["v"] for e in ends) if len(ends) == 2 else (None, None)
+        except tomllib.TOMLDecodeError:
+            start = stop = None
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (start, stop)):
+            raise DescriptorError(f"--vary {text!r}: a range is START:STOP with two numbers, e.g. 4:12")
+        if count is None:
+            raise DescriptorError(f"--vary {text!r}: a range needs --worlds N to know how many values to make")
+        n = max(count - 1, 1)
+        values = [start + (stop - start) * k / n for k in range(count)]
+        if isinstance(start, int) and isinstance(stop, int):
+            values = [round(v) for v in values]
+        return section, key, values
+    try:
+        values = tomllib.loads(f"v = {raw if raw.startswith('[') else f'[{raw}]'}")["v"]
+    except tomllib.TOMLDecodeError:
+        raise DescriptorError(f"--vary {text!r}: VALUES must be START:STOP or a list like 4,6,8") from None
+    return section, key, values
 
 
 def load_text(text: str, where: str) -> dict:
@@ -262,7 +366,7 @@ def _toml_value(value) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, (list, tuple)):
-        return f"[{', '.join(repr(float(v)) for v in value)}]"
+        return f"[{', '.join(_toml_value(v) for v in value)}]"
     return repr(value)
 
 
@@ -273,7 +377,11 @@ def to_toml(descriptor: dict) -> str:
         if section == "controls":
             continue
         lines.append(f"[{section}]")
-        lines += [f"{key} = {_toml_value(value)}" for key, value in values.items()]
+        for key, value in values.items():
+            if isinstance(value, dict):  # [worlds] per-world values: dotted keys
+                lines += [f"{key}.{sub} = {_toml_value(v)}" for sub, v in value.items()]
+            else:
+                lines.append(f"{key} = {_toml_value(value)}")
         lines.append("")
     for entry in descriptor.get("controls", []):
         lines.append("[[controls]]")

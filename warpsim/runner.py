@@ -18,7 +18,7 @@ import warp as wp
 
 from .builder import ModelBuilder
 from .controls import ControlError, ControlSchedule, Gusts, check_value
-from .descriptor import DescriptorError
+from .descriptor import DescriptorError, world_descriptor
 from .kernels.aero import AeroModel
 from .kernels.collision import CollisionMode
 from .model import Model
@@ -53,17 +53,32 @@ def object_config(kind: str, values: dict):
     return cls(**kwargs)
 
 
+def world_name(name: str, world: int, world_count: int) -> str:
+    """An object's name in a batch of ``world_count`` worlds: ``kite`` alone, ``kite_w007`` in world 7."""
+    if world_count == 1:
+        return name
+    return f"{name}_w{world:0{len(str(world_count - 1))}d}"
+
+
 def build_model(descriptor: dict, device: str | None = "cpu", where: str = "scene") -> Model:
-    """Build the model of a validated descriptor on ``device``."""
+    """Build the model of a validated descriptor on ``device``: ``worlds.count`` copies of its object, each
+    with its own ``[worlds]`` values, in one model (they share the terrain and never touch each other)."""
     kind = descriptor["scene"]["object"]
     builder = ModelBuilder(air_density=descriptor["air"]["density"])
     terrain = make_terrain(descriptor["terrain"], where)
     builder.set_terrain(terrain)
     spec = registry.OBJECTS[kind]
-    try:
-        spec.build(builder, object_config(kind, descriptor[registry.section(kind)]), terrain)
-    except ValueError as err:
-        raise DescriptorError(f"{where}: [{registry.section(kind)}]: {err}") from None
+    count = descriptor["worlds"]["count"]
+    builder.world_count = count
+    for world in range(count):
+        builder.current_world = world
+        values = world_descriptor(descriptor, world)[registry.section(kind)]
+        try:
+            record = spec.build(builder, object_config(kind, values), terrain)
+        except ValueError as err:
+            at = f" (world {world})" if count > 1 else ""
+            raise DescriptorError(f"{where}: [{registry.section(kind)}]{at}: {err}") from None
+        record.name = world_name(record.name, world, count)
     return builder.finalize(device)
 
 
@@ -165,14 +180,17 @@ class Simulation:
         self.state = self.model.state()
         self.state.set_velocity(self.model.particle_qd0, self.dt)
         self.control = self.model.control()
-        self.control.set_wind(descriptor["wind"]["velocity"])
         self.steps_taken = 0
-        wind = descriptor["wind"]
-        self.gusts = (
-            Gusts(wind["velocity"], wind["gust_intensity"], wind["gust_period"], wind["gust_seed"])
-            if wind["gust_intensity"] > 0.0
+        self.world_count = descriptor["worlds"]["count"]
+        winds = [world_descriptor(descriptor, k)["wind"] for k in range(self.world_count)]
+        # per world: the gusts blowing there (None = steady wind)
+        self.gusts: list[Gusts | None] = [
+            Gusts(w["velocity"], w["gust_intensity"], w["gust_period"], w["gust_seed"])
+            if w["gust_intensity"] > 0.0
             else None
-        )
+            for w in winds
+        ]
+        self.control.set_wind(np.array([w["velocity"] for w in winds]))
         try:
             self.schedule = ControlSchedule(descriptor.get("controls", []), self.control_names(), where)
         except ControlError as err:
@@ -196,8 +214,9 @@ class Simulation:
             values[name] = check_value(name, value)
         if "wind" in values:
             self.control.set_wind(values["wind"])
-            if self.gusts is not None:
-                self.gusts.mean = np.asarray(values["wind"], dtype=np.float64)
+            for gusts in self.gusts:
+                if gusts is not None:
+                    gusts.mean = np.asarray(values["wind"], dtype=np.float64)
         self.controls.update(values)
         if set(values) <= {"wind"}:
             return
@@ -224,13 +243,22 @@ class Simulation:
     def apply_schedule(self) -> None:
         """Apply the descriptor's ``[[controls]]`` schedule at the current time, and advance the gusts.
 
-        With gusts, a scheduled ``wind`` sets the mean the gusts blow around.
+        With gusts, a scheduled ``wind`` sets the mean the gusts blow around. Scheduled controls act on
+        every world.
         """
         values = self.schedule.at(self.state.time + 1e-9) if self.schedule else {}
-        if self.gusts is not None:
+        if any(g is not None for g in self.gusts):
             if "wind" in values:
-                self.gusts.mean = np.asarray(values.pop("wind"), dtype=np.float64)
-            self.control.set_wind(self.gusts.advance(self.steps_per_frame * self.dt))
+                mean = tuple(float(v) for v in values.pop("wind"))
+                if self._scheduled.get("wind") != mean:
+                    self.set_controls(wind=mean)
+                    self._scheduled["wind"] = mean
+            interval = self.steps_per_frame * self.dt
+            winds = self.control.wind.numpy().copy()
+            for k, gusts in enumerate(self.gusts):
+                if gusts is not None:
+                    winds[k] = gusts.advance(interval)
+            self.control.set_wind(winds)
         changed = {k: v for k, v in values.items() if self._scheduled.get(k) != v}
         if changed:
             self.set_controls(**changed)
@@ -258,9 +286,15 @@ class Simulation:
         ``controls`` (JSON text: the controls in force and the schedule's last values).
         """
         gusts = ""
-        if self.gusts is not None:
-            g = self.gusts
-            gusts = json.dumps({"g": g.g.tolist(), "mean": g.mean.tolist(), "rng": g.rng.bit_generator.state})
+        if any(g is not None for g in self.gusts):
+            gusts = json.dumps(
+                [
+                    None
+                    if g is None
+                    else {"g": g.g.tolist(), "mean": g.mean.tolist(), "rng": g.rng.bit_generator.state}
+                    for g in self.gusts
+                ]
+            )
         return {
             "q": self.state.particle_q.numpy().copy(),
             "q_prev": self.state.particle_q_prev.numpy().copy(),
@@ -282,11 +316,10 @@ class Simulation:
         self.control.stick_rest.assign(np.asarray(checkpoint["stick_rest"], dtype=np.float32))
         self.control.nail_target.assign(np.asarray(checkpoint["nail_target"], dtype=np.float32))
         self.control.wind.assign(np.asarray(checkpoint["wind"], dtype=np.float32))
-        if checkpoint.get("gusts") and self.gusts is not None:
-            g = json.loads(checkpoint["gusts"])
-            self.gusts.g = np.asarray(g["g"], dtype=np.float64)
-            self.gusts.mean = np.asarray(g["mean"], dtype=np.float64)
-            self.gusts.rng.bit_generator.state = g["rng"]
+        saved = json.loads(checkpoint["gusts"]) if checkpoint.get("gusts") else []
+        for gusts, g in zip(self.gusts, saved if isinstance(saved, list) else [saved], strict=False):
+            if gusts is not None and g is not None:
+                gusts.set_state(g)
         controls = json.loads(checkpoint["controls"])
         self.controls = {k: _from_json(v) for k, v in controls["in_force"].items()}
         self._scheduled = {k: _from_json(v) for k, v in controls["scheduled"].items()}

@@ -1,0 +1,165 @@
+"""``python -m benchmarks``: run the benchmark cases, print a table, write JSON.
+
+Examples::
+
+    python -m benchmarks                       # every case, about 2-4 minutes on 2 CPU cores
+    python -m benchmarks -k flag -k glider     # the cases whose names contain "flag" or "glider"
+    python -m benchmarks --list                # the case names and what each measures
+    python -m benchmarks --device cuda --json gpu.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+
+import numpy as np
+import warp as wp
+
+wp.config.log_level = wp.LOG_WARNING  # before Warp initialises: no per-module load lines
+
+from .suite import CASES, Options  # noqa: E402
+
+
+def machine() -> dict:
+    """Where the numbers were measured: CPU, cores, Python, NumPy and Warp versions, the Warp device."""
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            cpu = next((line.split(":", 1)[1].strip() for line in f if line.startswith("model name")), cpu)
+    except OSError:
+        pass
+    import warpsim
+
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "system": platform.platform(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "warp": wp.__version__,
+        "warpsim": warpsim.__version__,
+    }
+
+
+def _fmt(value, digits: int = 0) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, float):
+        return f"{value:,.{digits}f}"
+    return str(value)
+
+
+def table(rows: list[dict]) -> str:
+    """A Markdown table of the rows: the case, its rate, ms/step, real-time factor, sizes and comparison."""
+    lines = [
+        "| case | steps/s | ms/step | real-time | particles | sticks | iters | compared with | theirs, steps/s "
+        "| ratio |",
+        "|---|--:|--:|--:|--:|--:|--:|---|--:|--:|",
+    ]
+    for r in rows:
+        if "skipped" in r:
+            lines.append(f"| {r['case']} | skipped: {r['skipped']} |||||||||")
+            continue
+        if r["case"] == "startup":
+            lines.append(
+                f"| startup | cold {r['cold_start_s']:.2f} s, warm {r['warm_start_s']:.2f} s "
+                "(`warpsim run hang-glider --seconds 1`, fresh process) |||||||||"
+            )
+            continue
+        rt = r.get("realtime_factor")
+        lines.append(
+            "| "
+            + " | ".join(
+                [
+                    r["case"],
+                    _fmt(r["steps_per_s"], 1 if r["steps_per_s"] < 100 else 0),
+                    _fmt(r["ms_per_step"], 3),
+                    f"{rt:,.1f}x" if rt is not None else "-",
+                    _fmt(r.get("particles")),
+                    _fmt(r.get("sticks")),
+                    _fmt(r.get("iterations")),
+                    r.get("baseline", ""),
+                    _fmt(r.get("baseline_steps_per_s"), 1) if "baseline" in r else "",
+                    f"{r['ratio']:,.1f}x" if "ratio" in r else "",
+                ]
+            )
+            + " |"
+        )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the selected cases; returns the exit code."""
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks",
+        description="warpsim's benchmark suite: steps per second of each case, and comparisons measured in the "
+        "same run (the paper's figure, a plain NumPy step, Newton's XPBD, Euler against Verlet, batched worlds).",
+    )
+    parser.add_argument(
+        "-k",
+        dest="select",
+        action="append",
+        default=[],
+        metavar="TEXT",
+        help="run only the cases whose name contains TEXT (repeatable)",
+    )
+    parser.add_argument("--list", action="store_true", help="list the cases and exit")
+    parser.add_argument(
+        "--min-time",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="measure each timing over at least S wall seconds (default 1)",
+    )
+    parser.add_argument("--device", default="cpu", help="Warp device (default cpu)")
+    parser.add_argument(
+        "--json",
+        metavar="PATH",
+        default="benchmarks/results.json",
+        help="where to write the results (default benchmarks/results.json)",
+    )
+    args = parser.parse_args(argv)
+    if args.list:
+        for name, case in CASES.items():
+            print(f"{name:20s} {case.__doc__}")
+        return 0
+    names = [n for n in CASES if not args.select or any(s in n for s in args.select)]
+    if not names:
+        parser.error(f"no case matches {' / '.join(args.select)}; see --list")
+    if not args.min_time > 0:
+        parser.error("--min-time must be positive")
+    try:
+        wp.get_device(args.device)
+    except (ValueError, RuntimeError):
+        parser.error(f"--device {args.device} is not available here")
+    opts = Options(min_time=args.min_time, device=args.device)
+    info = machine()
+    print(
+        f"# {info['cpu']}, {info['cores']} cores; Warp {info['warp']} on {args.device}; {time.strftime('%Y-%m-%d')}",
+        file=sys.stderr,
+    )
+    rows = []
+    for name in names:
+        start = time.perf_counter()
+        print(f"  {name} ...", end="", flush=True, file=sys.stderr)
+        rows.append(CASES[name](opts))
+        print(f" {time.perf_counter() - start:.1f} s", file=sys.stderr)
+    print(table(rows))
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as f:
+            json.dump(
+                {"machine": info, "device": args.device, "date": time.strftime("%Y-%m-%d"), "results": rows},
+                f,
+                indent=1,
+            )
+        print(f"results written to {args.json}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,248 @@
+"""The benchmark cases: each measures steps per second of one configuration, and comparisons measure
+their baseline in the same run so that the ratio is fair.
+
+Every case returns a row (a dict) with at least ``case``, ``steps_per_s``, ``ms_per_step``; scene cases add
+the real-time factor at the scene's ``dt``, counts, iterations and device; comparisons add ``baseline``,
+``baseline_steps_per_s`` and ``ratio`` (warpsim / baseline, except where ``baseline`` says otherwise).
+Timings replay the captured step graph (the way ``warpsim run`` steps) after one warm-up step that
+compiles and captures, and repeat until at least ``min_time`` seconds of wall time have been measured.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import warp as wp
+
+from warpsim import descriptor
+from warpsim.runner import Simulation
+
+PAPER_HANG_GLIDER_STEPS_PER_S = 100.0  # the paper's figure: 100 steps/s on a 2 GHz Pentium 4 (Section 9)
+FLAG_SIZES = (16, 32, 64, 128, 256)
+
+
+@dataclass
+class Options:
+    """How long and where to measure: ``min_time`` [s] of wall time per timing, Warp ``device``."""
+
+    min_time: float = 1.0
+    device: str = "cpu"
+
+
+def time_steps(step: Callable[[int], None], min_time: float, sync: Callable[[], None] = lambda: None) -> float:
+    """Steps per second of ``step(n)`` (takes ``n`` steps), measured over at least ``min_time`` seconds."""
+    step(1)  # warm-up: compile, capture
+    sync()
+    n, steps, elapsed = 1, 0, 0.0
+    while elapsed < min_time:
+        start = time.perf_counter()
+        step(n)
+        sync()
+        elapsed += time.perf_counter() - start
+        steps += n
+        n = min(n * 2, 1 << 16)
+    return steps / elapsed
+
+
+def scene(name: str, overrides: dict | None = None) -> dict:
+    """A validated descriptor: built-in ``name`` with ``overrides`` (sections of keys) merged in."""
+    desc = descriptor.resolve(name)[0]
+    return descriptor.merge(f"benchmark {name}", desc, overrides or {})
+
+
+def flag(size: int, **solver) -> dict:
+    """A square flag of ``size`` x ``size`` particles (the pole along one side) at 55 iterations."""
+    return scene("flag", {"flag": {"resolution": size, "height": 2.0, "width": 2.0}, "solver": solver})
+
+
+def _row(case: str, sim: Simulation, rate: float) -> dict:
+    m = sim.model
+    return {
+        "case": case,
+        "steps_per_s": rate,
+        "ms_per_step": 1e3 / rate,
+        "realtime_factor": rate * sim.dt,
+        "dt": sim.dt,
+        "particles": m.particle_count,
+        "sticks": m.stick_count,
+        "triangles": m.tri_count,
+        "worlds": m.world_count,
+        "iterations": getattr(sim.solver, "iterations", None),
+        "method": sim.descriptor["solver"]["method"],
+        "device": str(m.device),
+    }
+
+
+def measure(case: str, desc: dict, opts: Options) -> dict:
+    """Steps per second of a scene, stepping only (no frames, no outputs)."""
+    sim = Simulation(desc, device=opts.device)
+    rate = time_steps(sim.step, opts.min_time, lambda: wp.synchronize_device(sim.model.device))
+    return _row(case, sim, rate)
+
+
+def _compare(row: dict, baseline: str, baseline_rate: float, **extra) -> dict:
+    row.update(baseline=baseline, baseline_steps_per_s=baseline_rate, ratio=row["steps_per_s"] / baseline_rate, **extra)
+    return row
+
+
+# ---------------------------------------------------------------------------------------------- cases
+def case_object(name: str) -> Callable[[Options], dict]:
+    def run(opts: Options) -> dict:
+        row = measure(name, scene(name), opts)
+        if name == "hang-glider":
+            _compare(row, "paper (2 GHz Pentium 4)", PAPER_HANG_GLIDER_STEPS_PER_S)
+        return row
+
+    run.__doc__ = f"the paper's {name} at its default settings"
+    return run
+
+
+def case_flag(size: int) -> Callable[[Options], dict]:
+    def run(opts: Options) -> dict:
+        return measure(f"flag-{size}", flag(size), opts)
+
+    run.__doc__ = f"a {size}x{size} flag at 55 iterations"
+    return run
+
+
+def case_numpy(name: str) -> Callable[[Options], dict]:
+    def run(opts: Options) -> dict:
+        from .numpy_step import NumpyVerlet
+
+        desc = flag(256) if name == "flag-256" else scene(name)
+        row = measure(f"numpy-{name}", desc, opts)
+        sim = Simulation(desc, device="cpu")
+        ref = NumpyVerlet(sim)
+
+        def step(n):
+            for _ in range(n):
+                ref.step()
+
+        return _compare(row, "plain NumPy, same step", time_steps(step, opts.min_time))
+
+    run.__doc__ = f"warpsim against the plain NumPy step on the {name}"
+    return run
+
+
+def largest_stable_dt(desc: dict, device: str, seconds: float = 2.0, max_stretch: float = 0.1) -> float | None:
+    """The largest of dt = 1/25 ... 1/6400 s at which ``seconds`` of the scene stay finite with every stick
+    within ``max_stretch``."""
+    for divisor in (25, 50, 100, 200, 400, 800, 1600, 3200, 6400):
+        d = descriptor.merge("stability search", desc, {"solver": {"dt": 1.0 / divisor}, "scene": {"fps": 25.0}})
+        sim = Simulation(d, device=device)
+        with np.errstate(all="ignore"):  # an unstable run overflows: that is what is being looked for
+            summary = sim.run(seconds)
+        q = sim.state.positions()
+        if np.isfinite(q).all() and summary.worst_stretch <= max_stretch:
+            return 1.0 / divisor
+    return None
+
+
+def case_euler_vs_verlet(opts: Options) -> dict:
+    """the paper's flag comparison (slide 15): wall time per simulated second, each at its largest stable dt"""
+    results = {}
+    for method in ("verlet", "euler"):
+        desc = scene("flag", {"solver": {"method": method}})
+        dt = largest_stable_dt(desc, opts.device)
+        row = measure(f"flag-{method}", descriptor.merge("dt", desc, {"solver": {"dt": dt}}), opts)
+        row["cost_per_simulated_s"] = 1.0 / (row["steps_per_s"] * dt)
+        results[method] = row
+    verlet, euler = results["verlet"], results["euler"]
+    row = dict(verlet, case="euler-vs-verlet")
+    _compare(
+        row,
+        f"Euler mass-spring at its dt 1/{1 / euler['dt']:.0f} s (Verlet's: 1/{1 / verlet['dt']:.0f} s); "
+        "ratio = Euler's wall time per simulated second / Verlet's",
+        euler["steps_per_s"],
+        euler_dt=euler["dt"],
+        euler_cost_per_simulated_s=euler["cost_per_simulated_s"],
+    )
+    row["ratio"] = euler["cost_per_simulated_s"] / verlet["cost_per_simulated_s"]
+    return row
+
+
+def case_batched(count: int) -> Callable[[Options], dict]:
+    def run(opts: Options) -> dict:
+        single = measure("kite", scene("kite"), opts)
+        speeds = list(np.linspace(4.0, 12.0, count))
+        row = measure(f"kites-x{count}", scene("kite", {"worlds": {"count": count, "wind": {"speed": speeds}}}), opts)
+        row["world_steps_per_s"] = row["steps_per_s"] * count
+        _compare(row, "one kite alone; ratio = world-steps/s (worlds x steps/s) / its steps/s", single["steps_per_s"])
+        row["ratio"] = row["world_steps_per_s"] / single["steps_per_s"]
+        return row
+
+    run.__doc__ = f"{count} kites (wind 4-12 m/s) as batched worlds against one kite"
+    return run
+
+
+def case_newton(size: int) -> Callable[[Options], dict]:
+    def run(opts: Options) -> dict:
+        try:
+            import newton
+        except ImportError:
+            return {"case": f"newton-flag-{size}", "skipped": "Newton is not installed (pip install -e '.[bench]')"}
+        desc = flag(size, chebyshev=0.0)
+        row = measure(f"newton-flag-{size}", desc, opts)
+        sim = Simulation(desc, device=opts.device)
+        m = sim.model
+        builder = newton.ModelBuilder(up_axis=newton.Axis.Z, gravity=(0.0, 0.0, -9.80665))
+        inv = m.particle_inv_mass.numpy()
+        for p, w in zip(m.particle_q0, inv, strict=True):
+            builder.add_particle(tuple(p), (0.0, 0.0, 0.0), mass=0.0 if w == 0 else 1.0 / float(w), radius=0.0)
+        for i, j in m.stick_particles_np:
+            builder.add_spring(int(i), int(j), ke=1.0e6, kd=0.0, control=0.0)
+        model = builder.finalize(device=opts.device)
+        solver = newton.solvers.SolverXPBD(model, iterations=sim.solver.iterations)
+        s0, s1, control = model.state(), model.state(), model.control()
+        solver.step(s0, s1, control, None, sim.dt)
+        with wp.ScopedCapture(device=model.device) as capture:
+            solver.step(s0, s1, control, None, sim.dt)
+            solver.step(s1, s0, control, None, sim.dt)
+
+        def step(n):
+            for _ in range((n + 1) // 2):
+                wp.capture_launch(capture.graph)
+
+        rate = time_steps(step, opts.min_time, lambda: wp.synchronize_device(model.device))
+        return _compare(row, f"Newton {newton.__version__} SolverXPBD, {sim.solver.iterations} iterations", rate)
+
+    run.__doc__ = f"warpsim against Newton's SolverXPBD on a {size}x{size} grid of the same sticks"
+    return run
+
+
+def case_startup(opts: Options) -> dict:
+    """`warpsim run hang-glider --seconds 1` in a fresh process: empty kernel cache (cold), then warm"""
+    times = {}
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, WARP_CACHE_PATH=cache)
+        script = shutil.which("warpsim", path=os.path.dirname(sys.executable)) or shutil.which("warpsim")
+        launcher = [script] if script else [sys.executable, "-m", "warpsim"]
+        command = [*launcher, "run", "hang-glider", "--seconds", "1", "--quiet"]
+        command += ["--device", opts.device]
+        for label in ("cold", "warm"):
+            start = time.perf_counter()
+            subprocess.run(command, env=env, check=True, capture_output=True)
+            times[label] = time.perf_counter() - start
+    return {"case": "startup", "cold_start_s": times["cold"], "warm_start_s": times["warm"], "device": opts.device}
+
+
+CASES: dict[str, Callable[[Options], dict]] = {
+    "hang-glider": case_object("hang-glider"),
+    "kite": case_object("kite"),
+    "parachute": case_object("parachute"),
+    **{f"flag-{n}": case_flag(n) for n in FLAG_SIZES},
+    "euler-vs-verlet": case_euler_vs_verlet,
+    "kites-x256": case_batched(256),
+    "numpy-hang-glider": case_numpy("hang-glider"),
+    "numpy-flag-256": case_numpy("flag-256"),
+    **{f"newton-flag-{n}": case_newton(n) for n in FLAG_SIZES},
+    "startup": case_startup,
+}

@@ -1,0 +1,46 @@
+"""The benchmark suite runs, writes its JSON, and its comparisons measure what they claim (no speed limits here:
+speed goals live in the suite's results, not in tests)."""
+
+import json
+
+import pytest
+
+from benchmarks.__main__ import main
+from benchmarks.suite import flag, largest_stable_dt, scene
+
+
+def test_suite_writes_rows_with_comparisons(tmp_path, capsys):
+    out = tmp_path / "results.json"
+    assert main(["-k", "hang-glider", "--min-time", "0.05", "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    rows = {r["case"]: r for r in data["results"]}
+    assert set(rows) == {"hang-glider", "numpy-hang-glider"}
+    glider = rows["hang-glider"]
+    assert glider["steps_per_s"] > 0 and glider["particles"] == 49 and glider["iterations"] == 55
+    assert glider["baseline_steps_per_s"] == 100.0  # the paper's figure
+    assert glider["ratio"] == pytest.approx(glider["steps_per_s"] / 100.0)
+    numpy_row = rows["numpy-hang-glider"]
+    assert numpy_row["baseline_steps_per_s"] > 0 and numpy_row["ratio"] > 0
+    assert data["machine"]["cores"] >= 1 and data["machine"]["warp"]
+    table = capsys.readouterr().out
+    assert "| hang-glider |" in table and "paper" in table
+
+
+def test_unknown_case_is_refused(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["-k", "no-such-case"])
+    assert exc.value.code == 2
+    assert "no case matches" in capsys.readouterr().err
+
+
+def test_flag_case_has_the_asked_size():
+    desc = flag(16)
+    assert desc["flag"]["resolution"] == 16 and desc["flag"]["height"] == desc["flag"]["width"]
+
+
+def test_euler_needs_a_smaller_step_than_verlet():
+    """The paper's slide 15: the mass-spring Euler flag needs about ten times more steps than Verlet's."""
+    verlet = largest_stable_dt(scene("flag"), "cpu")
+    euler = largest_stable_dt(scene("flag", {"solver": {"method": "euler"}}), "cpu")
+    assert verlet is not None and euler is not None
+    assert euler <= verlet / 4

@@ -144,7 +144,31 @@ def build_parser() -> argparse.ArgumentParser:
     )
     convert.add_argument("recording", metavar="REC.h5")
     convert.add_argument("output", metavar="OUT.usda|.usdc|.usdz")
+
+    render = sub.add_parser(
+        "render",
+        help="draw a recording as a picture (.png, one frame) or an animation (.gif)",
+        description="Draw a recording with a small built-in renderer (needs Pillow: pip install -e '.[render]'): "
+        "OUT.png shows one frame (default the last), OUT.gif the whole run at simulated speed. The camera looks "
+        "from the side and a little above and follows the objects.",
+    )
+    render.add_argument("recording", metavar="REC.h5")
+    render.add_argument("output", metavar="OUT.png|OUT.gif")
+    render.add_argument("--frame", type=int, help="frame to draw in a .png (default: the last; -1 = last)")
+    render.add_argument("--size", type=_size, default=(960, 540), metavar="WxH", help="pixels (default 960x540)")
+    render.add_argument("--azimuth", type=float, default=-60.0, help="view direction about +z [deg] (default -60)")
+    render.add_argument("--elevation", type=float, default=20.0, help="view height above horizon [deg] (default 20)")
     return parser
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        w = h = 0
+    if not (16 <= w <= 8192 and 16 <= h <= 8192):
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels (16..8192), e.g. 960x540, got {text!r}")
+    return w, h
 
 
 def _world_arguments(parser) -> None:
@@ -409,6 +433,20 @@ def cmd_convert(args) -> int:
     return 0
 
 
+def cmd_render(args) -> int:
+    """Draw a recording as a PNG or an animated GIF."""
+    from .io import OutputPathError
+    from .io.hdf5 import RecordingError
+    from .io.render import render_recording
+
+    try:
+        path = render_recording(args.recording, args.output, args.frame, args.size, args.azimuth, args.elevation)
+    except (RecordingError, OutputPathError, RuntimeError) as err:
+        raise UsageError(str(err)) from None
+    print(f"{args.recording} -> {path}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``warpsim`` console script."""
     parser = build_parser()
@@ -418,7 +456,7 @@ def main(argv: list[str] | None = None) -> int:
     wp.config.log_level = wp.LOG_WARNING  # no per-module load lines on the user's terminal
     from .descriptor import DescriptorError
 
-    commands = {"list": cmd_list, "info": cmd_info, "run": cmd_run, "convert": cmd_convert}
+    commands = {"list": cmd_list, "info": cmd_info, "run": cmd_run, "convert": cmd_convert, "render": cmd_render}
     try:
         return commands[args.command](args)
     except (DescriptorError, UsageError) as err:

@@ -287,14 +287,7 @@ class Simulation:
         """
         gusts = ""
         if any(g is not None for g in self.gusts):
-            gusts = json.dumps(
-                [
-                    None
-                    if g is None
-                    else {"g": g.g.tolist(), "mean": g.mean.tolist(), "rng": g.rng.bit_generator.state}
-                    for g in self.gusts
-                ]
-            )
+            gusts = json.dumps([None if g is None else g.state() for g in self.gusts])
         return {
             "q": self.state.particle_q.numpy().copy(),
             "q_prev": self.state.particle_q_prev.numpy().copy(),

@@ -268,14 +268,20 @@ def _check_controls(where: str, entries, kind: str) -> list[dict]:
     return [dict(e) for e in entries]
 
 
-def parse_override(text: str) -> dict:
-    """Turn ``section.key=value`` (value in TOML syntax; bare words are strings) into a nested dict."""
+def _split_assignment(flag: str, text: str, example: str) -> tuple[str, str, str]:
+    """Split ``section.key=value`` given to ``flag`` into ``(section, key, raw value)``; ``example`` shows the form."""
     if "=" not in text:
-        raise DescriptorError(f"--set {text!r}: expected section.key=value, e.g. wind.velocity=[8,0,0]")
+        raise DescriptorError(f"{flag} {text!r}: expected section.key=value, e.g. {example}")
     path, raw = (part.strip() for part in text.split("=", 1))
     if path.count(".") != 1 or not all(path.split(".")):
-        raise DescriptorError(f"--set {text!r}: the key must be section.key, e.g. solver.iterations=40")
+        raise DescriptorError(f"{flag} {text!r}: the key must be section.key, e.g. {example}")
     section, key = path.split(".")
+    return section, key, raw
+
+
+def parse_override(text: str) -> dict:
+    """Turn ``section.key=value`` (value in TOML syntax; bare words are strings) into a nested dict."""
+    section, key, raw = _split_assignment("--set", text, "wind.velocity=[8,0,0]")
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
@@ -289,12 +295,7 @@ def parse_vary(text: str, count: int | None) -> tuple[str, str, list]:
     VALUES is ``START:STOP`` (evenly spaced over ``count`` worlds, both ends included; whole numbers
     stay whole when both ends are) or a comma-separated / TOML list (``4,6,8`` or ``[[4,0,0],[8,0,0]]``).
     """
-    if "=" not in text:
-        raise DescriptorError(f"--vary {text!r}: expected section.key=VALUES, e.g. wind.speed=4:12 or wind.speed=4,8")
-    path, raw = (part.strip() for part in text.split("=", 1))
-    if path.count(".") != 1 or not all(path.split(".")):
-        raise DescriptorError(f"--vary {text!r}: the key must be section.key, e.g. wind.speed")
-    section, key = path.split(".")
+    section, key, raw = _split_assignment("--vary", text, "wind.speed=4:12 or wind.speed=4,8")
     if ":" in raw and not raw.startswith("["):
         ends = raw.split(":")
         try:

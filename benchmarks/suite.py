@@ -88,8 +88,10 @@ def measure(case: str, desc: dict, opts: Options) -> dict:
     return _row(case, sim, rate)
 
 
-def _compare(row: dict, baseline: str, baseline_rate: float, **extra) -> dict:
-    row.update(baseline=baseline, baseline_steps_per_s=baseline_rate, ratio=row["steps_per_s"] / baseline_rate, **extra)
+def _compare(row: dict, baseline: str, baseline_rate: float, ratio: float | None = None, **extra) -> dict:
+    """Add a baseline to ``row``; ``ratio`` defaults to warpsim's steps/s over the baseline's."""
+    ratio = row["steps_per_s"] / baseline_rate if ratio is None else ratio
+    row.update(baseline=baseline, baseline_steps_per_s=baseline_rate, ratio=ratio, **extra)
     return row
 
 
@@ -157,16 +159,15 @@ def case_euler_vs_verlet(opts: Options) -> dict:
         results[method] = row
     verlet, euler = results["verlet"], results["euler"]
     row = dict(verlet, case="euler-vs-verlet")
-    _compare(
+    return _compare(
         row,
         f"Euler mass-spring at its dt 1/{1 / euler['dt']:.0f} s (Verlet's: 1/{1 / verlet['dt']:.0f} s); "
         "ratio = Euler's wall time per simulated second / Verlet's",
         euler["steps_per_s"],
+        ratio=euler["cost_per_simulated_s"] / verlet["cost_per_simulated_s"],
         euler_dt=euler["dt"],
         euler_cost_per_simulated_s=euler["cost_per_simulated_s"],
     )
-    row["ratio"] = euler["cost_per_simulated_s"] / verlet["cost_per_simulated_s"]
-    return row
 
 
 def case_batched(count: int) -> Callable[[Options], dict]:
@@ -175,9 +176,12 @@ def case_batched(count: int) -> Callable[[Options], dict]:
         speeds = list(np.linspace(4.0, 12.0, count))
         row = measure(f"kites-x{count}", scene("kite", {"worlds": {"count": count, "wind": {"speed": speeds}}}), opts)
         row["world_steps_per_s"] = row["steps_per_s"] * count
-        _compare(row, "one kite alone; ratio = world-steps/s (worlds x steps/s) / its steps/s", single["steps_per_s"])
-        row["ratio"] = row["world_steps_per_s"] / single["steps_per_s"]
-        return row
+        return _compare(
+            row,
+            "one kite alone; ratio = world-steps/s (worlds x steps/s) / its steps/s",
+            single["steps_per_s"],
+            ratio=row["world_steps_per_s"] / single["steps_per_s"],
+        )
 
     run.__doc__ = f"{count} kites (wind 4-12 m/s) as batched worlds against one kite"
     return run

@@ -1,6 +1,8 @@
 """The ``warpsim`` command: list, info, run, convert.
 
-Every error a user can cause ends with one line ``warpsim <command>: error: ...`` and exit code 2.
+Every error a user can cause ends with one line ``warpsim <command>: error: ...`` and exit code 2; a run that
+blows up (NaN/Inf, or a stick past ``solver.max_stretch``) ends with exit code 3 and keeps its outputs up to the
+last good frame; an interrupted run ends with 130.
 """
 
 from __future__ import annotations
@@ -13,6 +15,8 @@ from pathlib import Path
 from . import __version__
 
 EXIT_USAGE = 2
+EXIT_BLOWUP = 3
+EXIT_INTERRUPTED = 130
 
 
 class UsageError(Exception):
@@ -65,7 +69,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Simulate flying fabric objects (flag, hang glider, delta kite, parachute) with Verlet "
         "particles and Jacobi-averaged distance constraints, in NVIDIA Warp kernels.",
         epilog="SCENE is a built-in object name (see `warpsim list`), a scene name found in ./scenes, "
-        "or a path to a .toml descriptor.",
+        "or a path to a .toml descriptor. Exit codes: 0 done, 2 bad input (one error line), 3 the simulation "
+        "blew up (outputs kept up to the last good frame), 130 interrupted (outputs kept).",
     )
     parser.add_argument("--version", action="version", version=f"warpsim {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
@@ -335,7 +340,7 @@ def cmd_run(args) -> int:
     from .descriptor import load_text, to_toml
     from .io.hdf5 import H5Recorder, Recording, RecordingError, check_recording_path
     from .io.usd import UsdWriter, check_stage_path
-    from .runner import Simulation
+    from .runner import BlowUpError, Simulation
 
     if args.resume and args.scene:
         raise UsageError("give either SCENE or --resume REC.h5, not both (a recording holds its scene)")
@@ -382,6 +387,7 @@ def cmd_run(args) -> int:
 
     stop = _StopRequests()
     recorder = usd = None
+    blowup = None
     try:
         if args.resume:
             recorder = H5Recorder(args.resume, sim, resume=True)
@@ -396,13 +402,16 @@ def cmd_run(args) -> int:
             if usd:
                 usd.write(frame.time, frame.positions)
 
-        summary = sim.run(
-            seconds,
-            on_frame=on_frame if (recorder or usd) else None,
-            on_progress=progress if show_progress else None,
-            realtime=args.realtime,
-            stop=stop,
-        )
+        try:
+            summary = sim.run(
+                seconds,
+                on_frame=on_frame if (recorder or usd) else None,
+                on_progress=progress if show_progress else None,
+                realtime=args.realtime,
+                stop=stop,
+            )
+        except BlowUpError as err:
+            blowup, summary = err, err.summary
     finally:
         if recorder:
             recorder.close()
@@ -416,7 +425,12 @@ def cmd_run(args) -> int:
         for label, path in (("recording", args.resume or h5_path), ("USD stage", usd_path)):
             if path:
                 print(f"  {label}: {path}")
-    return 130 if summary.interrupted else 0
+    if blowup is not None:
+        sys.stderr.write(
+            f"warpsim run: error: {blowup}\n  (try a smaller --dt, more --iterations, or see README: Blow-ups)\n"
+        )
+        return EXIT_BLOWUP
+    return EXIT_INTERRUPTED if summary.interrupted else 0
 
 
 def cmd_convert(args) -> int:

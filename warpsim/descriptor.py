@@ -5,7 +5,7 @@ so a descriptor only lists what it changes. Sections and keys (``warpsim info SC
 
 * ``[scene]`` ``object`` (flag, hang-glider, kite, parachute), ``seconds``, ``fps``
 * ``[solver]`` ``method`` (verlet | euler), ``dt`` [s], ``iterations``, ``relaxation``, ``chebyshev``,
-  ``mass_splitting``, ``damping``,
+  ``mass_splitting``, ``damping``, ``max_stretch`` (blow-up limit on ``|l - r|/r``, 0 = off),
   ``spring_stiffness`` [N/m], ``spring_damping`` [N s/m] (euler only)
 * ``[air]`` ``model`` (paper | plate), ``scale``, ``density`` [kg/m^3]
 * ``[wind]`` ``velocity`` [m/s, 3 numbers], ``shear_exponent``, ``reference_height`` [m],
@@ -61,6 +61,7 @@ BOUNDS = {
     ("solver", "relaxation"): (0.0, 2.0, False),
     ("solver", "chebyshev"): (0.0, 0.999, True),
     ("solver", "damping"): (0.0, 1.0, True),
+    ("solver", "max_stretch"): (0.0, None, True),
     ("solver", "spring_stiffness"): (0.0, None, False),
     ("solver", "spring_damping"): (0.0, None, True),
     ("air", "scale"): (0.0, None, True),
@@ -82,6 +83,7 @@ BASE_DEFAULTS: dict[str, dict[str, Any]] = {
         "chebyshev": 0.95,
         "mass_splitting": False,
         "damping": 0.0,
+        "max_stretch": 1.0,
         "spring_stiffness": 5000.0,
         "spring_damping": 5.0,
     },

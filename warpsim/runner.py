@@ -92,6 +92,7 @@ class Frame:
         worst_stretch: largest ``|l - r|/r`` over all sticks (dimensionless).
         kinetic_energy: total kinetic energy [J] of the free particles.
         velocities: host ``[particle_count, 3]`` velocities ``(x - x_prev)/dt`` [m/s].
+        worst_stick: index of the stick with the largest stretch (-1 when there are no sticks).
     """
 
     index: int
@@ -100,6 +101,31 @@ class Frame:
     worst_stretch: float
     kinetic_energy: float
     velocities: np.ndarray
+    worst_stick: int = -1
+
+
+class BlowUpError(RuntimeError):
+    """The simulation blew up: a position or velocity became NaN/Inf, or a stick stretched past
+    ``solver.max_stretch``. Raised by :meth:`Simulation.run` after the state has been put back to the
+    last good frame (so a recorder closed afterwards checkpoints that frame).
+
+    Attributes:
+        step: the solver step count at the bad frame. time: its simulated time [s].
+        object: the name of the object where it happened. reason: what was seen.
+        last_good_frame: index of the last good frame; last_good_time: its time [s].
+        summary: the :class:`RunSummary` of the run up to the last good frame.
+    """
+
+    def __init__(self, step, time, object, reason, last_good_frame, last_good_time, summary):
+        self.step, self.time, self.object, self.reason = step, time, object, reason
+        self.last_good_frame, self.last_good_time, self.summary = last_good_frame, last_good_time, summary
+        kept = (
+            f"stopped at the last good frame {last_good_frame} (t = {last_good_time:.4f} s), "
+            "which is kept with every frame before it"
+            if last_good_frame >= 0
+            else "the starting state is already bad, nothing was simulated"
+        )
+        super().__init__(f"the simulation blew up at step {step} (t = {time:.4f} s) in {object}: {reason}; {kept}")
 
 
 @dataclass
@@ -111,6 +137,7 @@ class RunSummary:
     wall_time: float
     worst_stretch: float
     interrupted: bool = False
+    blew_up: bool = False
 
     @property
     def steps_per_second(self) -> float:
@@ -124,7 +151,7 @@ class RunSummary:
 
     def text(self) -> str:
         """Human-readable summary lines."""
-        status = "interrupted" if self.interrupted else "done"
+        status = "blew up" if self.blew_up else "interrupted" if self.interrupted else "done"
         return (
             f"{status}: simulated {self.simulated_time:.3f} s in {self.steps} steps, wall {self.wall_time:.2f} s\n"
             f"  {self.steps_per_second:,.0f} steps/s, real-time factor {self.realtime_factor:.1f}x, "
@@ -273,10 +300,38 @@ class Simulation:
     def frame(self, index: int) -> Frame:
         """Diagnostics of the current state as frame ``index``."""
         q = self.state.positions()
-        stretch = float(np.abs(self.model.stick_stretch(q, self.control.stick_rest.numpy())).max(initial=0.0))
-        v = self.state.velocities(self.dt)
-        energy = float(0.5 * np.sum(self.model.particle_free_mass * np.einsum("ij,ij->i", v, v)))
-        return Frame(index, self.state.time, q, stretch, energy, v)
+        with np.errstate(invalid="ignore", over="ignore"):  # a blown-up state is reported by blowup()
+            stretches = np.abs(self.model.stick_stretch(q, self.control.stick_rest.numpy()))
+            worst_stick = int(np.argmax(stretches)) if len(stretches) else -1  # argmax finds a NaN first
+            stretch = float(stretches[worst_stick]) if len(stretches) else 0.0
+            v = self.state.velocities(self.dt)
+            energy = float(0.5 * np.sum(self.model.particle_free_mass * np.einsum("ij,ij->i", v, v)))
+        return Frame(index, self.state.time, q, stretch, energy, v, worst_stick)
+
+    def blowup(self, frame: Frame) -> tuple[str, str] | None:
+        """``(object name, what is wrong)`` when ``frame`` shows a blow-up, else None: a non-finite position
+        or velocity, or a worst stick stretch above ``solver.max_stretch`` (when that is > 0)."""
+        model = self.model
+        bad = ~(np.isfinite(frame.positions).all(axis=1) & np.isfinite(frame.velocities).all(axis=1))
+        if bad.any():
+            p = int(np.flatnonzero(bad)[0])
+            return self._object_of(p), f"particle {p} has a non-finite position or velocity ({bad.sum()} particles)"
+        limit = float(self.descriptor["solver"]["max_stretch"])
+        if limit > 0.0 and not frame.worst_stretch <= limit:  # NaN stretch counts as too much
+            k = frame.worst_stick
+            a, b = (int(i) for i in model.stick_particles_np[k])
+            return (
+                self._object_of(a),
+                f"stick {k} (particles {a}-{b}) is stretched {100 * frame.worst_stretch:.1f}% "
+                f"(limit solver.max_stretch = {100 * limit:g}%)",
+            )
+        return None
+
+    def _object_of(self, particle: int) -> str:
+        for record in self.model.objects:
+            if particle in record.particles:
+                return record.name
+        return "no object"
 
     def checkpoint(self) -> dict:
         """Everything needed to continue this run exactly: state, control arrays, gusts, step count.
@@ -317,6 +372,32 @@ class Simulation:
         self.controls = {k: _from_json(v) for k, v in controls["in_force"].items()}
         self._scheduled = {k: _from_json(v) for k, v in controls["scheduled"].items()}
 
+    def _snapshot(self, frame: Frame) -> dict:
+        """A cheap host copy of everything :meth:`checkpoint` holds, taken at every frame (``frame`` is the
+        current state's) so that a blow-up can go back to the last good one."""
+        control = self.control
+        return {
+            "q": frame.positions.copy(),
+            "q_prev": self.state.particle_q_prev.numpy().copy(),
+            "controls": [a.numpy().copy() for a in (control.stick_rest, control.nail_target, control.wind)],
+            "host": (self.state.time, self.steps_taken, [None if g is None else g.state() for g in self.gusts]),
+            "in_force": (dict(self.controls), dict(self._scheduled)),
+        }
+
+    def _rollback(self, snap: dict) -> None:
+        """Go back to a :meth:`_snapshot`."""
+        self.state.particle_q.assign(snap["q"])
+        self.state.particle_q_prev.assign(snap["q_prev"])
+        for array, saved in zip(
+            (self.control.stick_rest, self.control.nail_target, self.control.wind), snap["controls"], strict=True
+        ):
+            array.assign(saved)
+        self.state.time, self.steps_taken, gusts = snap["host"]
+        for g, saved in zip(self.gusts, gusts, strict=True):
+            if g is not None:
+                g.set_state(saved)
+        self.controls, self._scheduled = (dict(d) for d in snap["in_force"])
+
     def run(
         self,
         seconds: float,
@@ -337,6 +418,9 @@ class Simulation:
         ``on_progress(t, seconds, steps, wall)`` is called at most about 5 times per wall second.
         ``stop()`` is asked before every frame (the CLI's answers True after SIGINT/SIGTERM); True, or a
         ``KeyboardInterrupt``, ends the run there and the summary says ``interrupted``.
+
+        Every frame is checked (:meth:`blowup`) before ``on_frame`` sees it. A bad frame is not passed on:
+        the state goes back to the last good frame and :class:`BlowUpError` is raised.
         """
         total_steps = int(round(seconds / self.dt))
         spf = self.steps_per_frame
@@ -348,7 +432,13 @@ class Simulation:
         try:
             index = -(-self.steps_taken // spf)  # ceil: the frame the current state belongs to
             first = self.frame(index)
+            problem = self.blowup(first)
+            if problem:
+                raise BlowUpError(
+                    self.steps_taken, first.time, *problem, -1, first.time, RunSummary(0.0, 0, 0.0, 0.0, blew_up=True)
+                )
             worst = first.worst_stretch
+            good, good_frame = self._snapshot(first), first  # taken before on_frame can touch the state
             if on_frame and self.steps_taken == 0:
                 on_frame(first)
             while steps < total_steps:
@@ -363,7 +453,16 @@ class Simulation:
                 steps += n
                 index = -(-self.steps_taken // spf)
                 frame = self.frame(index)
+                problem = self.blowup(frame)
+                if problem:
+                    bad_step = self.steps_taken
+                    self._rollback(good)
+                    steps -= bad_step - self.steps_taken
+                    wp.synchronize_device(self.model.device)
+                    summary = RunSummary(steps * self.dt, steps, time.perf_counter() - start, worst, blew_up=True)
+                    raise BlowUpError(bad_step, frame.time, *problem, good_frame.index, good_frame.time, summary)
                 worst = max(worst, frame.worst_stretch)
+                good, good_frame = self._snapshot(frame), frame
                 if on_frame:
                     on_frame(frame)
                 now = time.perf_counter()

@@ -212,14 +212,14 @@ def _load(args) -> tuple[dict, str, str]:
         flags = " ".join([f"--worlds {count}"] + [f"--vary {v}" for v in getattr(args, "vary", [])])
         descriptor = merge(flags, descriptor, {"worlds": worlds})
     overrides = {
-        ("solver", "dt"): getattr(args, "dt", None),
-        ("solver", "iterations"): getattr(args, "iterations", None),
-        ("scene", "fps"): getattr(args, "fps", None),
-        ("scene", "seconds"): getattr(args, "seconds", None),
+        ("solver", "dt", "--dt"): getattr(args, "dt", None),
+        ("solver", "iterations", "--iterations"): getattr(args, "iterations", None),
+        ("scene", "fps", "--fps"): getattr(args, "fps", None),
+        ("scene", "seconds", "--seconds"): getattr(args, "seconds", None),
     }
-    for (section, key), value in overrides.items():
-        if value is not None:
-            descriptor[section][key] = value
+    for (section, key, flag), value in overrides.items():
+        if value is not None:  # checked against the descriptor's bounds like any other value
+            descriptor = merge(f"{flag} {value:g}", descriptor, {section: {key: value}})
     return descriptor, text, where
 
 

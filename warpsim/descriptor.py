@@ -56,7 +56,7 @@ CHOICES = {
 BOUNDS = {
     ("scene", "seconds"): (0.0, None, False),
     ("scene", "fps"): (0.0, None, False),
-    ("solver", "dt"): (0.0, None, False),
+    ("solver", "dt"): (1e-7, 1.0, True),
     ("solver", "iterations"): (1, 10000, True),
     ("solver", "relaxation"): (0.0, 2.0, False),
     ("solver", "chebyshev"): (0.0, 0.999, True),
@@ -70,6 +70,8 @@ BOUNDS = {
     ("ground", "friction"): (0.0, None, True),
     ("wind", "gust_intensity"): (0.0, None, True),
     ("wind", "gust_period"): (0.0, None, False),
+    ("wind", "gust_seed"): (0, None, True),
+    ("terrain", "seed"): (0, None, True),
     ("wind", "reference_height"): (0.0, None, False),
 }
 
@@ -184,6 +186,15 @@ def merge(where: str, base: dict, override: dict) -> dict:
         if section == "worlds":
             worlds = values  # checked last: its per-world values are checked against the merged sections
             continue
+        if (
+            section == "scene"
+            and isinstance(values, dict)
+            and values.get("object", out["scene"]["object"]) != (out["scene"]["object"])
+        ):
+            raise DescriptorError(
+                f"{where}: scene.object cannot change here (the scene is a {out['scene']['object']}); "
+                "name the object as SCENE instead, e.g. warpsim run kite"
+            )
         if section not in out:
             raise DescriptorError(
                 f"{where}: unknown section [{section}]{_suggest(section, out)}; sections are {', '.join(out)}"
@@ -345,14 +356,14 @@ def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, st
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():
             raise DescriptorError(f"{scene}: scene file not found")
-        text = path.read_text(encoding="utf-8")
+        text = _read_text(path)
         return load_text(text, str(path)), text, str(path)
     if scene in registry.OBJECTS:
         return defaults(scene), "", f"built-in {scene}"
     for directory in search_dirs or []:
         candidate = Path(directory) / f"{scene.replace('-', '_')}.toml"
         if candidate.is_file():
-            text = candidate.read_text(encoding="utf-8")
+            text = _read_text(candidate)
             return load_text(text, str(candidate)), text, str(candidate)
     names = list(registry.OBJECTS)
     for directory in search_dirs or []:
@@ -361,6 +372,16 @@ def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, st
         f"unknown scene '{scene}'{_suggest(scene, names)}: use a built-in object ({', '.join(registry.OBJECTS)}), "
         "a scene name from `warpsim list`, or a path to a .toml descriptor"
     )
+
+
+def _read_text(path: Path) -> str:
+    """A scene file's text; unreadable or non-UTF-8 files are descriptor errors."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise DescriptorError(f"{path}: not a text file (a scene descriptor is UTF-8 TOML)") from None
+    except OSError as err:
+        raise DescriptorError(f"{path}: cannot be read: {err.strerror or err}") from None
 
 
 def _toml_value(value) -> str:

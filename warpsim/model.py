@@ -88,7 +88,8 @@ class Model:
     def state(self) -> State:
         """A new :class:`State` at the build positions; the previous position encodes the build velocity
         for the default time step ``dt = 0.01`` s (call :meth:`State.set_velocity` for another dt)."""
-        q = self.particle_q0.astype(np.float32)
+        with np.errstate(over="ignore"):  # an absurd size overflows float32: Simulation reports it
+            q = self.particle_q0.astype(np.float32)
         s = State(
             particle_q=wp.array(q, dtype=wp.vec3, device=self.device),
             particle_q_prev=wp.array(q, dtype=wp.vec3, device=self.device),

@@ -206,6 +206,16 @@ class Simulation:
             )
         self.state = self.model.state()
         self.state.set_velocity(self.model.particle_qd0, self.dt)
+        with np.errstate(all="ignore"):
+            bad = ~np.isfinite(self.state.positions()).all(axis=1) | ~np.isfinite(self.state.velocities(self.dt)).all(
+                axis=1
+            )
+        if bad.any():
+            p = int(np.flatnonzero(bad)[0])
+            raise DescriptorError(
+                f"{where}: the built {self._object_of(p)} has a non-finite starting position or speed (particle {p}, "
+                f"{int(bad.sum())} in all): check its sizes, masses, speed and dt"
+            )
         self.control = self.model.control()
         self.steps_taken = 0
         self.world_count = descriptor["worlds"]["count"]

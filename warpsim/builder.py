@@ -286,6 +286,11 @@ class ModelBuilder:
         m.world_count = self.world_count
         mass = np.array(self.particle_mass, dtype=np.float64)
         nails = np.array(self.nail_particles, dtype=np.int32)
+        weightless = np.flatnonzero(~(mass > 0.0))
+        if len(weightless):
+            raise ValueError(
+                f"{len(weightless)} particles have no positive mass (first: {weightless[0]}, {mass[weightless[0]]} kg)"
+            )
         inv_mass = 1.0 / mass
         inv_mass[nails] = 0.0
         m.particle_mass = mass.copy()

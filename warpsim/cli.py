@@ -23,9 +23,15 @@ class UsageError(Exception):
     """A user mistake: printed as one line, exit code 2."""
 
 
+def one_line(message: str) -> str:
+    """``message`` with every control or line-breaking character escaped (``\\n``, ``\\r``...), so that text a
+    user typed cannot break an error line apart."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str):  # one line, no usage dump
-        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)\n")
 
 
 def _positive_float(name: str):
@@ -161,9 +167,32 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("output", metavar="OUT.png|OUT.gif")
     render.add_argument("--frame", type=int, help="frame to draw in a .png (default: the last; -1 = last)")
     render.add_argument("--size", type=_size, default=(960, 540), metavar="WxH", help="pixels (default 960x540)")
-    render.add_argument("--azimuth", type=float, default=-60.0, help="view direction about +z [deg] (default -60)")
-    render.add_argument("--elevation", type=float, default=20.0, help="view height above horizon [deg] (default 20)")
+    render.add_argument(
+        "--azimuth",
+        type=_angle("--azimuth", -360, 360),
+        default=-60.0,
+        help="view direction about +z [deg] (default -60)",
+    )
+    render.add_argument(
+        "--elevation",
+        type=_angle("--elevation", -90, 90),
+        default=20.0,
+        help="view height above the horizon [deg], -90..90 (default 20)",
+    )
     return parser
+
+
+def _angle(name: str, low: float, high: float):
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{name} must be an angle in degrees from {low} to {high}, got {text!r}")
+        return value
+
+    return parse
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -427,7 +456,8 @@ def cmd_run(args) -> int:
                 print(f"  {label}: {path}")
     if blowup is not None:
         sys.stderr.write(
-            f"warpsim run: error: {blowup}\n  (try a smaller --dt, more --iterations, or see README: Blow-ups)\n"
+            f"warpsim run: error: {one_line(str(blowup))}\n"
+            "  (try a smaller --dt, more --iterations, or see README: Blow-ups)\n"
         )
         return EXIT_BLOWUP
     return EXIT_INTERRUPTED if summary.interrupted else 0
@@ -474,7 +504,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return commands[args.command](args)
     except (DescriptorError, UsageError) as err:
-        sys.stderr.write(f"warpsim {args.command}: error: {err}\n")
+        sys.stderr.write(f"warpsim {args.command}: error: {one_line(str(err))}\n")
         return EXIT_USAGE
 
 

@@ -104,6 +104,7 @@ BASE_DEFAULTS: dict[str, dict[str, Any]] = {
 }
 
 MAX_WORLDS = 65536
+FLOAT_LIMIT = 1e30  # [any unit] the simulation is float32 (max 3.4e38): larger numbers are refused outright
 VARIABLE_SECTIONS = ("wind",)  # besides the object's own section
 
 
@@ -145,8 +146,8 @@ def _check_value(where: str, section: str, key: str, default, value):
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise DescriptorError(f"{where}: {name} must be a number, got {value!r}")
         value = float(value)
-        if value != value or value in (float("inf"), float("-inf")):
-            raise DescriptorError(f"{where}: {name} must be finite, got {value!r}")
+        if not abs(value) <= FLOAT_LIMIT:
+            raise DescriptorError(f"{where}: {name} must be finite and at most {FLOAT_LIMIT:g} in size, got {value!r}")
     elif isinstance(default, str):
         if not isinstance(value, str):
             raise DescriptorError(f"{where}: {name} must be a string, got {value!r}")
@@ -158,8 +159,10 @@ def _check_value(where: str, section: str, key: str, default, value):
         ):
             raise DescriptorError(f"{where}: {name} must be a list of {len(default)} numbers, got {value!r}")
         value = [float(v) for v in value]
-        if not all(v == v and abs(v) != float("inf") for v in value):
-            raise DescriptorError(f"{where}: {name} must hold finite numbers, got {value!r}")
+        if not all(abs(v) <= FLOAT_LIMIT for v in value):
+            raise DescriptorError(
+                f"{where}: {name} must hold finite numbers at most {FLOAT_LIMIT:g} in size, got {value!r}"
+            )
     choices = CHOICES.get((section, key))
     if choices is not None and value not in choices:
         raise DescriptorError(

@@ -79,7 +79,10 @@ def build_model(descriptor: dict, device: str | None = "cpu", where: str = "scen
             at = f" (world {world})" if count > 1 else ""
             raise DescriptorError(f"{where}: [{registry.section(kind)}]{at}: {err}") from None
         record.name = world_name(record.name, world, count)
-    return builder.finalize(device)
+    try:
+        return builder.finalize(device)
+    except ValueError as err:
+        raise DescriptorError(f"{where}: [{registry.section(kind)}]: {err}") from None
 
 
 @dataclass

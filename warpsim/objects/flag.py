@@ -34,12 +34,22 @@ class FlagConfig:
     position: tuple[float, float] = (0.0, 0.0)
 
 
+MAX_PARTICLES = 2048 * 2048  # a larger flag takes minutes to build and gigabytes to hold
+
+
 def build_flag(builder: ModelBuilder, cfg: FlagConfig, terrain: Heightfield) -> ObjectRecord:
     """Add a flag on a pole standing on ``terrain`` at ``cfg.position``; the pole-side column is nailed."""
     if cfg.resolution < 2:
         raise ValueError(f"flag resolution must be at least 2, got {cfg.resolution}")
     count_u = int(cfg.resolution)
-    count_v = max(2, int(round(cfg.height / cfg.width * (count_u - 1))) + 1)
+    rows = cfg.height / cfg.width * (count_u - 1)
+    if not rows * count_u <= MAX_PARTICLES:
+        raise ValueError(
+            f"a {cfg.width:g} m x {cfg.height:g} m flag at resolution {count_u} would have about {rows * count_u:.3g} "
+            f"particles (rows keep the cells square), more than {MAX_PARTICLES:,}: lower the resolution or the "
+            "height-to-width ratio"
+        )
+    count_v = max(2, int(round(rows)) + 1)
     x0, y0 = cfg.position
     top = float(terrain.height(x0, y0)) + cfg.pole_height
     p0 = builder.particle_count

@@ -49,7 +49,8 @@ class HangGliderConfig:
             is raised by this angle, growing linearly from 0 at the keel (real sails twist this way;
             it is what lets a swept wing trim with its centre of mass ahead of the sail's centre).
         frame_mass_fraction: share of ``glider_mass`` carried by the leading-edge and keel particles
-            (the tubes), at most 0.85; the rest minus the virtual particles' 10 % is spread over the sail cloth.
+            (the tubes), above 0 and at most 0.85; the rest minus the virtual particles' 10 % is spread over the
+            sail cloth.
         frame_weight: weight of the frame's sticks (leading edges, keel, virtual ties) in the constraint
             average (1 = the paper; 6 counts each as six sticks, keeping the frame within 1 % under the
             pilot's load).

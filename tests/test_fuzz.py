@@ -1,0 +1,258 @@
+"""Hostile input, property-based: random descriptors and random command lines.
+
+Whatever comes in, ``warpsim`` answers with exit code 0 (it ran), 2 (one clear error line) or 3 (a run that
+blew up, outputs kept); never a traceback, and after exit code 2 no file is left behind.
+"""
+
+import contextlib
+import io
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+from hypothesis import HealthCheck, event, given, settings
+from hypothesis import strategies as st
+
+from warpsim.cli import main
+from warpsim.descriptor import DescriptorError, defaults, load_text
+from warpsim.runner import BlowUpError, Simulation
+
+# WARPSIM_FUZZ_EXAMPLES=5000 for a long hunt; CI runs a fixed (derandomized) sample, see conftest.py
+FUZZ = settings(
+    max_examples=int(os.environ.get("WARPSIM_FUZZ_EXAMPLES", "150")),
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+
+# values a user might write, from plausible to absurd (kept small where a valid value would be slow to run)
+SCALARS = st.one_of(
+    st.sampled_from([0, 1, 2, 3, -1, 0.5, -0.0, 1e308, -1e308, 10**30, math.nan, math.inf, -math.inf, True, False]),
+    st.sampled_from(["", "flag", "kite", "paper", "plate", "verlet", "euler", "procedural", "file", "x" * 300]),
+    st.text(max_size=12),
+    st.integers(-5, 6),
+    st.floats(-1e3, 1e3, allow_nan=False),
+)
+VALUES = st.one_of(SCALARS, st.lists(SCALARS, max_size=4), st.dictionaries(st.text(max_size=6), SCALARS, max_size=2))
+
+SECTIONS = ["scene", "solver", "air", "wind", "terrain", "ground", "worlds", "flag", "kite", "hang_glider", "parachute"]
+
+
+def _keys(section: str) -> list[str]:
+    """Known keys of a section (any object's), so that the fuzz reaches value checks, not only key checks."""
+    keys = set()
+    for kind in ("flag", "kite", "hang-glider", "parachute"):
+        keys |= set(defaults(kind).get(section, {}))
+    return sorted(keys) or ["count"]
+
+
+def _toml(value) -> str:
+    """A value in TOML syntax (inline tables for dicts)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return "nan" if value != value else ("inf" if value > 0 else "-inf") if math.isinf(value) else repr(value)
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, str):
+        return json.dumps(value)  # JSON string escapes are valid TOML basic-string escapes
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    return "{" + ", ".join(f"{json.dumps(k)} = {_toml(v)}" for k, v in value.items()) + "}"
+
+
+@st.composite
+def descriptors(draw) -> str:
+    """TOML text: a few sections with known or random keys holding any value, sometimes [[controls]]."""
+    lines = []
+    kind = draw(st.sampled_from(["flag", "kite", "hang-glider", "parachute", "glider", 3]))
+    lines += ["[scene]", f"object = {_toml(kind)}", f"seconds = {draw(st.sampled_from([0.02, 0.05, -1, 0]))}"]
+    for section in draw(st.lists(st.sampled_from(SECTIONS + ["nonsense"]), max_size=3, unique=True)):
+        lines.append(f"[{section}]")
+        keys = draw(st.lists(st.sampled_from(_keys(section) + ["speed", "typo"]), min_size=1, max_size=3, unique=True))
+        lines += [f"{key} = {_toml(draw(VALUES))}" for key in keys]
+    for _ in range(draw(st.integers(0, 2))):
+        lines.append("[[controls]]")
+        for key in draw(st.lists(st.sampled_from(["time", "pitch", "roll", "anchor", "wind", "ramp"]), max_size=3)):
+            lines.append(f"{key} = {_toml(draw(VALUES))}")
+    return "\n".join(lines) + "\n"
+
+
+@FUZZ
+@given(descriptors())
+def test_descriptor_loader_accepts_or_explains(text):
+    try:
+        d = load_text(text, "fuzz.toml")
+    except DescriptorError as err:
+        message = str(err)
+        assert message.startswith("fuzz.toml: ") and "\n" not in message
+        return
+    assert d["scene"]["object"] in ("flag", "kite", "hang-glider", "parachute")
+    assert 0 < d["solver"]["dt"] <= 1.0 and d["worlds"]["count"] >= 1
+    # a valid descriptor builds (or is refused with a clear message) and runs (or reports a blow-up)
+    d["scene"]["fps"] = 100.0
+    try:
+        sim = Simulation(d, where="fuzz.toml")
+    except DescriptorError as err:
+        assert str(err).startswith("fuzz.toml: ") and "\n" not in str(err)
+        event("valid, refused at build")
+        return
+    try:
+        sim.run(0.03)
+        event("built and ran")
+    except BlowUpError as err:
+        assert err.object in {r.name for r in sim.model.objects}
+        event("built, blew up")
+
+
+@FUZZ
+@given(text=st.text(max_size=200), cut=st.integers(0, 400), scene=st.sampled_from(sorted(Path("scenes").glob("*"))))
+def test_mangled_scene_files_are_refused_clearly(text, cut, scene):
+    original = scene.read_text()
+    mangled = original[:cut] + text + original[cut + len(text) // 2 :]
+    try:
+        load_text(mangled, "mangled.toml")
+    except DescriptorError as err:
+        assert str(err).startswith("mangled.toml: ")
+
+
+TOKENS = {
+    "scene": [
+        "flag",
+        "kite",
+        "parachute",
+        "hang-glider",
+        "kite_gusty",
+        "nope",
+        "scenes/kite.toml",
+        "bad.toml",
+        "bin.toml",
+        ".",
+        "",
+    ],
+    "number": ["0.05", "0", "-1", "nan", "inf", "1e-300", "abc", "", "2", "0.001", "1e9"],
+    "count": ["1", "2", "0", "-3", "x", "70000", "3.5"],
+    "path": ["out.usda", "out.usdc", "out.h5", "out.obj", "missing/out.usda", "missing/out.h5", "", "bin.toml"],
+    "set": [
+        "wind.velocity=[8,0,0]",
+        "wind.velocity=[1e308,0,0]",
+        "air.density=1e30",
+        "flag.resolution=3",
+        "solver.iterations=0",
+        "x",
+        "a.b=c",
+        "scene.object=kite",
+    ]
+    + ["wind.gust_intensity=0.3", "solver.dt=1e-9", "terrain.kind=file", "worlds.count=2", "=", "flag.=1"],
+    "vary": ["wind.speed=4:12", "wind.speed=4,5", "kite.rope_length=1:2", "nonsense", "solver.dt=0.01,0.02", "a=1:"],
+    "device": ["cpu", "cuda", "cuda:3", "tpu", ""],
+}
+RUN_FLAGS = [
+    ("--seconds", "number"),
+    ("--dt", "number"),
+    ("--iterations", "count"),
+    ("--fps", "number"),
+    ("--device", "device"),
+    ("--set", "set"),
+    ("--worlds", "count"),
+    ("--vary", "vary"),
+    ("--usd", "path"),
+    ("--h5", "path"),
+    ("--resume", "path"),
+    ("--quiet", None),
+]
+FLAGS = {  # each command's own options, and one it does not have
+    "run": RUN_FLAGS + [("--bogus", None)],
+    "info": [("--set", "set"), ("--worlds", "count"), ("--vary", "vary"), ("--h5", "path")],
+    "render": [("--frame", "count"), ("--size", "count"), ("--azimuth", "number"), ("--elevation", "number")],
+    "convert": [("--quiet", None)],
+    "list": [("--set", "set")],
+    "nope": [],
+}
+
+
+@st.composite
+def command_lines(draw) -> list[str]:
+    command = draw(st.sampled_from(["run", "run", "run", "info", "convert", "render", "list", "nope"]))
+    argv = [command]
+    if command in ("run", "info"):
+        argv += ["--seconds", "0.05"] if command == "run" else []  # fuzzed --seconds below override this
+        argv += [draw(st.sampled_from(TOKENS["scene"]))] if draw(st.integers(0, 5)) else []
+    elif command in ("convert", "render"):
+        argv += [draw(st.sampled_from(["rec.h5", "bin.toml", "missing.h5"]))]
+        argv += [draw(st.sampled_from(["out.usda", "out.png", "out.gif", "out.txt", "missing/out.png"]))]
+    for flag, kind in draw(st.lists(st.sampled_from(FLAGS[command]), max_size=3)) if FLAGS[command] else []:
+        argv.append(flag)
+        if kind is not None:
+            typed = draw(st.integers(0, 4)) == 0  # now and then anything at all, mostly the listed tokens
+            argv.append(draw(st.text(max_size=6) if typed else st.sampled_from(TOKENS[kind])))
+    return argv
+
+
+def _fixture_files(directory: Path) -> None:
+    (directory / "bin.toml").write_bytes(bytes(range(256)))
+    (directory / "bad.toml").write_text("[scene]\nobject = 'kite'\n[kite]\nrope_length = -3\n")
+    assert main(["run", "kite", "--seconds", "0.1", "--quiet", "--h5", str(directory / "rec.h5")]) == 0
+
+
+@FUZZ
+@given(argv=command_lines())
+def test_command_line_never_tracebacks_and_leaves_nothing_on_error(argv):
+    with tempfile.TemporaryDirectory() as tmp:
+        directory = Path(tmp)
+        _fixture_files(directory)
+        before = {p.name: p.stat().st_mtime_ns for p in directory.iterdir()}
+        out, err = io.StringIO(), io.StringIO()
+        cwd = os.getcwd()
+        os.chdir(directory)
+        try:
+            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+                try:
+                    code = main(argv)
+                except SystemExit as exit:  # argparse: --help, --version, or a usage error
+                    code = exit.code
+        finally:
+            os.chdir(cwd)
+        errors = err.getvalue()
+        event(f"exit {code}")
+        assert "Traceback" not in errors and "Error:" not in errors.replace("error:", ""), (argv, errors)
+        assert code in (0, 2, 3), (argv, code, errors)
+        if code == 2:
+            lines = [line for line in errors.splitlines() if line.strip()]
+            assert len(lines) == 1 and "error:" in lines[0], (argv, errors)
+            after = {p.name: p.stat().st_mtime_ns for p in directory.iterdir()}
+            assert after == before, (argv, errors)  # nothing written, nothing changed
+        if code == 3:
+            assert "blew up" in errors, (argv, errors)
+
+
+EDGY = st.sampled_from([0, 1, 2, 3, 4, -1, 0.0, 1e-6, 0.001, 0.5, 1.0, 2.0, 89.9, 1e3, 1e6, 1e30, True, [0.0, 0.0]])
+
+
+@st.composite
+def edgy_objects(draw) -> dict:
+    """An object's defaults with up to 3 of its own keys set to edge values (tiny, huge, zero, negative)."""
+    kind = draw(st.sampled_from(["flag", "kite", "hang-glider", "parachute"]))
+    section = kind.replace("-", "_")
+    keys = draw(st.lists(st.sampled_from(sorted(defaults(kind)[section])), min_size=1, max_size=3, unique=True))
+    return {"scene": {"object": kind}, section: {key: draw(EDGY) for key in keys}}
+
+
+@FUZZ
+@given(edgy_objects())
+def test_object_builders_take_edge_values(override):
+    text = "\n".join(f"[{s}]\n" + "\n".join(f"{k} = {_toml(v)}" for k, v in t.items()) for s, t in override.items())
+    try:
+        d = load_text(text, "edgy.toml")
+        d["scene"]["fps"] = 100.0
+        sim = Simulation(d, where="edgy.toml")
+    except DescriptorError as err:
+        assert str(err).startswith("edgy.toml: ") and "\n" not in str(err), err
+        event("refused")
+        return
+    try:
+        sim.run(0.03)
+        event("built and ran")
+    except BlowUpError:
+        event("built, blew up")

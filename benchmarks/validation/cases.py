@@ -44,6 +44,9 @@ class Row:
     model_limit: bool = False
     note: str = ""
 
+    def __post_init__(self):
+        self.ok, self.model_limit = bool(self.ok), bool(self.model_limit)
+
     @property
     def status(self) -> str:
         """``pass``, ``FAIL``, or ``model limit`` (outside the band for a stated reason)."""

@@ -1,0 +1,76 @@
+"""The validation suite's physics checks, as tests (its table and the hour-long run: python -m benchmarks.validation).
+
+Rows that a stated limit of the paper's model keeps outside their band are checked to stay outside it too:
+if one starts passing, the README's explanation is out of date.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from benchmarks.validation import cases
+from benchmarks.validation.__main__ import long_run, table
+from benchmarks.validation.svg import loglog_panels
+
+
+def _rows(case):
+    return {r.case: r for r in cases.CASES[case]()}
+
+
+@pytest.mark.parametrize("case", ["free-fall", "catenary", "plate"])
+def test_analytic_cases_pass(case):
+    rows = _rows(case)
+    for row in rows.values():
+        assert row.ok or row.model_limit, row
+    assert all(r.ok for r in rows.values() if not r.model_limit)
+
+
+def test_pendulum_period_and_the_damping_of_projection():
+    rows = _rows("pendulum")
+    assert rows["pendulum 5°"].ok  # small swing: period within 1 %
+    for degrees in (5, 60):
+        swing = float(rows[f"pendulum {degrees}° energy"].measured.rstrip(" %")) / 100
+        assert 0.2 < swing < 0.95  # the method damps (stated in the README), and by this much at dt 0.01 s
+
+
+def test_mass_splitting_restores_the_force_balance():
+    """The kite's rope angle matches its force balance, and the parachute's descent Knacke's round canopies,
+    only when the constraint corrections conserve momentum."""
+    kite = _rows("kite")
+    assert kite["kite line angle (mass splitting)"].ok
+    assert not kite["kite line angle (paper's average)"].ok
+    chute = _rows("parachute")
+    assert chute["parachute descent (mass splitting)"].ok
+    assert not chute["parachute descent"].ok
+
+
+def test_glider_rows_report_the_model_limit():
+    rows = _rows("hang-glider")
+    assert len(rows) == 4 and all(r.model_limit for r in rows.values())
+    assert not rows["glider glide (paper)"].ok  # a flat sail under sin² α cannot glide like a real glider
+
+
+def test_elliptic_integral():
+    assert cases.complete_elliptic_k(0.0) == pytest.approx(math.pi / 2)
+    assert cases.complete_elliptic_k(math.sin(math.radians(30))) == pytest.approx(1.685750354812596, rel=1e-12)
+
+
+def test_long_run_bounded_flat_and_readable_while_written():
+    rows, info = long_run(seconds=240.0, fps=4.0, poll=0.3)
+    assert info["exit_code"] == 0, info["stderr"]
+    by = {r.case: r for r in rows}
+    assert by["long run: stretch"].ok, by["long run: stretch"]
+    assert by["long run: live reading"].ok, by["long run: live reading"]
+    assert info["frames"] == 961
+
+
+def test_table_and_plot(tmp_path):
+    row = cases.Row("a|b", "c", "1", "s", "2", "band", False, model_limit=True)
+    assert "a\\|b" in table([row]) and "**model limit**" in table([row])
+    path = loglog_panels(
+        [{"title": "t", "xlabel": "x", "ylabel": "y", "series": [("s", [1, 10, 100], [5.0, np.nan, 0.5])]}],
+        tmp_path / "p.svg",
+    )
+    text = path.read_text()
+    assert text.startswith("<svg") and text.count("<circle") == 2

@@ -59,3 +59,21 @@ def test_solver_rejects_bad_settings():
             assert str(err)
         else:
             raise AssertionError(f"{kwargs} accepted")
+
+
+def test_separate_processes_record_the_same_frames(tmp_path):
+    """Two fresh processes (own kernel loads, own gust generators) write bit-identical recordings; resume and
+    batched worlds are checked in test_outputs.py and test_worlds.py."""
+    import subprocess
+    import sys
+
+    import h5py
+
+    paths = [tmp_path / f"run{k}.h5" for k in range(2)]
+    for path in paths:
+        cmd = [sys.executable, "-m", "warpsim", "run", "kite_gusty", "--seconds", "1.5", "--h5", str(path), "--quiet"]
+        subprocess.run(cmd, check=True, capture_output=True, timeout=120)
+    with h5py.File(paths[0], "r") as a, h5py.File(paths[1], "r") as b:
+        assert a["positions"].shape[0] == 51
+        np.testing.assert_array_equal(a["positions"][:], b["positions"][:])
+        np.testing.assert_array_equal(a["checkpoint/q_prev"][:], b["checkpoint/q_prev"][:])

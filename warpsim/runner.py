@@ -209,17 +209,12 @@ class Simulation:
             )
         self.state = self.model.state()
         self.state.set_velocity(self.model.particle_qd0, self.dt)
-        with np.errstate(all="ignore"):
-            bad = ~np.isfinite(self.state.positions()).all(axis=1) | ~np.isfinite(self.state.velocities(self.dt)).all(
-                axis=1
-            )
-        if bad.any():
-            p = int(np.flatnonzero(bad)[0])
-            raise DescriptorError(
-                f"{where}: the built {self._object_of(p)} has a non-finite starting position or speed (particle {p}, "
-                f"{int(bad.sum())} in all): check its sizes, masses, speed and dt"
-            )
         self.control = self.model.control()
+        problem = self.blowup(self.frame(0))
+        if problem:
+            raise DescriptorError(
+                f"{where}: the built {problem[0]} is not sound: {problem[1]}; check its sizes, masses, speed and dt"
+            )
         self.steps_taken = 0
         self.world_count = descriptor["worlds"]["count"]
         winds = [world_descriptor(descriptor, k)["wind"] for k in range(self.world_count)]
@@ -346,6 +341,36 @@ class Simulation:
                 return record.name
         return "no object"
 
+    def _capture(self) -> dict:
+        """Host copies of everything that decides the run's future (what :meth:`checkpoint` stores, with the
+        gust states and controls as Python values)."""
+        return {
+            "q": self.state.positions(),
+            "q_prev": self.state.particle_q_prev.numpy().copy(),
+            "time": float(self.state.time),
+            "steps": int(self.steps_taken),
+            "stick_rest": self.control.stick_rest.numpy().copy(),
+            "nail_target": self.control.nail_target.numpy().copy(),
+            "wind": self.control.wind.numpy().copy(),
+            "gusts": [None if g is None else g.state() for g in self.gusts],
+            "controls": {"in_force": dict(self.controls), "scheduled": dict(self._scheduled)},
+        }
+
+    def _apply(self, captured: dict) -> None:
+        """Go back to a :meth:`_capture` (bit for bit)."""
+        self.state.particle_q.assign(np.asarray(captured["q"], dtype=np.float32))
+        self.state.particle_q_prev.assign(np.asarray(captured["q_prev"], dtype=np.float32))
+        self.state.time = float(captured["time"])
+        self.steps_taken = int(captured["steps"])
+        self.control.stick_rest.assign(np.asarray(captured["stick_rest"], dtype=np.float32))
+        self.control.nail_target.assign(np.asarray(captured["nail_target"], dtype=np.float32))
+        self.control.wind.assign(np.asarray(captured["wind"], dtype=np.float32))
+        for gusts, g in zip(self.gusts, captured["gusts"], strict=False):
+            if gusts is not None and g is not None:
+                gusts.set_state(g)
+        self.controls = dict(captured["controls"]["in_force"])
+        self._scheduled = dict(captured["controls"]["scheduled"])
+
     def checkpoint(self) -> dict:
         """Everything needed to continue this run exactly: state, control arrays, gusts, step count.
 
@@ -353,63 +378,21 @@ class Simulation:
         ``stick_rest`` [m], ``nail_target`` [m], ``wind`` [m/s], ``gusts`` (JSON text or ``""``),
         ``controls`` (JSON text: the controls in force and the schedule's last values).
         """
-        gusts = ""
-        if any(g is not None for g in self.gusts):
-            gusts = json.dumps([None if g is None else g.state() for g in self.gusts])
-        return {
-            "q": self.state.particle_q.numpy().copy(),
-            "q_prev": self.state.particle_q_prev.numpy().copy(),
-            "time": float(self.state.time),
-            "steps": int(self.steps_taken),
-            "stick_rest": self.control.stick_rest.numpy().copy(),
-            "nail_target": self.control.nail_target.numpy().copy(),
-            "wind": self.control.wind.numpy().copy(),
-            "gusts": gusts,
-            "controls": json.dumps({"in_force": self.controls, "scheduled": self._scheduled}),
-        }
+        captured = self._capture()
+        gusts = json.dumps(captured["gusts"]) if any(g is not None for g in self.gusts) else ""
+        return {**captured, "gusts": gusts, "controls": json.dumps(captured["controls"])}
 
     def restore(self, checkpoint: dict) -> None:
         """Continue from a :meth:`checkpoint` of a simulation of the same descriptor (bit for bit)."""
-        self.state.particle_q.assign(np.asarray(checkpoint["q"], dtype=np.float32))
-        self.state.particle_q_prev.assign(np.asarray(checkpoint["q_prev"], dtype=np.float32))
-        self.state.time = float(checkpoint["time"])
-        self.steps_taken = int(checkpoint["steps"])
-        self.control.stick_rest.assign(np.asarray(checkpoint["stick_rest"], dtype=np.float32))
-        self.control.nail_target.assign(np.asarray(checkpoint["nail_target"], dtype=np.float32))
-        self.control.wind.assign(np.asarray(checkpoint["wind"], dtype=np.float32))
         saved = json.loads(checkpoint["gusts"]) if checkpoint.get("gusts") else []
-        for gusts, g in zip(self.gusts, saved if isinstance(saved, list) else [saved], strict=False):
-            if gusts is not None and g is not None:
-                gusts.set_state(g)
         controls = json.loads(checkpoint["controls"])
-        self.controls = {k: _from_json(v) for k, v in controls["in_force"].items()}
-        self._scheduled = {k: _from_json(v) for k, v in controls["scheduled"].items()}
-
-    def _snapshot(self, frame: Frame) -> dict:
-        """A cheap host copy of everything :meth:`checkpoint` holds, taken at every frame (``frame`` is the
-        current state's) so that a blow-up can go back to the last good one."""
-        control = self.control
-        return {
-            "q": frame.positions.copy(),
-            "q_prev": self.state.particle_q_prev.numpy().copy(),
-            "controls": [a.numpy().copy() for a in (control.stick_rest, control.nail_target, control.wind)],
-            "host": (self.state.time, self.steps_taken, [None if g is None else g.state() for g in self.gusts]),
-            "in_force": (dict(self.controls), dict(self._scheduled)),
-        }
-
-    def _rollback(self, snap: dict) -> None:
-        """Go back to a :meth:`_snapshot`."""
-        self.state.particle_q.assign(snap["q"])
-        self.state.particle_q_prev.assign(snap["q_prev"])
-        for array, saved in zip(
-            (self.control.stick_rest, self.control.nail_target, self.control.wind), snap["controls"], strict=True
-        ):
-            array.assign(saved)
-        self.state.time, self.steps_taken, gusts = snap["host"]
-        for g, saved in zip(self.gusts, gusts, strict=True):
-            if g is not None:
-                g.set_state(saved)
-        self.controls, self._scheduled = (dict(d) for d in snap["in_force"])
+        self._apply(
+            {
+                **checkpoint,
+                "gusts": saved if isinstance(saved, list) else [saved],  # format 1 stored one world's dict
+                "controls": {part: {k: _from_json(v) for k, v in values.items()} for part, values in controls.items()},
+            }
+        )
 
     def run(
         self,
@@ -451,7 +434,7 @@ class Simulation:
                     self.steps_taken, first.time, *problem, -1, first.time, RunSummary(0.0, 0, 0.0, 0.0, blew_up=True)
                 )
             worst = first.worst_stretch
-            good, good_frame = self._snapshot(first), first  # taken before on_frame can touch the state
+            good, good_frame = self._capture(), first  # taken before on_frame can touch the state
             if on_frame and self.steps_taken == 0:
                 on_frame(first)
             while steps < total_steps:
@@ -469,13 +452,13 @@ class Simulation:
                 problem = self.blowup(frame)
                 if problem:
                     bad_step = self.steps_taken
-                    self._rollback(good)
+                    self._apply(good)
                     steps -= bad_step - self.steps_taken
                     wp.synchronize_device(self.model.device)
                     summary = RunSummary(steps * self.dt, steps, time.perf_counter() - start, worst, blew_up=True)
                     raise BlowUpError(bad_step, frame.time, *problem, good_frame.index, good_frame.time, summary)
                 worst = max(worst, frame.worst_stretch)
-                good, good_frame = self._snapshot(frame), frame
+                good, good_frame = self._capture(), frame
                 if on_frame:
                     on_frame(frame)
                 now = time.perf_counter()

@@ -34,14 +34,18 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_USAGE, f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)\n")
 
 
-def _positive_float(name: str):
+def _number(name: str, what: str = "a positive finite number", low: float = 0.0, high: float = math.inf, closed=False):
+    """argparse type for ``name``: a finite float above ``low`` (``closed``: or equal to it) and at most ``high``;
+    the error says it must be ``what``."""
+
     def parse(text: str) -> float:
         try:
             value = float(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"{name} must be a number, got {text!r}") from None
-        if not value > 0.0 or math.isinf(value):
-            raise argparse.ArgumentTypeError(f"{name} must be a positive finite number, got {text}")
+        above = value >= low if closed else value > low
+        if not (above and value <= high and math.isfinite(value)):
+            raise argparse.ArgumentTypeError(f"{name} must be {what}, got {text}")
         return value
 
     return parse
@@ -113,12 +117,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("scene", metavar="SCENE", nargs="?", help="the scene (not with --resume)")
     run.add_argument(
         "--seconds",
-        type=_positive_float("--seconds"),
+        type=_number("--seconds"),
         help="simulated time [s] (default: scene's); with --resume, the time to add",
     )
-    run.add_argument("--dt", type=_positive_float("--dt"), help="time step [s] (default: scene's, 0.01)")
+    run.add_argument("--dt", type=_number("--dt"), help="time step [s] (default: scene's, 0.01)")
     run.add_argument("--iterations", type=_iterations, help="constraint iterations per step (default 55)")
-    run.add_argument("--fps", type=_positive_float("--fps"), help="output frames per simulated second")
+    run.add_argument("--fps", type=_number("--fps"), help="output frames per simulated second")
     run.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
     run.add_argument(
         "--set",
@@ -169,30 +173,17 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--size", type=_size, default=(960, 540), metavar="WxH", help="pixels (default 960x540)")
     render.add_argument(
         "--azimuth",
-        type=_angle("--azimuth", -360, 360),
+        type=_number("--azimuth", "an angle in degrees from -360 to 360", -360.0, 360.0, closed=True),
         default=-60.0,
         help="view direction about +z [deg] (default -60)",
     )
     render.add_argument(
         "--elevation",
-        type=_angle("--elevation", -90, 90),
+        type=_number("--elevation", "an angle in degrees from -90 to 90", -90.0, 90.0, closed=True),
         default=20.0,
         help="view height above the horizon [deg], -90..90 (default 20)",
     )
     return parser
-
-
-def _angle(name: str, low: float, high: float):
-    def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            value = math.nan
-        if not low <= value <= high:
-            raise argparse.ArgumentTypeError(f"{name} must be an angle in degrees from {low} to {high}, got {text!r}")
-        return value
-
-    return parse
 
 
 def _size(text: str) -> tuple[int, int]:

@@ -189,15 +189,6 @@ def merge(where: str, base: dict, override: dict) -> dict:
         if section == "worlds":
             worlds = values  # checked last: its per-world values are checked against the merged sections
             continue
-        if (
-            section == "scene"
-            and isinstance(values, dict)
-            and values.get("object", out["scene"]["object"]) != (out["scene"]["object"])
-        ):
-            raise DescriptorError(
-                f"{where}: scene.object cannot change here (the scene is a {out['scene']['object']}); "
-                "name the object as SCENE instead, e.g. warpsim run kite"
-            )
         if section not in out:
             raise DescriptorError(
                 f"{where}: unknown section [{section}]{_suggest(section, out)}; sections are {', '.join(out)}"
@@ -210,7 +201,13 @@ def merge(where: str, base: dict, override: dict) -> dict:
                     f"{where}: unknown key {section}.{key}{_suggest(key, out[section])}; "
                     f"[{section}] keys are {', '.join(out[section])}"
                 )
-            out[section][key] = _check_value(where, section, key, out[section][key], value)
+            checked = _check_value(where, section, key, out[section][key], value)
+            if (section, key) == ("scene", "object") and checked != out[section][key]:
+                raise DescriptorError(
+                    f"{where}: scene.object cannot change here (the scene is a {out[section][key]}); "
+                    "name the object as SCENE instead, e.g. warpsim run kite"
+                )
+            out[section][key] = checked
     if worlds is not None:
         out["worlds"] = _check_worlds(where, worlds, out)
     return out

@@ -131,7 +131,9 @@ class NumpyVerlet:
         a, b = self.ends[:, 0], self.ends[:, 1]
         free = (self.scale != 0) & ~self.nailed
         step = (self.relaxation * self.scale)[:, None]
-        older = self.q.copy()
+        # the last iterate's increment, and what float32 could not hold of the iterate (float64 sums)
+        last = np.zeros_like(self.q)
+        resid = np.zeros_like(self.q)
         for omega in self.omegas:
             x = self.q
             d = x[b] - x[a]
@@ -139,13 +141,16 @@ class NumpyVerlet:
             safe = np.where(length > 0, length, F32(1.0))
             c = d * np.where(length > 0, self.coef * (length - self.rest) / safe, F32(0.0))[:, None]
             total = self._sum_per_particle(np.concatenate([a, b]), np.concatenate([c, -c]))
-            y = x + total * step
+            inc = total * step
             if omega != 1.0:
-                y = older + (y - older) * omega
-            y = np.where(free[:, None], y, x)
-            y[self.nailed] = self.nail_target[self.nail_of]
-            older = np.where(free[:, None], x, older)
-            self.q = y.astype(F32)
+                inc = inc * omega + last * (omega - F32(1.0))
+            y = x.astype(np.float64) + resid + inc
+            q = y.astype(F32)
+            q = np.where(free[:, None], q, x)
+            q[self.nailed] = self.nail_target[self.nail_of]
+            resid = np.where(free[:, None], (y - q).astype(F32), resid)
+            last = np.where(free[:, None], inc, last)
+            self.q = q
 
     def collide(self) -> None:
         """Keep free particles at or above the terrain."""

@@ -11,8 +11,8 @@ from warpsim.runner import Simulation
 @pytest.mark.parametrize(
     "scene, override, steps, tolerance",
     [
-        ("hang-glider", {}, 3, 1e-5),
-        ("hang-glider", {"air": {"model": "plate"}}, 3, 1e-5),
+        ("hang-glider", {}, 3, 1e-4),  # at 300 m, where a float32 ulp is 3e-5 m
+        ("hang-glider", {"air": {"model": "plate"}}, 3, 1e-4),
         ("kite", {}, 3, 1e-5),
         ("parachute", {}, 3, 3e-4),  # it starts at 400 m, where a float32 ulp is 3e-5 m
         ("flag", {"wind": {"shear_exponent": 0.14}, "solver": {"damping": 0.01}}, 50, 1e-4),

@@ -73,6 +73,7 @@ OBJECTS: dict[str, ObjectSpec] = {
             "roll_travel": (0.0, None, True),
             "washout": (-45.0, 45.0, True),
             "frame_mass_fraction": (0.0, 0.85, False),
+            "virtual_mass_fraction": (0.0, 0.85, False),
             "frame_weight": POSITIVE,
             "altitude": POSITIVE,
             "speed": (0.0, None, True),

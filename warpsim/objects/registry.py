@@ -85,7 +85,9 @@ OBJECTS: dict[str, ObjectSpec] = {
     "kite": ObjectSpec(
         config=kite.KiteConfig,
         build=kite.build_kite,
-        scene_defaults={"wind": {"velocity": [6.0, 0.0, 0.0]}},
+        # mass splitting: with the paper's plain average the rope leans 19 degrees off the kite's force
+        # balance (benchmarks/validation); split masses match it within 0.1 degree
+        scene_defaults={"wind": {"velocity": [6.0, 0.0, 0.0]}, "solver": {"mass_splitting": True}},
         bounds={
             "divisions": (3, 256, True),
             "keel_divisions": (1, 128, True),

@@ -287,6 +287,7 @@ class StickProjector:
         if m.stick_count == 0:
             return
         omegas = chebyshev_weights(iterations, self.chebyshev)
+        apply = (self.particle_scale, m.particle_nail, control.nail_target, self.relaxation)  # both schemes
         if self.scheme == "scatter":
             for k, omega in enumerate(omegas):
                 wp.launch(
@@ -299,14 +300,7 @@ class StickProjector:
                 wp.launch(
                     _apply_accumulated,
                     dim=m.particle_count,
-                    inputs=[
-                        self.particle_scale,
-                        m.particle_nail,
-                        control.nail_target,
-                        self.relaxation,
-                        float(omega),
-                        int(k == 0),
-                    ],
+                    inputs=[*apply, float(omega), int(k == 0)],
                     outputs=[self.accum, state.particle_q, self.last_inc, self.resid],
                     device=m.device,
                 )
@@ -322,10 +316,7 @@ class StickProjector:
                     m.stick_particles,
                     control.stick_rest,
                     self.stick_coef,
-                    self.particle_scale,
-                    m.particle_nail,
-                    control.nail_target,
-                    self.relaxation,
+                    *apply,
                     float(omega),
                     int(k == 0),
                     buffers[k % 2],

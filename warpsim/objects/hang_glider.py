@@ -54,9 +54,9 @@ class HangGliderConfig:
             control frame and crossbar they stand for), above 0; ``frame_mass_fraction +
             virtual_mass_fraction`` must stay below 0.95 so the cloth keeps some mass.
         frame_weight: weight of the frame's sticks (leading edges, keel, virtual ties) in the constraint
-            average (1 = the paper; 12 counts each as twelve sticks). With mass splitting, the frame stays
-            within 1 % under the pilot's load only with this weight *and* heavy virtual particles: at 6 and
-            10 % it reached 2 %, at 12 and 30 % it stays under 0.8 % (README, hang glider).
+            average (1 = the paper; 6 counts each as six sticks). With mass splitting the frame stays within
+            1 % under the pilot's load only with heavy virtual particles: with 10 % of the mass on them it
+            reached 1.1 %, with 30 % it stays under 0.5 % (README, hang glider).
         chord_loading: load the sail most near its leading edge under the ``plate`` air model (thin-aerofoil
             loading, centre of pressure near the quarter chord; see :mod:`warpsim.kernels.aero`). Off:
             uniform load, centre of pressure at the area centroid, and the glider has almost no pitch

@@ -101,10 +101,33 @@ def iterate_increment(total: wp.vec3, step: float, omega: float, last: wp.vec3) 
 
 
 @wp.func
-def advance(x: wp.vec3, resid: wp.vec3, inc: wp.vec3) -> wp.vec3d:
-    """``x + resid + inc`` in float64: the next iterate, before it is split into a float32 position and the
-    residual that float32 could not hold."""
-    return wp.vec3d(x) + wp.vec3d(resid) + wp.vec3d(inc)
+def next_position(
+    i: int,
+    x: wp.vec3,
+    total: wp.vec3,
+    step: float,
+    omega: float,
+    first: int,
+    last_inc: wp.array(dtype=wp.vec3),
+    resid: wp.array(dtype=wp.vec3),
+) -> wp.vec3:
+    """Particle ``i``'s next float32 position from ``x`` and its summed corrections ``total``.
+
+    The iterate ``x + resid + increment`` is summed in float64; what float32 cannot hold of it is kept in
+    ``resid[i]`` for the next iteration, and the increment in ``last_inc[i]`` (both read as zero on the
+    ``first`` iteration of a projection).
+    """
+    last = wp.vec3(0.0)
+    r = wp.vec3(0.0)
+    if first == 0:
+        last = last_inc[i]
+        r = resid[i]
+    inc = iterate_increment(total, step, omega, last)
+    y = wp.vec3d(x) + wp.vec3d(r) + wp.vec3d(inc)
+    q = wp.vec3(y)
+    resid[i] = wp.vec3(y - wp.vec3d(q))
+    last_inc[i] = inc
+    return q
 
 
 @wp.kernel
@@ -145,17 +168,7 @@ def _apply_accumulated(
     scale = particle_scale[i]
     if scale == 0.0:
         return
-    last = wp.vec3(0.0)
-    r = wp.vec3(0.0)
-    if first == 0:
-        last = last_inc[i]
-        r = resid[i]
-    inc = iterate_increment(total, relaxation * scale, omega, last)
-    y = advance(particle_q[i], r, inc)
-    q = wp.vec3(y)
-    particle_q[i] = q
-    resid[i] = wp.vec3(y - wp.vec3d(q))
-    last_inc[i] = inc
+    particle_q[i] = next_position(i, particle_q[i], total, relaxation * scale, omega, first, last_inc, resid)
 
 
 @wp.kernel
@@ -195,17 +208,8 @@ def _gather_iteration(
         if (ref & 1) == 1:
             other = ends[0]
         total += stick_correction(q_in[other] - x, stick_rest[s], stick_coef[s])
-    last = wp.vec3(0.0)
-    r = wp.vec3(0.0)
-    if first == 0:  # only this thread reads and writes its own increment and residual
-        last = last_inc[i]
-        r = resid[i]
-    inc = iterate_increment(total, relaxation * scale, omega, last)
-    y = advance(x, r, inc)
-    q = wp.vec3(y)
-    q_out[i] = q
-    resid[i] = wp.vec3(y - wp.vec3d(q))
-    last_inc[i] = inc
+    # only this thread reads and writes its own increment and residual
+    q_out[i] = next_position(i, x, total, relaxation * scale, omega, first, last_inc, resid)
 
 
 @wp.kernel

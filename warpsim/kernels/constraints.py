@@ -44,7 +44,7 @@ broke momentum for heavy particles far from the origin (a 65 kg pilot at 300 m, 
 carries, across the iterations of one projection, the *residual* that float32 could not hold
 (``y - float32(y)``, the iterate ``y`` summed in float64), and Chebyshev extrapolation works on the last
 *increment* (small, exact in float32) instead of the older position. Only the projection's final
-result is rounded, once. This costs about 7 % of a step on the CPU.
+result is rounded, once. This costs about 7-15 % of a step on the CPU (README, benchmarks).
 
 On the 2-core CPU the scatter scheme costs about 1.0 us per iteration for the hang glider's 180 sticks,
 the gather scheme about 1.75 us (each stick measured twice).

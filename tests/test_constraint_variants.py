@@ -7,8 +7,9 @@ import warpsim as ws
 from warpsim.kernels.constraints import chebyshev_weights, project_sticks
 
 
-def _mesh(rng, device, double_first: str | None = None):
-    """A perturbed free triangle mesh of random masses; the first stick doubled as asked."""
+def _mesh(rng, device, double_first: str | None = None, nail_first: bool = False):
+    """A perturbed free triangle mesh of random masses; the first stick doubled, the first particle nailed,
+    as asked."""
     b = ws.ModelBuilder(gravity=0.0)
     b.add_subdivided_triangle((0, 0, 5), (2, 1, 5), (1, 2, 5.5), 4, mass=3.0)
     b.particle_mass = list(rng.uniform(0.1, 2.0, b.particle_count))
@@ -18,6 +19,8 @@ def _mesh(rng, device, double_first: str | None = None):
     elif double_first == "duplicate":
         i, j = b.stick_particles[0]
         b.add_stick(i, j, rest=b.stick_rest[0])
+    if nail_first:
+        b.add_nail(0)
     return b.finalize(device)
 
 
@@ -82,22 +85,26 @@ def test_solver_refuses_bad_chebyshev(device):
 
 
 @pytest.mark.parametrize("iterations", [1, 20, 55])
-def test_scatter_and_gather_schemes_agree_and_repeat_bit_for_bit(device, iterations):
-    """The two schemes differ only in the order of float additions; each repeats itself exactly."""
-    m = _mesh(np.random.default_rng(11), device)
+def test_schemes_agree_and_repeat_bit_for_bit(device, iterations):
+    """fused and scatter do the same float operations in the same order (bit-identical); gather differs
+    only in the order of float additions. Each repeats itself exactly. A moved nail is honoured by all."""
+    m = _mesh(np.random.default_rng(11), device, nail_first=True)
     results = {}
-    for scheme in ("scatter", "gather"):
+    for scheme in ("fused", "scatter", "gather"):
         runs = []
         for _ in range(2):
             s, c = m.state(), m.control()
+            c.nail_target.assign(np.array([m.nail_target0[0] + (0.3, -0.2, 0.1)], dtype=np.float32))
             project_sticks(m, s, c, iterations, mass_splitting=True, chebyshev=0.9, scheme=scheme)
             runs.append(s.positions())
         np.testing.assert_array_equal(runs[0], runs[1])
+        np.testing.assert_allclose(runs[0][0], m.nail_target0[0] + (0.3, -0.2, 0.1), atol=1e-6)  # on its nail
         results[scheme] = runs[0]
+    np.testing.assert_array_equal(results["fused"], results["scatter"])
     np.testing.assert_allclose(results["scatter"], results["gather"], atol=2e-6)
     assert np.abs(results["scatter"] - m.particle_q0).max() > 1e-3  # it did move
 
 
 def test_unknown_scheme_is_refused(device):
-    with pytest.raises(ValueError, match="scatter, gather"):
+    with pytest.raises(ValueError, match="scatter, gather, fused"):
         ws.SolverVerlet(_mesh(np.random.default_rng(1), device), constraint_scheme="red-black")

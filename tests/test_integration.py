@@ -111,7 +111,7 @@ def _perturbed_mesh(rng, device, order=None):
     return b.finalize(device)
 
 
-@pytest.mark.parametrize("scheme", ["scatter", "gather"])
+@pytest.mark.parametrize("scheme", ["fused", "scatter", "gather"])
 def test_jacobi_iteration_matches_numpy_oracle(device, rng, scheme):
     m = _perturbed_mesh(rng, device)
     s, c = m.state(), m.control()
@@ -126,7 +126,7 @@ def test_jacobi_iteration_matches_numpy_oracle(device, rng, scheme):
     assert shared.sum() > 5 and np.abs(got - q0)[shared].max() > 1e-4  # shared particles really moved
 
 
-@pytest.mark.parametrize("scheme", ["scatter", "gather"])
+@pytest.mark.parametrize("scheme", ["fused", "scatter", "gather"])
 def test_stick_order_does_not_change_result(device, scheme):
     rng_a, rng_b = np.random.default_rng(7), np.random.default_rng(7)
     m1 = _perturbed_mesh(rng_a, device)

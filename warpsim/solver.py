@@ -3,8 +3,9 @@
 One call ``solver.step(state, control, dt)`` advances ``state`` in place by ``dt`` seconds. Buffers are
 allocated once in ``__init__``. The whole step is captured once per ``(state, control, dt)`` as a Warp
 graph and replayed with ``wp.capture_launch``, on the ``cpu`` device as on ``cuda``: a CPU kernel
-launch from Python costs about 10 us and a step has ~113 of them, while a replayed graph costs
-about as much as the kernels themselves.
+launch from Python costs about 10 us, while a replayed graph costs about as much as the kernels
+themselves. On the CPU the constraint projection is one launch (the ``fused`` scheme), so a step has
+five; on CUDA it is one launch per iteration (``gather``), about 60.
 """
 
 from __future__ import annotations
@@ -113,8 +114,8 @@ class SolverVerlet(_Solver):
         damping: fraction of the velocity removed per step (0 = none, the paper).
         air: :class:`AirSettings`. ground: :class:`GroundSettings`.
         use_graph: capture the step as a graph and replay it (default); False launches kernel by kernel.
-        constraint_scheme: ``"scatter"`` or ``"gather"`` (:class:`~warpsim.kernels.constraints.StickProjector`);
-            None = scatter on the CPU, gather on CUDA.
+        constraint_scheme: ``"fused"``, ``"scatter"`` or ``"gather"``
+            (:class:`~warpsim.kernels.constraints.StickProjector`); None = fused on the CPU, gather on CUDA.
     """
 
     def __init__(

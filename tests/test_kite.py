@@ -41,7 +41,7 @@ def test_kite_climbs_and_line_angle_settles(flight):
     start = defaults("kite")["kite"]["elevation"]
     assert elevation[:20].max() > start + 10.0  # climbs from its 10 degree launch
     settled = elevation[40:]  # 20 s .. 30 s
-    assert settled.std() < 1.5 and 15.0 < settled.mean() < 40.0  # README: about 23 degrees
+    assert settled.std() < 1.5 and 15.0 < settled.mean() < 40.0  # README: about 33 degrees
 
 
 def test_rope_end_stays_exactly_on_the_anchor(flight):
@@ -49,7 +49,6 @@ def test_rope_end_stays_exactly_on_the_anchor(flight):
     assert anchor_err == 0.0
 
 
-@pytest.mark.xfail(strict=True, reason="kite spars reach ~1.7 % at 55 iterations (README: limits)")
 def test_kite_frame_within_one_percent(flight):
     assert flight[3] < 0.01
 

@@ -75,6 +75,19 @@ def add_rigid_frame(
     return DeltaFrame(points, keel, virtual, sticks)
 
 
+def add_spar_braces(builder: ModelBuilder, rows: list[list[int]], weight: float) -> list[int]:
+    """Tie every leading-edge particle of a subdivided delta sail to the one two rows further back.
+
+    A chain of short sticks bends at every joint, so under the sail's pull a leading edge bows and its
+    sticks stretch while the Jacobi iterations catch up; these sticks (of ``weight`` in the constraint
+    average) make each leading edge a straight rod, as a real spar is. Returns the new sticks.
+    """
+    sticks = []
+    for edge in ([r[0] for r in rows], [r[-1] for r in rows]):
+        sticks += [builder.add_stick(a, b, weight=weight) for a, b in zip(edge[:-2], edge[2:], strict=True)]
+    return sticks
+
+
 def chordwise_loading(
     builder: ModelBuilder, tris, nose, fwd, left, chord: float, semi_span: float, xi_min: float = 0.02
 ) -> np.ndarray:

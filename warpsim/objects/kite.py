@@ -5,7 +5,8 @@
   nose (paper: 6 particles per side). Its top edge is made of the spine's own particles (every second
   row of the sail, from row 2 on), its apex is the tow point.
 * Spars: two virtual particles above and below the sail's centre tied to every particle of the leading
-  edges and the spine keep them rigid; the cloth between stays flexible.
+  edges and the spine keep them rigid; sticks between every second leading-edge particle keep the leading
+  edges straight (``straight_spars``); the cloth between stays flexible.
 * Rope: a chain of particles much lighter than the sail from the tow point to the ground (paper: 14);
   the sticks nearest the keel count double (``rope_doubled``, the paper's doubled sticks). The ground
   end is a nail whose target is the ``anchor`` control: (x, y) [m], z on the terrain.
@@ -20,7 +21,7 @@ import numpy as np
 from ..builder import ModelBuilder
 from ..model import ObjectRecord
 from ..terrain import Heightfield
-from .delta import add_rigid_frame, body_axes
+from .delta import add_rigid_frame, add_spar_braces, body_axes
 
 PAPER_COUNTS = {"particles": 152, "sticks": 458, "triangles": 221}
 
@@ -40,6 +41,8 @@ class KiteConfig:
         mass: kite mass [kg] (sail, spars and keel).
         frame_height: distance of the virtual particles from the sail [m].
         frame_weight: weight of the spar and keel sticks in the constraint average (1 = the paper).
+        straight_spars: tie every leading-edge particle to the one two rows back, so the leading edges stay
+            straight rods (not in the paper; without them they bow and stretch ~1.7 % in steady flight).
         rope_length: tow point to anchor [m].
         rope_particles: particles of the rope, the nailed ground end included (paper: 14).
         rope_mass: rope mass [kg] (much lighter than the kite).
@@ -59,8 +62,9 @@ class KiteConfig:
     keel_depth: float = 0.3
     tow_point: float = 0.35
     mass: float = 0.2
-    frame_height: float = 0.25
+    frame_height: float = 0.4
     frame_weight: float = 4.0
+    straight_spars: bool = True
     rope_length: float = 30.0
     rope_particles: int = 14
     rope_mass: float = 0.03
@@ -69,7 +73,7 @@ class KiteConfig:
     heading: float = 0.0
     elevation: float = 10.0
     attack: float = 40.0
-    dihedral: float = 10.0
+    dihedral: float = 20.0
 
 
 def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> ObjectRecord:
@@ -120,6 +124,8 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     spars = add_rigid_frame(
         builder, rows, sail_sticks, centre, cfg.frame_height * up, (1, -1), cfg.mass * 0.1 / 2.0, cfg.frame_weight
     )
+    if cfg.straight_spars:
+        spars.sticks.extend(add_spar_braces(builder, rows, cfg.frame_weight))
 
     # rope: from the tow point down to the anchor; the first sticks count double
     count = int(cfg.rope_particles)

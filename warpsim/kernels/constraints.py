@@ -107,6 +107,15 @@ def iterate_increment(total: wp.vec3, step: float, omega: float, last: wp.vec3) 
 
 
 @wp.func
+def round_iterate(x: wp.vec3, resid: wp.vec3, inc: wp.vec3):
+    """The iterate ``x + resid + inc`` summed in float64: returns it as float32 and the residual that float32
+    could not hold of it."""
+    y = wp.vec3d(x) + wp.vec3d(resid) + wp.vec3d(inc)
+    q = wp.vec3(y)
+    return q, wp.vec3(y - wp.vec3d(q))
+
+
+@wp.func
 def next_position(
     i: int,
     x: wp.vec3,
@@ -129,9 +138,8 @@ def next_position(
         last = last_inc[i]
         r = resid[i]
     inc = iterate_increment(total, step, omega, last)
-    y = wp.vec3d(x) + wp.vec3d(r) + wp.vec3d(inc)
-    q = wp.vec3(y)
-    resid[i] = wp.vec3(y - wp.vec3d(q))
+    q, r_next = round_iterate(x, r, inc)
+    resid[i] = r_next
     last_inc[i] = inc
     return q
 
@@ -283,9 +291,8 @@ def _fused_projection(
             it = iterate[i]
             if it.step != 0.0:
                 inc = iterate_increment(total, it.step, omega, it.last)
-                y = wp.vec3d(particle_q[i]) + wp.vec3d(it.resid) + wp.vec3d(inc)
-                q = wp.vec3(y)
-                it.resid = wp.vec3(y - wp.vec3d(q))
+                q, r_next = round_iterate(particle_q[i], it.resid, inc)
+                it.resid = r_next
                 it.last = inc
                 iterate[i] = it
                 particle_q[i] = q

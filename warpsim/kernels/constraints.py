@@ -61,7 +61,7 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
-wp.set_module_options({"enable_backward": False, "optimization_level": 3})  # forward-only: halves compile time
+wp.set_module_options({"enable_backward": False})  # forward-only: halves compile time
 
 
 @wp.func

@@ -30,8 +30,9 @@ Three schemes compute the same iteration:
 - ``fused`` (the default on the CPU): one thread runs the whole projection, every iteration's stick pass
   (each stick computes its correction once and adds it to its two particles' accumulators, in
   stick-list order) then particle pass (each particle applies and clears its accumulator), with the
-  sticks and the per-particle iterate data packed into 16- and 28-byte records. A CPU launch runs
-  serially anyway, so this is one launch per step instead of two per iteration.
+  sticks and the per-particle iterate data packed (once, when the projector is made) into 16- and
+  28-byte records; per step only the rest lengths (a control) are copied in. A CPU launch runs serially
+  anyway, so this is one launch per step instead of two per iteration.
 - ``scatter``: the same two passes as two launches per iteration, one thread per stick then one per
   particle. It gives bit-identical results to ``fused`` (same float operations in the same order).
 - ``gather`` (the default on CUDA, where concurrent float atomics would add in a varying order): one
@@ -247,14 +248,35 @@ class ParticleIterate:
 
 
 @wp.kernel
-def _fused_projection(
+def _pack_sticks(
     stick_particles: wp.array(dtype=wp.vec2i),
-    stick_rest: wp.array(dtype=wp.float32),
     stick_coef: wp.array(dtype=wp.float32),
-    particle_scale: wp.array(dtype=wp.float32),
+    packed: wp.array(dtype=PackedStick),
+):
+    s = wp.tid()
+    ends = stick_particles[s]
+    p = PackedStick()
+    p.a = ends[0]
+    p.b = ends[1]
+    p.coef = stick_coef[s]
+    packed[s] = p
+
+
+@wp.kernel
+def _pack_steps(
+    particle_scale: wp.array(dtype=wp.float32), relaxation: float, iterate: wp.array(dtype=ParticleIterate)
+):
+    i = wp.tid()
+    it = ParticleIterate()
+    it.step = relaxation * particle_scale[i]
+    iterate[i] = it
+
+
+@wp.kernel
+def _fused_projection(
+    stick_rest: wp.array(dtype=wp.float32),
     particle_nail: wp.array(dtype=wp.int32),
     nail_target: wp.array(dtype=wp.vec3),
-    relaxation: float,
     omegas: wp.array(dtype=wp.float32),
     accum: wp.array(dtype=wp.vec3),
     particle_q: wp.array(dtype=wp.vec3),
@@ -263,19 +285,18 @@ def _fused_projection(
 ):
     if wp.tid() != 0:  # one thread; reading tid also lets Warp compile constant array strides on the CPU
         return
+    # ends, factors and step sizes were packed once (_pack_sticks, _pack_steps); per step only the rest
+    # lengths (a control) come in, and every particle starts with a zero increment and residual
     particle_count = particle_q.shape[0]
     for i in range(particle_count):
-        it = ParticleIterate()
-        it.step = relaxation * particle_scale[i]
+        it = iterate[i]
+        it.last = wp.vec3(0.0)
+        it.resid = wp.vec3(0.0)
         iterate[i] = it
-    stick_count = stick_particles.shape[0]
+    stick_count = packed.shape[0]
     for s in range(stick_count):
-        ends = stick_particles[s]
-        p = PackedStick()
-        p.a = ends[0]
-        p.b = ends[1]
+        p = packed[s]
         p.rest = stick_rest[s]
-        p.coef = stick_coef[s]
         packed[s] = p
     # the scatter scheme's two passes per iteration, with the same float operations in the same order
     for k in range(omegas.shape[0]):
@@ -368,8 +389,17 @@ class StickProjector:
         device = model.device
         self.accum = wp.zeros(n, dtype=wp.vec3, device=device) if scheme != "gather" else None
         if scheme == "fused":
-            self.packed = wp.zeros(max(model.stick_count, 1), dtype=PackedStick, device=device)
+            self.packed = wp.zeros(model.stick_count, dtype=PackedStick, device=device)
             self.iterate = wp.zeros(n, dtype=ParticleIterate, device=device)
+            if model.stick_count:
+                wp.launch(
+                    _pack_sticks,
+                    model.stick_count,
+                    [model.stick_particles, self.stick_coef],
+                    [self.packed],
+                    device=device,
+                )
+            wp.launch(_pack_steps, n, [self.particle_scale, self.relaxation], [self.iterate], device=device)
             self._omegas: dict[int, wp.array] = {}  # each iteration count's Chebyshev weights, made once
         else:
             # the last iterate's increment, and what float32 positions could not hold of the iterate
@@ -387,7 +417,6 @@ class StickProjector:
         if m.stick_count == 0:
             return
         omegas = chebyshev_weights(iterations, self.chebyshev)
-        apply = (self.particle_scale, m.particle_nail, control.nail_target, self.relaxation)  # every scheme
         if self.scheme == "fused":
             weights = self._omegas.get(iterations)
             if weights is None:
@@ -395,11 +424,12 @@ class StickProjector:
             wp.launch(
                 _fused_projection,
                 dim=1,
-                inputs=[m.stick_particles, control.stick_rest, self.stick_coef, *apply, weights],
+                inputs=[control.stick_rest, m.particle_nail, control.nail_target, weights],
                 outputs=[self.accum, state.particle_q, self.packed, self.iterate],
                 device=m.device,
             )
             return
+        apply = (self.particle_scale, m.particle_nail, control.nail_target, self.relaxation)  # both schemes
         if self.scheme == "scatter":
             for k, omega in enumerate(omegas):
                 wp.launch(

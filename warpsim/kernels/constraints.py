@@ -286,27 +286,37 @@ def _fused_projection(
     if wp.tid() != 0:  # one thread; reading tid also lets Warp compile constant array strides on the CPU
         return
     # ends, factors and step sizes were packed once (_pack_sticks, _pack_steps); per step only the rest
-    # lengths (a control) come in, and every particle starts with a zero increment and residual
+    # lengths (a control) come in, and every particle starts with a zero increment and residual.
+    # The loops are `while` loops on purpose: Warp's `range` handles a step of either sign at run time,
+    # which costs ~20 % of the stick pass on the CPU (3.8 against 3.0 ns per stick on a 256^2 flag).
     particle_count = particle_q.shape[0]
-    for i in range(particle_count):
+    i = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
+    while i < particle_count:
         it = iterate[i]
         it.last = wp.vec3(0.0)
         it.resid = wp.vec3(0.0)
         iterate[i] = it
+        i += 1
     stick_count = packed.shape[0]
-    for s in range(stick_count):
+    s = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
+    while s < stick_count:
         p = packed[s]
         p.rest = stick_rest[s]
         packed[s] = p
+        s += 1
     # the scatter scheme's two passes per iteration, with the same float operations in the same order
-    for k in range(omegas.shape[0]):
-        for s in range(stick_count):
+    k = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
+    while k < omegas.shape[0]:
+        s = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
+        while s < stick_count:
             p = packed[s]
             c = stick_correction(particle_q[p.b] - particle_q[p.a], p.rest, p.coef)
             accum[p.a] = accum[p.a] + c
             accum[p.b] = accum[p.b] - c
+            s += 1
         omega = omegas[k]
-        for i in range(particle_count):
+        i = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
+        while i < particle_count:
             total = accum[i]
             accum[i] = wp.vec3(0.0)
             it = iterate[i]
@@ -321,6 +331,8 @@ def _fused_projection(
                 nail = particle_nail[i]  # nailed particles have step 0
                 if nail >= 0:
                     particle_q[i] = nail_target[nail]
+            i += 1
+        k += 1
 
 
 @wp.kernel

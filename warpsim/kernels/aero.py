@@ -119,8 +119,11 @@ def gather_air_force(
 ) -> wp.vec3:
     """Sum of the per-vertex air forces [N] of the triangles around particle ``i`` (fixed order)."""
     f = wp.vec3(0.0)
-    for k in range(particle_tri_start[i], particle_tri_start[i + 1]):
+    k = particle_tri_start[i]
+    end = particle_tri_start[i + 1]
+    while k < end:  # not range(): on the CPU Warp's range checks the step's sign on every pass
         f += tri_force[particle_tri_ids[k]]
+        k += 1
     return f
 
 

@@ -131,9 +131,10 @@ class NumpyVerlet:
         a, b = self.ends[:, 0], self.ends[:, 1]
         free = (self.scale != 0) & ~self.nailed
         step = (self.relaxation * self.scale)[:, None]
-        # the last iterate's increment, and what float32 could not hold of the iterate (float64 sums)
+        # the last iterate's increment, and the sum of the increments added to the starting positions
         last = np.zeros_like(self.q)
-        resid = np.zeros_like(self.q)
+        offset = np.zeros_like(self.q)
+        origin = self.q
         for omega in self.omegas:
             x = self.q
             d = x[b] - x[a]
@@ -144,11 +145,10 @@ class NumpyVerlet:
             inc = total * step
             if omega != 1.0:
                 inc = inc * omega + last * (omega - F32(1.0))
-            y = x.astype(np.float64) + resid + inc
-            q = y.astype(F32)
-            q = np.where(free[:, None], q, x)
+            moved = offset + inc
+            q = np.where(free[:, None], origin + moved, x)
             q[self.nailed] = self.nail_target[self.nail_of]
-            resid = np.where(free[:, None], (y - q).astype(F32), resid)
+            offset = np.where(free[:, None], moved, offset)
             last = np.where(free[:, None], inc, last)
             self.q = q
 

@@ -11,7 +11,7 @@ from warpsim.runner import Simulation
 @pytest.mark.parametrize(
     "scene, override, steps, tolerance",
     [
-        # at 300 m a float32 ulp is 3e-5 m; the carried residual keeps the float32 sums' order differences
+        # at 300 m a float32 ulp is 3e-5 m; the iterates' float32 offsets keep the sums' order differences
         # (np.bincount vs stick-order atomics), which used to round away: up to 2 ulps after 3 steps
         ("hang-glider", {}, 3, 1e-4),
         ("hang-glider", {"air": {"model": "plate"}}, 3, 1e-4),

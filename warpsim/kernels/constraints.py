@@ -40,21 +40,24 @@ Three schemes compute the same iteration:
   its own end, and writes the next iterate into a second buffer (ping-pong). Each stick is
   measured twice, once from each end; the per-particle order is fixed, so this is bit-identical from
   run to run, and agrees with the others to float rounding.
-  Only the positions need two buffers: a particle's increment and residual are its own thread's.
+  Only the positions need two buffers: a particle's increment, offset and origin are its own thread's.
 
 Positions are float32, and an iterate's small corrections can be smaller than half a float32 step of
 the coordinate (1.5e-5 m at 300 m): rounded away every iteration, always in the same direction, they
 broke momentum for heavy particles far from the origin (a 65 kg pilot at 300 m, an 80 kg parachutist at
 400 m, whose descent speed changed from 4.3 to 11.7 m/s with the terrain's height). So each particle
-carries, across the iterations of one projection, the *residual* that float32 could not hold
-(``y - float32(y)``, the iterate ``y`` summed in float64), and Chebyshev extrapolation works on the last
-*increment* (small, exact in float32) instead of the older position. Only the projection's final
-result is rounded, once. This costs about 7-15 % of a step on the CPU (README, benchmarks).
+keeps, across the iterations of one projection, its *origin* (its position when the projection began)
+and its *offset* from it, the sum of its increments: small, so float32 holds it to ~1e-9 m. Every
+iterate is ``origin + offset``, rounded afresh, so the rounding to a float32 position never accumulates,
+and Chebyshev extrapolation works on the last *increment* instead of the older position. (An earlier
+version summed ``x + residual + increment`` in float64: the same accuracy, but the conversions made the
+particle pass 2.8 instead of 1.7 ns per particle.)
 
 Measured on the 2-core CPU (hang glider, 180 sticks, 49 particles, per iteration): ``gather`` about
-1.75 us, ``scatter`` about 1.2 us, ``fused`` about 0.85 us. ``fused`` wins by dropping 110 launches
-per step (small objects) and by its packed records (large flags: 14.4 against 12.8 steps/s at 256²).
-On CUDA ``fused`` would run on a single GPU thread: it is correct there, but slow.
+1.75 us, ``scatter`` about 1.2 us, ``fused`` about 0.65 us. ``fused`` wins by dropping 110 launches
+per step (small objects), by its packed records (large flags: 14.4 against 12.8 steps/s at 256²) and
+by its plain ``while`` loops. On CUDA ``fused`` would run on a single GPU thread: it is correct there,
+but slow.
 """
 
 from __future__ import annotations
@@ -108,15 +111,6 @@ def iterate_increment(total: wp.vec3, step: float, omega: float, last: wp.vec3) 
 
 
 @wp.func
-def round_iterate(x: wp.vec3, resid: wp.vec3, inc: wp.vec3):
-    """The iterate ``x + resid + inc`` summed in float64: returns it as float32 and the residual that float32
-    could not hold of it."""
-    y = wp.vec3d(x) + wp.vec3d(resid) + wp.vec3d(inc)
-    q = wp.vec3(y)
-    return q, wp.vec3(y - wp.vec3d(q))
-
-
-@wp.func
 def next_position(
     i: int,
     x: wp.vec3,
@@ -125,24 +119,29 @@ def next_position(
     omega: float,
     first: int,
     last_inc: wp.array(dtype=wp.vec3),
-    resid: wp.array(dtype=wp.vec3),
+    offset: wp.array(dtype=wp.vec3),
+    origin: wp.array(dtype=wp.vec3),
 ) -> wp.vec3:
-    """Particle ``i``'s next float32 position from ``x`` and its summed corrections ``total``.
+    """Particle ``i``'s next float32 position [m] from ``x`` and its summed corrections ``total``.
 
-    The iterate ``x + resid + increment`` is summed in float64; what float32 cannot hold of it is kept in
-    ``resid[i]`` for the next iteration, and the increment in ``last_inc[i]`` (both read as zero on the
-    ``first`` iteration of a projection).
+    The iterate is ``origin[i] + offset[i]``: the position when the projection began (stored on the
+    ``first`` iteration, which also reads the last increment and the offset as zero) plus the sum of the
+    increments so far; the increment is kept in ``last_inc[i]`` for Chebyshev extrapolation.
     """
     last = wp.vec3(0.0)
-    r = wp.vec3(0.0)
+    off = wp.vec3(0.0)
+    x0 = x
     if first == 0:
         last = last_inc[i]
-        r = resid[i]
+        off = offset[i]
+        x0 = origin[i]
+    else:
+        origin[i] = x
     inc = iterate_increment(total, step, omega, last)
-    q, r_next = round_iterate(x, r, inc)
-    resid[i] = r_next
+    off = off + inc
+    offset[i] = off
     last_inc[i] = inc
-    return q
+    return x0 + off
 
 
 @wp.kernel
@@ -171,7 +170,8 @@ def _apply_accumulated(
     accum: wp.array(dtype=wp.vec3),
     particle_q: wp.array(dtype=wp.vec3),
     last_inc: wp.array(dtype=wp.vec3),
-    resid: wp.array(dtype=wp.vec3),
+    offset: wp.array(dtype=wp.vec3),
+    origin: wp.array(dtype=wp.vec3),
 ):
     i = wp.tid()
     total = accum[i]
@@ -183,7 +183,7 @@ def _apply_accumulated(
     scale = particle_scale[i]
     if scale == 0.0:
         return
-    particle_q[i] = next_position(i, particle_q[i], total, relaxation * scale, omega, first, last_inc, resid)
+    particle_q[i] = next_position(i, particle_q[i], total, relaxation * scale, omega, first, last_inc, offset, origin)
 
 
 @wp.kernel
@@ -202,7 +202,8 @@ def _gather_iteration(
     q_in: wp.array(dtype=wp.vec3),
     q_out: wp.array(dtype=wp.vec3),
     last_inc: wp.array(dtype=wp.vec3),
-    resid: wp.array(dtype=wp.vec3),
+    offset: wp.array(dtype=wp.vec3),
+    origin: wp.array(dtype=wp.vec3),
 ):
     i = wp.tid()
     nail = particle_nail[i]
@@ -223,8 +224,8 @@ def _gather_iteration(
         if (ref & 1) == 1:
             other = ends[0]
         total += stick_correction(q_in[other] - x, stick_rest[s], stick_coef[s])
-    # only this thread reads and writes its own increment and residual
-    q_out[i] = next_position(i, x, total, relaxation * scale, omega, first, last_inc, resid)
+    # only this thread reads and writes its own increment, offset and origin
+    q_out[i] = next_position(i, x, total, relaxation * scale, omega, first, last_inc, offset, origin)
 
 
 @wp.struct
@@ -239,11 +240,13 @@ class PackedStick:
 
 @wp.struct
 class ParticleIterate:
-    """A particle's per-projection data in the fused scheme: last increment [m], float32 residual [m], and
-    ``relaxation * scale`` (0 = the particle does not move)."""
+    """A particle's per-projection data in the fused scheme: last increment [m], offset [m] from the origin
+    [m] (its position when the projection began), and ``relaxation * scale`` (0 = the particle does not
+    move)."""
 
     last: wp.vec3
-    resid: wp.vec3
+    offset: wp.vec3
+    origin: wp.vec3
     step: wp.float32
 
 
@@ -286,7 +289,7 @@ def _fused_projection(
     if wp.tid() != 0:  # one thread; reading tid also lets Warp compile constant array strides on the CPU
         return
     # ends, factors and step sizes were packed once (_pack_sticks, _pack_steps); per step only the rest
-    # lengths (a control) come in, and every particle starts with a zero increment and residual.
+    # lengths (a control) come in, and every particle starts at its origin with a zero increment.
     # The loops are `while` loops on purpose: Warp's `range` handles a step of either sign at run time,
     # which costs ~20 % of the stick pass on the CPU (3.8 against 3.0 ns per stick on a 256^2 flag).
     particle_count = particle_q.shape[0]
@@ -294,7 +297,8 @@ def _fused_projection(
     while i < particle_count:
         it = iterate[i]
         it.last = wp.vec3(0.0)
-        it.resid = wp.vec3(0.0)
+        it.offset = wp.vec3(0.0)
+        it.origin = particle_q[i]
         iterate[i] = it
         i += 1
     stick_count = packed.shape[0]
@@ -322,11 +326,10 @@ def _fused_projection(
             it = iterate[i]
             if it.step != 0.0:
                 inc = iterate_increment(total, it.step, omega, it.last)
-                q, r_next = round_iterate(particle_q[i], it.resid, inc)
-                it.resid = r_next
+                it.offset = it.offset + inc
                 it.last = inc
                 iterate[i] = it
-                particle_q[i] = q
+                particle_q[i] = it.origin + it.offset
             else:
                 nail = particle_nail[i]  # nailed particles have step 0
                 if nail >= 0:
@@ -414,9 +417,10 @@ class StickProjector:
             wp.launch(_pack_steps, n, [self.particle_scale, self.relaxation], [self.iterate], device=device)
             self._omegas: dict[int, wp.array] = {}  # each iteration count's Chebyshev weights, made once
         else:
-            # the last iterate's increment, and what float32 positions could not hold of the iterate
+            # the last iterate's increment, the sum of the increments, and the position they are added to
             self.last_inc = wp.zeros(n, dtype=wp.vec3, device=device)
-            self.resid = wp.zeros(n, dtype=wp.vec3, device=device)
+            self.offset = wp.zeros(n, dtype=wp.vec3, device=device)
+            self.origin = wp.zeros(n, dtype=wp.vec3, device=device)
             self.scratch = wp.zeros(n, dtype=wp.vec3, device=device) if scheme == "gather" else None  # ping-pong
 
     def project(self, state, control, iterations: int) -> None:
@@ -455,7 +459,7 @@ class StickProjector:
                     _apply_accumulated,
                     dim=m.particle_count,
                     inputs=[*apply, float(omega), int(k == 0)],
-                    outputs=[self.accum, state.particle_q, self.last_inc, self.resid],
+                    outputs=[self.accum, state.particle_q, self.last_inc, self.offset, self.origin],
                     device=m.device,
                 )
             return
@@ -475,7 +479,7 @@ class StickProjector:
                     int(k == 0),
                     buffers[k % 2],
                 ],
-                outputs=[buffers[(k + 1) % 2], self.last_inc, self.resid],
+                outputs=[buffers[(k + 1) % 2], self.last_inc, self.offset, self.origin],
                 device=m.device,
             )
         if len(omegas) % 2 == 1:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from warpsim.cli import main
-from warpsim.descriptor import load_text, resolve
+from warpsim.descriptor import defaults, load_text, resolve
 from warpsim.runner import Simulation
 
 SCENES = sorted((Path(__file__).resolve().parent.parent / "scenes").glob("*.toml"))
@@ -53,8 +53,6 @@ def test_bad_descriptor_messages(tmp_path, capsys, text, expected):
 def test_delta_objects_are_built_mirror_symmetric(name):
     """The sail, frame and pilot/rope map exactly onto their mirror images across the keel plane, so any
     turn the object makes comes from its flight dynamics (seeded by rounding), not from its mesh."""
-    from warpsim.descriptor import defaults
-
     sim = Simulation(defaults(name))
     model, meta = sim.model, sim.model.objects[0].meta
     q = sim.state.positions().astype(np.float64)

@@ -111,6 +111,14 @@ def iterate_increment(total: wp.vec3, step: float, omega: float, last: wp.vec3) 
 
 
 @wp.func
+def advance_offset(origin: wp.vec3, offset: wp.vec3, inc: wp.vec3):
+    """Adds the increment ``inc`` [m] to a particle's ``offset`` [m]: returns the new offset and the iterate
+    ``origin + offset`` rounded to float32 (every scheme does exactly these operations)."""
+    moved = offset + inc
+    return moved, origin + moved
+
+
+@wp.func
 def next_position(
     i: int,
     x: wp.vec3,
@@ -138,10 +146,10 @@ def next_position(
     else:
         origin[i] = x
     inc = iterate_increment(total, step, omega, last)
-    off = off + inc
-    offset[i] = off
+    moved, q = advance_offset(x0, off, inc)
+    offset[i] = moved
     last_inc[i] = inc
-    return x0 + off
+    return q
 
 
 @wp.kernel
@@ -326,10 +334,11 @@ def _fused_projection(
             it = iterate[i]
             if it.step != 0.0:
                 inc = iterate_increment(total, it.step, omega, it.last)
-                it.offset = it.offset + inc
+                moved, q = advance_offset(it.origin, it.offset, inc)
+                it.offset = moved
                 it.last = inc
                 iterate[i] = it
-                particle_q[i] = it.origin + it.offset
+                particle_q[i] = q
             else:
                 nail = particle_nail[i]  # nailed particles have step 0
                 if nail >= 0:

@@ -5,29 +5,41 @@ terrain, after Beaudry, Egli & Patenaude, "Simulation de deltaplanes et de cerf-
 réel" (2005).
 """
 
-from .builder import ModelBuilder
-from .kernels.aero import AeroModel
-from .kernels.collision import CollisionMode
-from .model import AIR_DENSITY, GRAVITY, Control, Model, ObjectRecord, State
-from .solver import AirSettings, GroundSettings, SolverEuler, SolverVerlet
-from .terrain import Heightfield
+from __future__ import annotations
+
+import importlib
 
 __version__ = "0.1.0"
 
-__all__ = [
-    "AIR_DENSITY",
-    "GRAVITY",
-    "AeroModel",
-    "AirSettings",
-    "CollisionMode",
-    "Control",
-    "GroundSettings",
-    "Heightfield",
-    "Model",
-    "ModelBuilder",
-    "ObjectRecord",
-    "SolverEuler",
-    "SolverVerlet",
-    "State",
-    "__version__",
-]
+# name -> module: imported on first use, so that the command line starts (and answers --help or Ctrl-C) without
+# loading Warp first
+_EXPORTS = {
+    "AIR_DENSITY": "model",
+    "GRAVITY": "model",
+    "AeroModel": "kernels.aero",
+    "AirSettings": "solver",
+    "CollisionMode": "kernels.collision",
+    "Control": "model",
+    "GroundSettings": "solver",
+    "Heightfield": "terrain",
+    "Model": "model",
+    "ModelBuilder": "builder",
+    "ObjectRecord": "model",
+    "SolverEuler": "solver",
+    "SolverVerlet": "solver",
+    "State": "model",
+}
+
+__all__ = [*sorted(_EXPORTS), "__version__"]
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

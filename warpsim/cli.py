@@ -2,7 +2,8 @@
 
 Every error a user can cause ends with one line ``warpsim <command>: error: ...`` and exit code 2; a run that
 blows up (NaN/Inf, or a stick past ``solver.max_stretch``) ends with exit code 3 and keeps its outputs up to the
-last good frame; an interrupted run ends with 130.
+last good frame; an output that cannot be written part-way (disk full, I/O error) ends with exit code 4 and one
+line naming the file and what it keeps; an interrupted run ends with 130.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from . import __version__
 
 EXIT_USAGE = 2
 EXIT_BLOWUP = 3
+EXIT_OUTPUT = 4
 EXIT_INTERRUPTED = 130
 
 
@@ -80,7 +82,8 @@ def build_parser() -> argparse.ArgumentParser:
         "particles and Jacobi-averaged distance constraints, in NVIDIA Warp kernels.",
         epilog="SCENE is a built-in object name (see `warpsim list`), a scene name found in ./scenes, "
         "or a path to a .toml descriptor. Exit codes: 0 done, 2 bad input (one error line), 3 the simulation "
-        "blew up (outputs kept up to the last good frame), 130 interrupted (outputs kept).",
+        "blew up (outputs kept up to the last good frame), 4 an output could not be written (disk full, I/O error; "
+        "one line says what it keeps), 130 interrupted (outputs kept).",
     )
     parser.add_argument("--version", action="version", version=f"warpsim {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
@@ -327,12 +330,15 @@ def _checked_output(check, value: str | None, flag: str) -> Path | None:
 
 
 class _StopRequests:
-    """SIGINT (Ctrl-C) and SIGTERM ask a run to stop after the current frame; a second one stops at once."""
+    """SIGINT (Ctrl-C) and SIGTERM ask a run to stop after the current frame; a second one stops at once, except
+    once the outputs are being finished (:meth:`finishing`): then they are only noted, so that a stage being
+    exported and a recording being closed are always completed."""
 
     def __init__(self):
         import signal
 
         self.requested = False
+        self.finishing_outputs = False
         self.previous = {}
         for sig in (signal.SIGINT, signal.SIGTERM):
             try:
@@ -341,9 +347,13 @@ class _StopRequests:
                 pass
 
     def _handle(self, signum, frame):
-        if self.requested:
+        if self.requested and not self.finishing_outputs:
             raise KeyboardInterrupt
         self.requested = True
+
+    def finishing(self) -> None:
+        """From now on signals do not interrupt (the outputs are being written)."""
+        self.finishing_outputs = True
 
     def __call__(self) -> bool:
         return self.requested
@@ -355,12 +365,21 @@ class _StopRequests:
             signal.signal(sig, handler)
 
 
+def _same_file_check(scene: str, outputs: dict) -> None:
+    """Refuse an output that would overwrite the scene file being run."""
+    from .io import same_file
+
+    if not Path(scene).is_file():
+        return
+    for flag, path in outputs.items():
+        if path is not None and Path(path).exists() and same_file(scene, path):
+            raise UsageError(f"{flag} {path} is the scene file itself; choose another output name")
+
+
 def cmd_run(args) -> int:
     """Run a scene (or continue a recording) and print the summary."""
-    from .descriptor import load_text, to_toml
-    from .io.hdf5 import H5Recorder, Recording, RecordingError, check_recording_path
-    from .io.usd import UsdWriter, check_stage_path
-    from .runner import BlowUpError, Simulation
+    from .io.hdf5 import RecordingError, check_recording_path, claim
+    from .io.usd import check_stage_path
 
     if args.resume and args.scene:
         raise UsageError("give either SCENE or --resume REC.h5, not both (a recording holds its scene)")
@@ -370,19 +389,50 @@ def cmd_run(args) -> int:
         raise UsageError("--resume appends to its recording; --h5 is not needed")
     usd_path = _checked_output(check_stage_path, args.usd, "--usd")
     h5_path = _checked_output(check_recording_path, args.h5, "--h5")
+    if args.scene:
+        _same_file_check(args.scene, {"--h5": h5_path, "--usd": usd_path})
     device = _check_device(args.device)
+    lock = None
+    try:
+        # refuse a recording another run writes before anything else happens
+        if h5_path:
+            try:
+                lock = claim(h5_path, create=True)
+            except RecordingError as err:
+                raise UsageError(f"--h5 {err}") from None
+        elif args.resume:
+            if not Path(args.resume).is_file():
+                raise UsageError(f"--resume {args.resume}: no such file")
+            _checked_output(check_recording_path, args.resume, "--resume")
+            try:
+                lock = claim(args.resume, create=False)  # held to the end: nobody else writes it meanwhile
+            except RecordingError as err:
+                raise UsageError(f"--resume {err}") from None
+        return _run(args, device, usd_path, h5_path, lock)
+    finally:
+        if lock is not None:
+            lock.release(remove_created=True)  # no-op once the recorder has taken and released it
+
+
+def _run(args, device: str, usd_path: Path | None, h5_path: Path | None, lock) -> int:
+    """``cmd_run`` once the outputs are checked (``lock``: the --h5 recording's writer lock, or None)."""
+    from .descriptor import load_text, to_toml
+    from .io import OutputWriteError
+    from .io.hdf5 import H5Recorder, Recording, RecordingError
+    from .io.usd import UsdWriter
+    from .runner import BlowUpError, Simulation
 
     checkpoint = None
     if args.resume:
-        try:
-            with Recording(args.resume) as recording:
-                checkpoint = recording.checkpoint()
-                text, where = recording.descriptor_text, f"{args.resume} (resumed)"
-        except RecordingError as err:
-            raise UsageError(f"--resume {err}") from None
         for name in ("set", "dt", "iterations", "fps", "worlds", "vary"):
             if getattr(args, name):
                 raise UsageError(f"--{name} cannot change a resumed run; it continues with the recording's settings")
+        try:
+            with Recording(args.resume, owner=True) as recording:
+                checkpoint, frame = recording.checkpoint(), recording.checkpoint_frame
+                text, where = recording.descriptor_text, f"{args.resume} (resumed)"
+        except RecordingError as err:
+            raise UsageError(f"--resume {err}") from None
         descriptor = load_text(text, where)
         seconds = args.seconds if args.seconds is not None else descriptor["scene"]["seconds"]
     else:
@@ -391,13 +441,16 @@ def cmd_run(args) -> int:
     show_progress = not args.quiet and sys.stderr.isatty()
     sim = Simulation(descriptor, device=device, where=where)
     if checkpoint is not None:
-        sim.restore(checkpoint)
+        try:
+            sim.restore(checkpoint)
+        except ValueError as err:
+            raise UsageError(f"--resume {args.resume}: its checkpoint does not fit its scene ({err})") from None
     if not args.quiet:
         m = sim.model
         print(
             f"{where}: {m.particle_count} particles, {m.stick_count} sticks, {m.tri_count} triangles; "
             f"dt {sim.dt:g} s, {descriptor['solver']['method']}, device {device}"
-            + (f"; from t = {sim.state.time:.3f} s, frame {checkpoint['frame']}" if checkpoint else "")
+            + (f"; from t = {sim.state.time:.3f} s, frame {frame}" if checkpoint is not None else "")
         )
 
     def progress(t, total, steps, wall):
@@ -408,17 +461,25 @@ def cmd_run(args) -> int:
     stop = _StopRequests()
     recorder = usd = None
     blowup = None
+    failures: list[OutputWriteError] = []
     try:
-        if args.resume:
-            recorder = H5Recorder(args.resume, sim, resume=True)
-        elif h5_path:
-            recorder = H5Recorder(h5_path, sim, to_toml(descriptor), where)
+        try:
+            if args.resume:
+                recorder = H5Recorder(args.resume, sim, resume=True, lock=lock)
+            elif h5_path:
+                recorder = H5Recorder(h5_path, sim, to_toml(descriptor), where, lock=lock)
+        except RecordingError as err:
+            raise UsageError(str(err)) from None
         if usd_path:
             usd = UsdWriter(usd_path, sim.model, sim.steps_per_frame * sim.dt)
 
         def on_frame(frame):
-            if recorder:
-                recorder.write(frame)
+            if recorder and not failures:
+                try:
+                    recorder.write(frame)
+                except OutputWriteError as err:  # stop at this frame; the outputs keep what they have
+                    failures.append(err)
+                    stop.requested = True
             if usd:
                 usd.write(frame.time, frame.positions)
 
@@ -433,18 +494,26 @@ def cmd_run(args) -> int:
         except BlowUpError as err:
             blowup, summary = err, err.summary
     finally:
-        if recorder:
-            recorder.close()
-        if usd:
-            usd.close()
+        stop.finishing()
+        for output in (recorder, usd):
+            if output is not None:
+                try:
+                    output.close()
+                except OutputWriteError as err:
+                    if err not in failures:
+                        failures.append(err)
         stop.restore()
     if show_progress:
         sys.stderr.write("\r" + " " * 70 + "\r")
     if not args.quiet:
         print(summary.text())
         for label, path in (("recording", args.resume or h5_path), ("USD stage", usd_path)):
-            if path:
+            if path and not any(str(path) in str(err) for err in failures):
                 print(f"  {label}: {path}")
+    for err in failures:
+        sys.stderr.write(f"warpsim run: error: {one_line(str(err))}\n")
+    if failures:
+        return EXIT_OUTPUT
     if blowup is not None:
         sys.stderr.write(
             f"warpsim run: error: {one_line(str(blowup))}\n"
@@ -484,12 +553,21 @@ def cmd_render(args) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``warpsim`` console script."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:  # Ctrl-C before a run's own handling starts (start-up, model building)
+        sys.stderr.write("warpsim: interrupted\n")
+        return EXIT_INTERRUPTED
+
+
+def _main(argv: list[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     import warp as wp
 
     wp.config.log_level = wp.LOG_WARNING  # no per-module load lines on the user's terminal
     from .descriptor import DescriptorError
+    from .io import OutputWriteError
 
     commands = {"list": cmd_list, "info": cmd_info, "run": cmd_run, "convert": cmd_convert, "render": cmd_render}
     try:
@@ -497,6 +575,9 @@ def main(argv: list[str] | None = None) -> int:
     except (DescriptorError, UsageError) as err:
         sys.stderr.write(f"warpsim {args.command}: error: {one_line(str(err))}\n")
         return EXIT_USAGE
+    except OutputWriteError as err:
+        sys.stderr.write(f"warpsim {args.command}: error: {one_line(str(err))}\n")
+        return EXIT_OUTPUT
 
 
 if __name__ == "__main__":

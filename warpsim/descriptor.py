@@ -384,18 +384,32 @@ def _read_text(path: Path) -> str:
         raise DescriptorError(f"{path}: cannot be read: {err.strerror or err}") from None
 
 
-def _toml_value(value) -> str:
-    if isinstance(value, str):
-        return f'"{value}"'
-    if isinstance(value, bool):
-        return "true" if value else "false"
+def _plain(value):
+    """``value`` as the types a TOML writer takes: tuples as lists, NumPy scalars as Python numbers."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if hasattr(value, "item") and not isinstance(value, (str, bytes)):  # numpy scalar
+        return value.item()
+    return value
+
+
+def _toml_value(value) -> str:
+    """One value as inline TOML: scalars (strings escaped) by ``tomli_w``, arrays inline."""
+    import tomli_w
+
+    if isinstance(value, list):
         return f"[{', '.join(_toml_value(v) for v in value)}]"
-    return repr(value)
+    return tomli_w.dumps({"v": value})[4:].rstrip("\n")
 
 
 def to_toml(descriptor: dict) -> str:
-    """Write a descriptor back as TOML text (all keys, for recording with outputs)."""
+    """Write a descriptor back as TOML text (all keys, for recording with outputs and for ``warpsim info``).
+
+    Values are written by ``tomli_w`` (every string escaped), so ``load_text(to_toml(d))`` gives ``d`` back.
+    """
+    descriptor = _plain(descriptor)
     lines = []
     for section, values in descriptor.items():
         if section == "controls":

@@ -7,7 +7,6 @@ steps of ``dt`` as one frame lasts. Diagnostics are computed on the host once pe
 from __future__ import annotations
 
 import dataclasses
-import json
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -17,6 +16,7 @@ import numpy as np
 import warp as wp
 
 from .builder import ModelBuilder
+from .checkpoint import Checkpoint, pack_controls, pack_rng, unpack_controls, unpack_rng
 from .controls import ControlError, ControlSchedule, Gusts, check_value
 from .descriptor import DescriptorError, world_descriptor
 from .kernels.aero import AeroModel
@@ -341,58 +341,62 @@ class Simulation:
                 return record.name
         return "no object"
 
-    def _capture(self) -> dict:
-        """Host copies of everything that decides the run's future (what :meth:`checkpoint` stores, with the
-        gust states and controls as Python values)."""
-        return {
-            "q": self.state.positions(),
-            "q_prev": self.state.particle_q_prev.numpy().copy(),
-            "time": float(self.state.time),
-            "steps": int(self.steps_taken),
-            "stick_rest": self.control.stick_rest.numpy().copy(),
-            "nail_target": self.control.nail_target.numpy().copy(),
-            "wind": self.control.wind.numpy().copy(),
-            "gusts": [None if g is None else g.state() for g in self.gusts],
-            "controls": {"in_force": dict(self.controls), "scheduled": dict(self._scheduled)},
-        }
-
-    def _apply(self, captured: dict) -> None:
-        """Go back to a :meth:`_capture` (bit for bit)."""
-        self.state.particle_q.assign(np.asarray(captured["q"], dtype=np.float32))
-        self.state.particle_q_prev.assign(np.asarray(captured["q_prev"], dtype=np.float32))
-        self.state.time = float(captured["time"])
-        self.steps_taken = int(captured["steps"])
-        self.control.stick_rest.assign(np.asarray(captured["stick_rest"], dtype=np.float32))
-        self.control.nail_target.assign(np.asarray(captured["nail_target"], dtype=np.float32))
-        self.control.wind.assign(np.asarray(captured["wind"], dtype=np.float32))
-        for gusts, g in zip(self.gusts, captured["gusts"], strict=False):
-            if gusts is not None and g is not None:
-                gusts.set_state(g)
-        self.controls = dict(captured["controls"]["in_force"])
-        self._scheduled = dict(captured["controls"]["scheduled"])
-
-    def checkpoint(self) -> dict:
-        """Everything needed to continue this run exactly: state, control arrays, gusts, step count.
-
-        Host copies: ``q``/``q_prev`` ``[particle_count, 3]`` float32 [m], ``time`` [s], ``steps``,
-        ``stick_rest`` [m], ``nail_target`` [m], ``wind`` [m/s], ``gusts`` (JSON text or ``""``),
-        ``controls`` (JSON text: the controls in force and the schedule's last values).
-        """
-        captured = self._capture()
-        gusts = json.dumps(captured["gusts"]) if any(g is not None for g in self.gusts) else ""
-        return {**captured, "gusts": gusts, "controls": json.dumps(captured["controls"])}
-
-    def restore(self, checkpoint: dict) -> None:
-        """Continue from a :meth:`checkpoint` of a simulation of the same descriptor (bit for bit)."""
-        saved = json.loads(checkpoint["gusts"]) if checkpoint.get("gusts") else []
-        controls = json.loads(checkpoint["controls"])
-        self._apply(
-            {
-                **checkpoint,
-                "gusts": saved if isinstance(saved, list) else [saved],  # format 1 stored one world's dict
-                "controls": {part: {k: _from_json(v) for k, v in values.items()} for part, values in controls.items()},
-            }
+    def checkpoint(self) -> Checkpoint:
+        """Everything needed to continue this run exactly (host copies, see :class:`warpsim.checkpoint.Checkpoint`):
+        state, control arrays, every world's gusts, the controls in force and the step count."""
+        names = self.control_names()
+        worlds = len(self.gusts)
+        gust_active = np.zeros(worlds, dtype=np.uint8)
+        gust_g = np.zeros((worlds, 3), dtype=np.float64)
+        gust_mean = np.zeros((worlds, 3), dtype=np.float64)
+        gust_rng = np.zeros((worlds, 6), dtype=np.uint64)
+        for k, gusts in enumerate(self.gusts):
+            if gusts is not None:
+                gust_active[k] = 1
+                gust_g[k], gust_mean[k] = gusts.g, gusts.mean
+                gust_rng[k] = pack_rng(gusts.rng.bit_generator.state)
+        control_set, control_value = pack_controls(names, self.controls)
+        scheduled_set, scheduled_value = pack_controls(names, self._scheduled)
+        return Checkpoint(
+            q=self.state.positions().astype(np.float32, copy=True),
+            q_prev=self.state.particle_q_prev.numpy().copy(),
+            time=np.array([self.state.time], dtype=np.float64),
+            steps=np.array([self.steps_taken], dtype=np.int64),
+            stick_rest=self.control.stick_rest.numpy().copy(),
+            nail_target=self.control.nail_target.numpy().copy(),
+            wind=self.control.wind.numpy().copy(),
+            gust_active=gust_active,
+            gust_g=gust_g,
+            gust_mean=gust_mean,
+            gust_rng=gust_rng,
+            control_set=control_set,
+            control_value=control_value,
+            scheduled_set=scheduled_set,
+            scheduled_value=scheduled_value,
+            control_names=names,
         )
+
+    def restore(self, checkpoint: Checkpoint) -> None:
+        """Continue from a :meth:`checkpoint` of a simulation of the same descriptor (bit for bit).
+
+        Raises ``ValueError`` when its fields do not fit this scene (other shapes, types or controls).
+        """
+        checkpoint.check_like(self.checkpoint())
+        self.state.particle_q.assign(checkpoint.q)
+        self.state.particle_q_prev.assign(checkpoint.q_prev)
+        self.state.time = float(checkpoint.time[0])
+        self.steps_taken = int(checkpoint.steps[0])
+        self.control.stick_rest.assign(checkpoint.stick_rest)
+        self.control.nail_target.assign(checkpoint.nail_target)
+        self.control.wind.assign(checkpoint.wind)
+        for k, gusts in enumerate(self.gusts):
+            if gusts is not None and checkpoint.gust_active[k]:
+                gusts.g = checkpoint.gust_g[k].copy()
+                gusts.mean = checkpoint.gust_mean[k].copy()
+                gusts.rng.bit_generator.state = unpack_rng(checkpoint.gust_rng[k])
+        names = checkpoint.control_names
+        self.controls = unpack_controls(names, checkpoint.control_set, checkpoint.control_value)
+        self._scheduled = unpack_controls(names, checkpoint.scheduled_set, checkpoint.scheduled_value)
 
     def run(
         self,
@@ -434,7 +438,7 @@ class Simulation:
                     self.steps_taken, first.time, *problem, -1, first.time, RunSummary(0.0, 0, 0.0, 0.0, blew_up=True)
                 )
             worst = first.worst_stretch
-            good, good_frame = self._capture(), first  # taken before on_frame can touch the state
+            good, good_frame = self.checkpoint(), first  # taken before on_frame can touch the state
             if on_frame and self.steps_taken == 0:
                 on_frame(first)
             while steps < total_steps:
@@ -452,13 +456,13 @@ class Simulation:
                 problem = self.blowup(frame)
                 if problem:
                     bad_step = self.steps_taken
-                    self._apply(good)
+                    self.restore(good)
                     steps -= bad_step - self.steps_taken
                     wp.synchronize_device(self.model.device)
                     summary = RunSummary(steps * self.dt, steps, time.perf_counter() - start, worst, blew_up=True)
                     raise BlowUpError(bad_step, frame.time, *problem, good_frame.index, good_frame.time, summary)
                 worst = max(worst, frame.worst_stretch)
-                good, good_frame = self._capture(), frame
+                good, good_frame = self.checkpoint(), frame
                 if on_frame:
                     on_frame(frame)
                 now = time.perf_counter()
@@ -473,8 +477,3 @@ class Simulation:
             interrupted = True
         wp.synchronize_device(self.model.device)
         return RunSummary(steps * self.dt, steps, time.perf_counter() - start, worst, interrupted)
-
-
-def _from_json(value):
-    """A control value read back from JSON (vectors were tuples)."""
-    return tuple(value) if isinstance(value, list) else value

@@ -1,24 +1,110 @@
-"""Outputs: animated USD stages (:mod:`warpsim.io.usd`) and streaming HDF5 recordings (:mod:`warpsim.io.hdf5`)."""
+"""Outputs: animated USD stages (:mod:`warpsim.io.usd`) and streaming HDF5 recordings (:mod:`warpsim.io.hdf5`).
+
+Helpers shared by every output: the path checks made before a run starts, and the temporary names that
+outputs are written under before they are renamed into place (``.NAME.PID.tmp.EXT`` beside the target;
+ones left by a killed process are removed by the next output written there).
+"""
 
 from __future__ import annotations
 
+import errno
+import os
+import stat
 from pathlib import Path
 
 
 class OutputPathError(ValueError):
-    """An output path that cannot be written: unknown extension or missing directory."""
+    """An output path that cannot be written: unknown extension, missing or unwritable directory, not a file."""
+
+
+class OutputWriteError(OSError):
+    """Writing an output failed part-way (disk full, I/O error); the message says what was kept."""
+
+
+def reason(err: BaseException) -> str:
+    """A short, one-line cause of an ``OSError`` (``No space left on device``), for error messages."""
+    code = getattr(err, "errno", None)
+    if isinstance(code, int) and code > 0:
+        return os.strerror(code)
+    text = str(err).strip().splitlines()
+    return text[0][:200] if text else type(err).__name__
 
 
 def check_output_path(path, extensions: tuple[str, ...], kind: str) -> Path:
-    """Check that ``path`` ends in one of ``extensions`` and that its directory exists; returns it as a Path.
+    """Check that ``path`` can be written as a ``kind`` output before anything is computed; returns it as a Path.
 
-    ``kind`` names the format in the message (``USD``, ``HDF5``). Checked before a run starts, so that a
-    mistake costs nothing and leaves no file.
+    It must end in one of ``extensions``; its directory must exist and take new files (a file is created
+    there and removed again, which catches read-only mounts and immutable directories); an existing
+    ``path`` must be a regular file that can be opened for writing. ``kind`` names the format in the
+    message (``USD``, ``HDF5``). Raises :class:`OutputPathError`.
     """
     path = Path(path)
     if path.suffix.lower() not in extensions:
         choices = ", ".join(extensions[:-1]) + " or " + extensions[-1] if len(extensions) > 1 else extensions[0]
         raise OutputPathError(f"{path}: unknown {kind} extension {path.suffix!r}; use {choices}")
-    if not path.parent.resolve().is_dir():
-        raise OutputPathError(f"{path}: directory {path.parent} does not exist")
+    directory = path.parent
+    if not directory.resolve().is_dir():
+        raise OutputPathError(f"{path}: directory {directory} does not exist")
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        info = None
+    except OSError as err:
+        raise OutputPathError(f"{path}: cannot be written ({reason(err)})") from None
+    if info is not None and stat.S_ISDIR(info.st_mode):
+        raise OutputPathError(f"{path}: is a directory")
+    if info is not None and not stat.S_ISREG(info.st_mode):
+        raise OutputPathError(f"{path}: exists and is not a regular file")
+    probe = temporary_path(path, ".probe")
+    try:
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+        probe.unlink()
+    except OSError as err:
+        raise OutputPathError(f"{path}: cannot write in {directory} ({reason(err)})") from None
+    if info is not None:
+        try:
+            os.close(os.open(path, os.O_WRONLY | os.O_NONBLOCK))  # no truncation: only asks
+        except OSError as err:
+            raise OutputPathError(f"{path}: cannot be overwritten ({reason(err)})") from None
     return path
+
+
+def temporary_path(path: Path, suffix: str | None = None) -> Path:
+    """A name beside ``path`` for writing it before the rename: ``.NAME.PID.tmp.EXT`` (``EXT`` = ``suffix``,
+    default ``path``'s, which tells writers such as USD the format)."""
+    path = Path(path)
+    ext = path.suffix if suffix is None else suffix
+    return path.with_name(f".{path.name}.{os.getpid()}.tmp{ext}")
+
+
+def remove_stale_temporaries(path: Path) -> list[Path]:
+    """Remove the temporary files of ``path`` (see :func:`temporary_path`) whose process no longer runs
+    (killed while writing); returns them."""
+    path = Path(path)
+    removed = []
+    for candidate in path.parent.glob(f".{path.name}.*.tmp*"):
+        pid_text = candidate.name[len(path.name) + 2 :].split(".", 1)[0]
+        if not pid_text.isdigit() or int(pid_text) == os.getpid() or _alive(int(pid_text)):
+            continue
+        try:
+            candidate.unlink()
+            removed.append(candidate)
+        except OSError:
+            pass
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except OSError as err:
+        return err.errno == errno.EPERM  # exists, owned by someone else
+    return True
+
+
+def same_file(a, b) -> bool:
+    """True when paths ``a`` and ``b`` name the same existing file (or the same path)."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return Path(a).resolve() == Path(b).resolve()

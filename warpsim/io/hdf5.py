@@ -16,41 +16,71 @@ Layout (``F`` frames, ``N`` particles, ``M`` sticks, ``T`` triangles, ``O`` obje
     /topology/particle_object    [N]        int32    object of each particle (index into attr ``objects``)
     /topology/particle_part      [N]        int32    part of each particle (index into attr ``parts``; -1 none)
     /topology/triangle_part      [T]        int32    part of each triangle (index into attr ``parts``)
-    /checkpoint/...                                  the state after the last frame, for ``--resume``
+    /checkpoint/slot0, slot1                         two copies of the state after a frame, for ``--resume``:
+        frame [1] int64, digest [32] uint8 (sha256), and the arrays of :class:`warpsim.checkpoint.Checkpoint`
 
 Root attributes: ``format`` (``warpsim-recording``), ``format_version``, ``descriptor`` (the full scene
 descriptor as TOML), ``scene`` (where it came from), ``solver`` (JSON), ``warpsim_version``,
 ``warp_version``, ``dt`` [s], ``steps_per_frame``, ``frame_interval`` [s]; on ``/topology``:
-``objects`` and ``parts`` (names, parts as ``object/part``).
+``objects`` and ``parts`` (names, parts as ``object/part``); on ``/checkpoint``: ``control_names``.
+Every frame and topology dataset carries HDF5's Fletcher-32 checksum, so damaged data fails to read
+instead of reading wrong.
 
 The file is written in HDF5's single-writer/multiple-reader (SWMR) mode: another process can open it
-while it grows. Frames are flushed, with a checkpoint of the state after the last of them, every
-``H5Recorder.sync_interval`` (0.5) wall seconds and when the recorder closes, which the CLI does on
-Ctrl-C and SIGTERM: an interrupted run keeps every completed frame, and a killed one (SIGKILL, power
-loss) keeps those of the last sync. On resume, frames after the checkpoint's are dropped and redone.
+while it grows (``h5py.File(path, "r", swmr=True)``). One writer at a time: a writer holds an exclusive
+lock (:class:`warpsim.io.h5safe.WriterLock`) and a second one is refused before it touches the file.
+
+Frames are flushed every ``H5Recorder.sync_interval`` (0.5) wall seconds and when the recorder closes
+(which the CLI does on Ctrl-C and SIGTERM), then a checkpoint of the state after the last of them is
+written to the older of two slots, with a digest, and flushed. A frame counts once a checkpoint covers it:
+readers show frames up to the newest slot whose digest holds, so frames written after it (a run killed
+outright, a disk that filled up) are never shown as data, and a resume redoes them. A checkpoint torn by
+a kill leaves the other slot. A killed writer also leaves the superblock's "open for writing" flags set:
+warpsim reads such a file as it is and ``--resume`` clears them; other tools open it with ``swmr=True``
+or after ``h5clear -s``.
 """
 
 from __future__ import annotations
 
 import contextlib
 import json
+import os
 import signal
+import stat
 import time
 from pathlib import Path
 
 import h5py
 import numpy as np
 
-from . import check_output_path
+from ..checkpoint import DIGEST_BYTES, Checkpoint
+from . import OutputWriteError, check_output_path, reason
+from .h5safe import LockedError, WriterLock, abandon, clear_status_flags, open_for_reading, writer_active
 
 EXTENSIONS = (".h5", ".hdf5")
 FORMAT = "warpsim-recording"
-FORMAT_VERSION = 1
-_TEXT_BYTES = 4096  # checkpoint texts (JSON) are stored zero-padded in fixed-size byte datasets (SWMR-safe)
-# the parts of :meth:`warpsim.runner.Simulation.checkpoint`, by how they are stored
-_CHECKPOINT_ARRAYS = ("q", "q_prev", "stick_rest", "nail_target", "wind")
-_CHECKPOINT_SCALARS = ("time", "steps")
-_CHECKPOINT_TEXTS = ("gusts", "controls")
+FORMAT_VERSION = 2
+SLOTS = ("slot0", "slot1")
+_CHECKSUM = {"fletcher32": True}
+_FRAME_DATASETS = (
+    "time",
+    "positions",
+    "diagnostics/worst_stretch",
+    "diagnostics/kinetic_energy",
+    "diagnostics/centre",
+    "diagnostics/altitude",
+    "diagnostics/airspeed",
+)
+_TOPOLOGY = (
+    "sticks",
+    "stick_rest",
+    "triangles",
+    "particle_mass",
+    "particle_object",
+    "particle_part",
+    "triangle_part",
+)
+_ATTRIBUTES = ("format_version", "descriptor", "dt", "steps_per_frame", "frame_interval")
 
 
 @contextlib.contextmanager
@@ -69,12 +99,25 @@ def signals_held():
 
 
 class RecordingError(ValueError):
-    """The file is not a warpsim recording, or cannot be continued."""
+    """The file is not a readable warpsim recording, is damaged, is being written, or cannot be continued."""
 
 
 def check_recording_path(path) -> Path:
-    """Check that ``path`` is an HDF5 file name in an existing directory (raises ``OutputPathError``)."""
+    """Check that ``path`` can be written as an HDF5 recording (raises ``OutputPathError``)."""
     return check_output_path(path, EXTENSIONS, "HDF5")
+
+
+def claim(path, create: bool) -> WriterLock:
+    """Take the writer's lock of the recording ``path`` (see :class:`warpsim.io.h5safe.WriterLock`).
+
+    Raises :class:`RecordingError` when another run is writing it or it cannot be opened for writing.
+    """
+    try:
+        return WriterLock(path, create)
+    except LockedError:
+        raise RecordingError(f"{path}: another warpsim run is writing this recording; wait for it to end") from None
+    except OSError as err:
+        raise RecordingError(f"{path}: cannot be opened for writing ({reason(err)})") from None
 
 
 def _names(sim) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray]:
@@ -121,94 +164,130 @@ class H5Recorder:
 
     Args:
         path: the ``.h5`` file to create (``resume=False``) or to continue (``resume=True``).
-        sim: the simulation being recorded.
+        sim: the simulation being recorded (restored from the recording's checkpoint when resuming).
         descriptor_text: the full descriptor as TOML (see :func:`warpsim.descriptor.to_toml`).
         scene: where the scene came from (a path or ``built-in NAME``), stored as an attribute.
         resume: open an existing recording and append after its checkpoint's frame.
+        lock: the path's :func:`claim`, when the caller took it already (a resume reads the recording under
+            it); taken here otherwise. Released when the recorder closes.
 
-    Use as a context manager, or call :meth:`close`; call :meth:`write` with each frame.
+    Raises :class:`RecordingError` when another run writes ``path``. Use as a context manager, or call
+    :meth:`close`; call :meth:`write` with each frame. A failed write (disk full) raises
+    :class:`warpsim.io.OutputWriteError` naming the last frame kept; the file stays readable and resumable.
     """
 
     sync_interval = 0.5  # [s] of wall time between checkpoints/flushes
 
-    def __init__(self, path, sim, descriptor_text: str = "", scene: str = "", resume: bool = False):
+    def __init__(self, path, sim, descriptor_text: str = "", scene: str = "", resume: bool = False, lock=None):
+        self.path = Path(path)
+        self.sim = sim
+        self.lock = lock if lock is not None else claim(self.path, create=not resume)
+        self.file = None
+        self.failed: OutputWriteError | None = None
+        try:
+            if resume:
+                self._open_existing()
+            else:
+                self._create(descriptor_text, scene)
+        except BaseException as err:
+            if self.file is not None:
+                with contextlib.suppress(Exception):
+                    self.file.close()
+            if not resume:
+                self.path.unlink(missing_ok=True)
+            self.lock.release()
+            if isinstance(err, OSError | RuntimeError):
+                raise OutputWriteError(f"{self.path}: cannot write the recording ({reason(err)})") from None
+            raise
+        self._datasets = {name: self.file[name] for name in _FRAME_DATASETS}
+        self._slots = [
+            {name: self.file[f"checkpoint/{slot}/{name}"] for name in self.file[f"checkpoint/{slot}"]} for slot in SLOTS
+        ]
+        self._unsaved: tuple[int, int, float] | None = None
+        self._last_sync = -float("inf")
+
+    def _open_existing(self) -> None:
+        clear_status_flags(self.path)  # a killed writer's flags; we hold the lock
+        self.file = h5py.File(self.path, "r+", libver="latest", locking=False)
+        frame, slot, _ = _newest_checkpoint(self.file, self.path)
+        if frame < 0:
+            raise RecordingError(f"{self.path}: the recording has no frame to resume from")
+        for name in _FRAME_DATASETS:
+            self.file[name].resize(frame + 1, axis=0)
+        self.frames = frame + 1
+        self.committed = (frame, float(self.file["time"][frame]))
+        self._next_slot = 1 - slot
+        self.file.swmr_mode = True
+
+    def _create(self, descriptor_text: str, scene: str) -> None:
         import warp as wp
 
         from .. import __version__
 
-        self.path = Path(path)
-        self.sim = sim
+        sim = self.sim
         model = sim.model
         n, objects = model.particle_count, len(model.objects)
-        if resume:
-            self.file = h5py.File(self.path, "r+", libver="latest")
-            last = int(self.file["checkpoint/frame"][0])
-            for name in _FRAME_DATASETS:
-                self.file[name].resize(last + 1, axis=0)
-            self.frames = last + 1
-            self.file.swmr_mode = True
-            self._cache()
-            return
-        self.file = h5py.File(self.path, "w", libver="latest")
-        f = self.file
-        try:
-            object_names, parts, particle_part, triangle_part, particle_object = _names(sim)
-            f.attrs.update(
-                {
-                    "format": FORMAT,
-                    "format_version": FORMAT_VERSION,
-                    "descriptor": descriptor_text,
-                    "scene": scene,
-                    "solver": json.dumps(sim.descriptor["solver"]),
-                    "warpsim_version": __version__,
-                    "warp_version": wp.config.version,
-                    "dt": sim.dt,
-                    "steps_per_frame": sim.steps_per_frame,
-                    "frame_interval": sim.steps_per_frame * sim.dt,
-                }
+        self.file = f = h5py.File(self.path, "w", libver="latest", locking=False)
+        object_names, parts, particle_part, triangle_part, particle_object = _names(sim)
+        f.attrs.update(
+            {
+                "format": FORMAT,
+                "format_version": FORMAT_VERSION,
+                "descriptor": descriptor_text,
+                "scene": scene,
+                "solver": json.dumps(sim.descriptor["solver"]),
+                "warpsim_version": __version__,
+                "warp_version": wp.config.version,
+                "dt": sim.dt,
+                "steps_per_frame": sim.steps_per_frame,
+                "frame_interval": sim.steps_per_frame * sim.dt,
+            }
+        )
+        top = f.create_group("topology")
+        top.attrs["objects"] = object_names
+        top.attrs["parts"] = parts
+        topology = {
+            "sticks": model.stick_particles_np,
+            "stick_rest": model.stick_rest.numpy(),
+            "triangles": model.tri_indices_np,
+            "particle_mass": model.particle_mass,
+            "particle_object": particle_object,
+            "particle_part": particle_part,
+            "triangle_part": triangle_part,
+        }
+        for name, data in topology.items():
+            data = np.asarray(data)
+            top.create_dataset(
+                name, data=data, chunks=data.shape if data.size else None, **(_CHECKSUM if data.size else {})
             )
-            top = f.create_group("topology")
-            top.attrs["objects"] = object_names
-            top.attrs["parts"] = parts
-            top["sticks"] = model.stick_particles_np
-            top["stick_rest"] = model.stick_rest.numpy()
-            top["triangles"] = model.tri_indices_np
-            top["particle_mass"] = model.particle_mass
-            top["particle_object"] = particle_object
-            top["particle_part"] = particle_part
-            top["triangle_part"] = triangle_part
-            gz = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
-            f.create_dataset("time", (0,), maxshape=(None,), dtype="f8", chunks=(256,))
-            f.create_dataset("positions", (0, n, 3), maxshape=(None, n, 3), dtype="f4", chunks=(1, n, 3), **gz)
-            d = f.create_group("diagnostics")
-            d.create_dataset("worst_stretch", (0,), maxshape=(None,), dtype="f4", chunks=(256,))
-            d.create_dataset("kinetic_energy", (0,), maxshape=(None,), dtype="f8", chunks=(256,))
-            shape3 = {"maxshape": (None, objects, 3), "chunks": (64, objects, 3)}
-            d.create_dataset("centre", (0, objects, 3), dtype="f4", **shape3)
-            d.create_dataset("altitude", (0, objects), maxshape=(None, objects), dtype="f4", chunks=(64, objects))
-            d.create_dataset("airspeed", (0, objects), maxshape=(None, objects), dtype="f4", chunks=(64, objects))
-            c = f.create_group("checkpoint")
-            c.create_dataset("frame", data=np.array([-1], dtype=np.int64))  # -1: no frame checkpointed yet
-            cp = sim.checkpoint()  # shapes and types of what later checkpoints write
-            for name in _CHECKPOINT_ARRAYS:
-                c.create_dataset(name, data=cp[name])
-            for name in _CHECKPOINT_SCALARS:
-                c.create_dataset(name, data=np.array([cp[name]]))
-            for name in _CHECKPOINT_TEXTS:
-                c.create_dataset(name, (_TEXT_BYTES,), dtype="u1")
-            self.frames = 0
-            f.swmr_mode = True
-            self._cache()
-        except BaseException:
-            self.file.close()
-            self.path.unlink(missing_ok=True)
-            raise
-
-    def _cache(self) -> None:
-        self._datasets = {name: self.file[name] for name in _FRAME_DATASETS}
-        self._checkpoint = {name: self.file[f"checkpoint/{name}"] for name in self.file["checkpoint"]}
-        self._unsaved: tuple[int, int] | None = None
-        self._last_sync = -float("inf")
+        gz = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+        f.create_dataset("time", (0,), maxshape=(None,), dtype="f8", chunks=(256,), **_CHECKSUM)
+        f.create_dataset("positions", (0, n, 3), maxshape=(None, n, 3), dtype="f4", chunks=(1, n, 3), **gz, **_CHECKSUM)
+        d = f.create_group("diagnostics")
+        d.create_dataset("worst_stretch", (0,), maxshape=(None,), dtype="f4", chunks=(256,), **_CHECKSUM)
+        d.create_dataset("kinetic_energy", (0,), maxshape=(None,), dtype="f8", chunks=(256,), **_CHECKSUM)
+        d.create_dataset(
+            "centre", (0, objects, 3), maxshape=(None, objects, 3), dtype="f4", chunks=(64, objects, 3), **_CHECKSUM
+        )
+        d.create_dataset(
+            "altitude", (0, objects), maxshape=(None, objects), dtype="f4", chunks=(64, objects), **_CHECKSUM
+        )
+        d.create_dataset(
+            "airspeed", (0, objects), maxshape=(None, objects), dtype="f4", chunks=(64, objects), **_CHECKSUM
+        )
+        c = f.create_group("checkpoint")
+        cp = sim.checkpoint()  # shapes and types of what later checkpoints write
+        c.attrs["control_names"] = list(cp.control_names)
+        for slot in SLOTS:
+            g = c.create_group(slot)
+            g.create_dataset("frame", data=np.array([-1], dtype=np.int64))  # -1: no frame checkpointed yet
+            g.create_dataset("digest", data=np.zeros(DIGEST_BYTES, dtype=np.uint8))
+            for name, data in cp.arrays().items():
+                g.create_dataset(name, data=data)
+        self.frames = 0
+        self.committed = (-1, float("nan"))
+        self._next_slot = 0
+        f.swmr_mode = True
 
     def write(self, frame) -> None:
         """Store one :class:`warpsim.runner.Frame` as row ``frame.index`` (the next row, or the last one again
@@ -216,13 +295,16 @@ class H5Recorder:
 
         The frame is flushed, and the simulation's state saved as the checkpoint, at most every
         ``sync_interval`` wall seconds and always by :meth:`close` (which the CLI reaches on Ctrl-C and
-        SIGTERM too); a frame written after the last checkpoint stays readable and is redone by a resume.
+        SIGTERM too); a frame written after the last checkpoint is not shown to readers and is redone by a
+        resume. Raises :class:`warpsim.io.OutputWriteError` when the file cannot be written (and after that).
         """
+        if self.failed is not None:
+            raise self.failed
         k = int(frame.index)
         if not self.frames - 1 <= k <= self.frames:
             raise ValueError(f"frame {k} does not follow the recording's last frame {self.frames - 1}")
         diag = object_diagnostics(self.sim, frame.positions, frame.velocities)
-        with signals_held():
+        with signals_held(), self._guard():
             d = self._datasets
             if k == self.frames:
                 for name in _FRAME_DATASETS:
@@ -235,36 +317,58 @@ class H5Recorder:
             d["diagnostics/altitude"][k] = diag["altitude"]
             d["diagnostics/airspeed"][k] = diag["airspeed"]
             self.frames = k + 1
-            self._unsaved = (k, self.sim.steps_taken)
+            self._unsaved = (k, self.sim.steps_taken, float(frame.time))
             now = time.monotonic()
             if now - self._last_sync >= self.sync_interval:
                 self._save_checkpoint()
                 self._last_sync = now
 
+    @contextlib.contextmanager
+    def _guard(self):
+        """Turn a failed HDF5 write into :class:`OutputWriteError`, leaving the file as the last sync left it."""
+        try:
+            yield
+        except (OSError, RuntimeError) as err:
+            abandon(self.file)
+            self.lock.release()
+            frame, t = self.committed
+            kept = f"frames 0-{frame} (t = {t:.3f} s)" if frame >= 0 else "no frame"
+            self.failed = OutputWriteError(
+                f"{self.path}: writing failed ({reason(err)}); the recording keeps {kept}"
+                + (f"; continue it with `warpsim run --resume {self.path}` once fixed" if frame >= 0 else "")
+            )
+            raise self.failed from None
+
     def _save_checkpoint(self) -> None:
-        """Write the simulation's current state as the checkpoint of the last written frame, and flush."""
+        """Flush the frames, then write the simulation's state as the checkpoint of the last written frame into
+        the older slot (with its digest), and flush again: a kill at any moment leaves one whole checkpoint."""
         if self._unsaved is None:
             return
-        k, steps = self._unsaved
-        if steps == self.sim.steps_taken:  # the simulation is still at that frame
-            cp = self.sim.checkpoint()
-            c = self._checkpoint
-            for name in _CHECKPOINT_ARRAYS:
-                c[name][...] = cp[name]
-            for name in _CHECKPOINT_SCALARS:
-                c[name][0] = cp[name]
-            for name in _CHECKPOINT_TEXTS:
-                c[name][...] = _pad(cp[name])
-            c["frame"][0] = k
+        k, steps, t = self._unsaved
         self._unsaved = None
         self.file.flush()
+        if steps != self.sim.steps_taken:  # the simulation has moved on since that frame
+            return
+        cp = self.sim.checkpoint()
+        slot = self._slots[self._next_slot]
+        for name, data in cp.arrays().items():
+            slot[name][...] = data
+        slot["frame"][0] = k
+        slot["digest"][...] = cp.digest(k)
+        self.file.flush()
+        self.committed = (k, t)
+        self._next_slot = 1 - self._next_slot
 
     def close(self) -> None:
-        """Save the checkpoint, flush and close the file (safe to call twice)."""
-        if self.file.id.valid:
+        """Save the checkpoint, flush and close the file, release the lock (safe to call twice).
+
+        Raises :class:`warpsim.io.OutputWriteError` when the last writes fail (the file keeps the last sync)."""
+        if self.file is not None and self.file.id.valid and self.failed is None:
             with signals_held():
-                self._save_checkpoint()
-                self.file.close()
+                with self._guard():
+                    self._save_checkpoint()
+                    self.file.close()
+        self.lock.release()
 
     def __enter__(self):
         return self
@@ -273,70 +377,158 @@ class H5Recorder:
         self.close()
 
 
-_FRAME_DATASETS = (
-    "time",
-    "positions",
-    "diagnostics/worst_stretch",
-    "diagnostics/kinetic_energy",
-    "diagnostics/centre",
-    "diagnostics/altitude",
-    "diagnostics/airspeed",
-)
+def _read_checkpoint(group, names: tuple[str, ...]) -> tuple[int, Checkpoint | None]:
+    """``(frame, checkpoint)`` of one slot; ``(-1, None)`` when it holds none or its digest does not match."""
+    frame = int(group["frame"][0])
+    if frame < 0:
+        return -1, None
+    fields = {name: group[name][()] for name in group if name not in ("frame", "digest")}
+    try:
+        cp = Checkpoint(**fields, control_names=names)
+    except TypeError:  # missing or unknown fields
+        return -1, None
+    if not np.array_equal(group["digest"][()], cp.digest(frame)):
+        return -1, None
+    return frame, cp
 
 
-def _pad(text: str) -> np.ndarray:
-    data = text.encode("utf-8")
-    if len(data) > _TEXT_BYTES:
-        raise ValueError(f"checkpoint text too long ({len(data)} bytes)")
-    out = np.zeros(_TEXT_BYTES, dtype=np.uint8)
-    out[: len(data)] = np.frombuffer(data, dtype=np.uint8)
-    return out
+def _newest_checkpoint(file, path) -> tuple[int, int, Checkpoint | None]:
+    """``(frame, slot index, checkpoint)`` of the newest intact checkpoint; frame -1 when there is none.
+
+    Raises :class:`RecordingError` when a slot claims a frame but none is intact (a damaged file)."""
+    group = file["checkpoint"]
+    names = tuple(str(n) for n in group.attrs["control_names"])
+    best = (-1, 0, None)
+    claimed = False
+    for k, slot in enumerate(SLOTS):
+        claimed |= int(group[slot]["frame"][0]) >= 0
+        frame, cp = _read_checkpoint(group[slot], names)
+        if frame > best[0]:
+            best = (frame, k, cp)
+    if claimed and best[2] is None:
+        raise RecordingError(f"{path}: the recording's checkpoints are damaged (their digests do not match)")
+    return best
 
 
-def _unpad(data: np.ndarray) -> str:
-    return bytes(np.asarray(data, dtype=np.uint8)).rstrip(b"\0").decode("utf-8")
+@contextlib.contextmanager
+def _reading(path):
+    """Turn what HDF5 and h5py raise on a damaged or foreign file into one-line :class:`RecordingError`."""
+    try:
+        yield
+    except RecordingError:
+        raise
+    except (OSError, RuntimeError, KeyError, ValueError, TypeError, IndexError, AttributeError) as err:
+        raise RecordingError(f"{path}: damaged or not a warpsim recording ({reason(err)})") from None
 
 
 class Recording:
     """Read a recording (also while another process is still writing it).
 
+    Only frames covered by an intact checkpoint are shown (see the module notes). Raises
+    :class:`RecordingError` with a one-line message for a missing, foreign, damaged or incomplete file,
+    within about a second (HDF5's metadata read retries are limited when no writer is running).
+
     Attributes:
         path: the file. descriptor_text: the scene descriptor (TOML). scene: where it came from.
         time: ``[F]`` frame times [s]. frame_count: ``F``. frame_interval: time between frames [s].
+        checkpoint_frame: the frame the newest intact checkpoint follows (-1: none). live: a writer is running.
+
+    ``owner``: the caller holds the recording's writer lock (:func:`claim`, as a resume does), so no one else
+    writes it.
     """
 
-    def __init__(self, path):
+    def __init__(self, path, owner: bool = False):
         self.path = Path(path)
-        if not self.path.is_file():
-            raise RecordingError(f"{path}: no such file")
         try:
-            self.file = h5py.File(self.path, "r", libver="latest", swmr=True)
+            info = os.stat(self.path)
         except OSError:
-            raise RecordingError(f"{path}: not an HDF5 file (expected a warpsim recording)") from None
-        if self.file.attrs.get("format") != FORMAT:
+            raise RecordingError(f"{path}: no such file") from None
+        if not stat.S_ISREG(info.st_mode):
+            raise RecordingError(f"{path}: not a regular file")
+        self.live = not owner and writer_active(self.path)
+        with _reading(path):
+            try:
+                self.file = open_for_reading(self.path, self.live)
+            except OSError:
+                if _is_hdf5(self.path):
+                    raise
+                raise RecordingError(f"{path}: not an HDF5 file (expected a warpsim recording)") from None
+        try:
+            with _reading(path):
+                self._check()
+        except BaseException:
             self.file.close()
+            raise
+
+    def _check(self) -> None:
+        f, path = self.file, self.path
+        if f.attrs.get("format") != FORMAT:
             raise RecordingError(f"{path}: an HDF5 file but not a warpsim recording (no format = {FORMAT!r})")
-        self.descriptor_text = str(self.file.attrs["descriptor"])
-        self.scene = str(self.file.attrs.get("scene", ""))
-        self.frame_interval = float(self.file.attrs["frame_interval"])
-        self.time = self.file["time"][:]
-        self.frame_count = len(self.time)
+        missing = [a for a in _ATTRIBUTES if a not in f.attrs]
+        missing += [n for n in (*_FRAME_DATASETS, *(f"topology/{t}" for t in _TOPOLOGY), "checkpoint") if n not in f]
+        if "format_version" in f.attrs and int(f.attrs["format_version"]) != FORMAT_VERSION:
+            raise RecordingError(
+                f"{path}: recording format version {f.attrs['format_version']}; this warpsim reads version "
+                f"{FORMAT_VERSION} (record it again)"
+            )
+        if missing:
+            raise RecordingError(f"{path}: incomplete warpsim recording (missing {', '.join(missing[:4])})")
+        self.descriptor_text = str(f.attrs["descriptor"])
+        self.scene = str(f.attrs.get("scene", ""))
+        self.frame_interval = float(f.attrs["frame_interval"])
+        if not (np.isfinite(self.frame_interval) and self.frame_interval > 0):
+            raise RecordingError(f"{path}: frame_interval {self.frame_interval} is not a positive time")
+        n = f["topology/particle_mass"].shape[0]
+        positions = f["positions"]
+        if positions.ndim != 3 or positions.shape[1:] != (n, 3):
+            raise RecordingError(f"{path}: positions are {positions.shape}, expected (frames, {n}, 3)")
+        self.checkpoint_frame, self._slot, self._checkpoint = _newest_checkpoint(f, path)
+        if self._checkpoint is not None and self._checkpoint.q.shape != (n, 3):
+            raise RecordingError(f"{path}: the checkpoint holds {self._checkpoint.q.shape[0]} particles, not {n}")
+        written = min(f[name].shape[0] for name in _FRAME_DATASETS)
+        self.frame_count = min(written, self.checkpoint_frame + 1)
+        self.time = f["time"][: self.frame_count]
+        if not np.isfinite(self.time).all():
+            raise RecordingError(f"{path}: frame times are not finite")
+
+    @property
+    def particle_count(self) -> int:
+        """Particles per frame."""
+        return int(self.file["positions"].shape[1])
 
     def positions(self, frame: int | slice = slice(None)) -> np.ndarray:
-        """Positions [m] of one frame ``[N, 3]`` or a slice of frames ``[F, N, 3]``."""
-        return self.file["positions"][frame]
+        """Positions [m] of one frame ``[N, 3]`` (negative: from the end) or a slice of frames ``[F, N, 3]``."""
+        with _reading(self.path):
+            if isinstance(frame, slice):
+                start, stop, step = frame.indices(self.frame_count)
+                if step < 0:
+                    ids = list(range(start, stop, step))[::-1]  # h5py reads increasing indices only
+                    return self.file["positions"][ids][::-1] if ids else self.file["positions"][0:0]
+                return self.file["positions"][start:stop:step]
+            k = int(frame)
+            if not -self.frame_count <= k < self.frame_count:
+                raise RecordingError(f"{self.path}: no frame {k}; the recording has frames 0..{self.frame_count - 1}")
+            return self.file["positions"][k % self.frame_count]
 
-    def checkpoint(self) -> dict:
-        """The saved state after the last checkpointed frame (see :meth:`warpsim.runner.Simulation.restore`)."""
-        c = self.file["checkpoint"]
-        frame = int(c["frame"][0])
-        if frame < 0:
+    def checkpoint(self) -> Checkpoint:
+        """The saved state after frame :attr:`checkpoint_frame` (see :meth:`warpsim.runner.Simulation.restore`)."""
+        if self._checkpoint is None:
             raise RecordingError(f"{self.path}: the recording has no frame to resume from")
-        out = {"frame": frame}
-        out.update({name: c[name][:] for name in _CHECKPOINT_ARRAYS})
-        out.update({name: c[name][0].item() for name in _CHECKPOINT_SCALARS})
-        out.update({name: _unpad(c[name][:]) for name in _CHECKPOINT_TEXTS})
-        return out
+        return self._checkpoint
+
+    def build_model(self, device: str = "cpu"):
+        """The recorded scene's :class:`warpsim.Model`, checked against the recorded particle count."""
+        from ..descriptor import load_text
+        from ..runner import build_model
+
+        descriptor = load_text(self.descriptor_text, f"{self.path}: descriptor")
+        model = build_model(descriptor, device, str(self.path))
+        if model.particle_count != self.particle_count:
+            raise RecordingError(
+                f"{self.path}: its descriptor builds {model.particle_count} particles, its frames hold "
+                f"{self.particle_count}"
+            )
+        return model
 
     def close(self) -> None:
         """Close the file."""
@@ -347,3 +539,15 @@ class Recording:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def _is_hdf5(path) -> bool:
+    """True when ``path`` starts with the HDF5 signature (at 0, 512, 1024, ... as HDF5 looks for it)."""
+    from .h5safe import SIGNATURE
+
+    with open(path, "rb") as f:
+        for offset in (0, 512, 1024, 2048, 4096):
+            f.seek(offset)
+            if f.read(8) == SIGNATURE:
+                return True
+    return False

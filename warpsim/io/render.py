@@ -13,13 +13,12 @@ Files are written to a temporary name beside the target and renamed over it: com
 from __future__ import annotations
 
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from . import check_output_path
+from . import OutputWriteError, check_output_path, reason, remove_stale_temporaries, temporary_path
 from .usd import COLOURS, SPHERE_PARTS
 
 EXTENSIONS = (".png", ".gif")
@@ -176,17 +175,23 @@ class Scene:
 
 
 def _atomic_save(path: Path, save) -> Path:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
+    """Call ``save(temporary name)`` and rename the result over ``path``; a failure (full disk) leaves ``path``
+    as it was and raises :class:`warpsim.io.OutputWriteError`."""
+    remove_stale_temporaries(path)
+    tmp = temporary_path(path)
     try:
-        save(tmp)
+        try:
+            save(tmp)
+            with open(tmp, "rb+") as f:
+                os.fsync(f.fileno())
+        except OSError as err:
+            raise OutputWriteError(f"{path}: could not write the picture ({reason(err)})") from None
         mask = os.umask(0)
         os.umask(mask)
         os.chmod(tmp, 0o666 & ~mask)
         os.replace(tmp, path)
     finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+        tmp.unlink(missing_ok=True)
     return path
 
 
@@ -204,7 +209,6 @@ def render_recording(
     at the simulated speed). Returns the path written.
     """
     from ..descriptor import load_text
-    from ..runner import build_model
     from .hdf5 import Recording, RecordingError
 
     output = check_picture_path(output)
@@ -214,7 +218,7 @@ def render_recording(
         if count == 0:
             raise RecordingError(f"{recording_path}: the recording has no frames")
         descriptor = load_text(recording.descriptor_text, f"{recording_path}: descriptor")
-        scene = Scene(build_model(descriptor, "cpu", str(recording_path)))
+        scene = Scene(recording.build_model())
         name = descriptor["scene"]["object"]
         if output.suffix.lower() == ".png":
             k = count - 1 if frame is None else frame

@@ -13,20 +13,25 @@ default prim. ``/World/Terrain`` is a static mesh of the heightfield. Each objec
 Virtual particles (the frame's helpers) are not drawn. Display colours tell the parts apart.
 
 The stage is built in memory and exported when the run ends (also on Ctrl-C/SIGTERM): first to a
-temporary file beside the target, then renamed over it, so a viewer never sees a half-written stage and
-a run killed outright leaves no file at all. ``.usdz`` packages a ``.usdc`` layer.
+temporary file beside the target (``.NAME.PID.tmp.EXT``), which is synced, opened again and checked,
+then renamed over the target, so a viewer never sees a half-written stage, a failed export (a full disk)
+leaves the target as it was, and a run killed outright leaves no file under the target's name (its
+temporary is removed by the next export there). ``.usdz`` packages a ``.usdc`` layer.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
 import tempfile
+import zipfile
 from pathlib import Path
 
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdUtils, Vt
 
-from . import check_output_path
+from . import OutputWriteError, check_output_path, reason, remove_stale_temporaries, temporary_path
 
 EXTENSIONS = (".usda", ".usdc", ".usdz")
 
@@ -181,7 +186,11 @@ class UsdWriter:
         self.last = index if self.last is None else max(self.last, index)
 
     def close(self) -> Path | None:
-        """Export the stage atomically to :attr:`path`; returns it (None when no frame was written)."""
+        """Export the stage atomically to :attr:`path`; returns it (None when no frame was written).
+
+        Raises :class:`warpsim.io.OutputWriteError` (one line) when the stage cannot be written or does not
+        open again; the target is then left as it was.
+        """
         if self.closed:
             return self.path
         self.closed = True
@@ -189,41 +198,90 @@ class UsdWriter:
             return None
         self.stage.SetStartTimeCode(self.first)
         self.stage.SetEndTimeCode(self.last)
-        suffix = self.path.suffix.lower()
-        directory = self.path.resolve().parent
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{self.path.stem}.", suffix=suffix, dir=directory)
-        os.close(fd)
-        tmp = Path(tmp_name)
+        remove_stale_temporaries(self.path)
+        tmp = temporary_path(self.path)
+        scratch = temporary_path(self.path, ".usdc")  # the layer a .usdz packages
         umask = os.umask(0)
         os.umask(umask)
         try:
-            if suffix == ".usdz":
-                with tempfile.TemporaryDirectory() as scratch:
-                    layer = Path(scratch) / f"{self.path.stem}.usdc"
-                    self.stage.GetRootLayer().Export(str(layer))
-                    tmp.unlink()
-                    if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(layer)), str(tmp)):
-                        raise OSError(f"could not package {self.path}")
-            elif not self.stage.GetRootLayer().Export(str(tmp)):
-                raise OSError(f"could not write {self.path}")
-            os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; the stage is an ordinary output
+            with _stderr_captured() as captured:
+                try:
+                    self._export(tmp, scratch)
+                    _check_stage(tmp)
+                except Exception as err:  # noqa: BLE001 - USD reports write errors as several exception types
+                    detail = captured() or reason(err)
+                    raise OutputWriteError(f"{self.path}: could not write the stage ({detail})") from None
+            os.chmod(tmp, 0o666 & ~umask)  # an ordinary output file
             os.replace(tmp, self.path)
         finally:
             tmp.unlink(missing_ok=True)
+            scratch.unlink(missing_ok=True)
         return self.path
+
+    def _export(self, tmp: Path, scratch: Path) -> None:
+        """Write the stage to ``tmp`` (packaging ``scratch`` for .usdz) and sync it to disk."""
+        if self.path.suffix.lower() == ".usdz":
+            if not self.stage.GetRootLayer().Export(str(scratch)):
+                raise OSError("the layer export failed")
+            if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(scratch)), str(tmp)):
+                raise OSError("packaging failed")
+        elif not self.stage.GetRootLayer().Export(str(tmp)):
+            raise OSError("the export failed")
+        with open(tmp, "rb+") as f:
+            os.fsync(f.fileno())  # a full disk can show up only here (delayed allocation)
+
+
+def _check_stage(path: Path) -> None:
+    """Raise ``OSError`` unless the stage file at ``path`` is whole: a .usdz's members pass their CRC check, and
+    the stage opens with its ``/World`` prim."""
+    if path.suffix.lower() == ".usdz":
+        with zipfile.ZipFile(path) as package:
+            bad = package.testzip()
+            if bad is not None:
+                raise OSError(f"member {bad} of the package is damaged")
+    stage = Usd.Stage.Open(str(path), Usd.Stage.LoadNone)
+    if stage is None or not stage.GetPrimAtPath("/World"):
+        raise OSError("the written stage does not open")
+
+
+@contextlib.contextmanager
+def _stderr_captured():
+    """Send what USD prints to the process's stderr (fd 2) to a temporary file inside the block; yields a function
+    returning its first line (USD can print thousands of lines about one failed write)."""
+    sys.stderr.flush()
+    try:
+        saved = os.dup(2)
+    except OSError:  # no stderr at all
+        yield lambda: ""
+        return
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 2)
+
+        def first_line() -> str:
+            try:
+                sink.seek(0)
+                lines = sink.read(4096).decode("utf-8", "replace").strip().splitlines()
+            except OSError:
+                return ""
+            return lines[0].strip()[:200] if lines else ""
+
+        try:
+            yield first_line
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
 
 
 def recording_to_stage(recording_path, output) -> Path:
     """Write the frames of the HDF5 recording at ``recording_path`` as the stage ``output`` (same layout and
-    time codes as a direct export); returns its path."""
-    from ..descriptor import load_text
-    from ..runner import build_model
-    from .hdf5 import Recording
+    time codes as a direct export); returns its path. Raises ``RecordingError`` for a recording without frames."""
+    from .hdf5 import Recording, RecordingError
 
     check_stage_path(output)
     with Recording(recording_path) as recording:
-        descriptor = load_text(recording.descriptor_text, f"{recording_path}: descriptor")
-        writer = UsdWriter(output, build_model(descriptor, "cpu", str(recording_path)), recording.frame_interval)
+        if recording.frame_count == 0:
+            raise RecordingError(f"{recording_path}: the recording has no frames")
+        writer = UsdWriter(output, recording.build_model(), recording.frame_interval)
         for k in range(recording.frame_count):
             writer.write(float(recording.time[k]), recording.positions(k))
         return writer.close()

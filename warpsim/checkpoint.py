@@ -1,0 +1,139 @@
+"""The state that decides a run's future, as typed arrays: what a recording stores to be continued exactly.
+
+A :class:`Checkpoint` holds the particles, the control arrays, the gust processes of every world and the
+controls in force, each as a fixed-shape NumPy array (sizes known when the scene is built), so that a
+recording can reserve its place once and overwrite it in place, and a reader can check every field's shape
+and type and a digest of the whole before trusting it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+
+import numpy as np
+
+from .controls import UNIT_CONTROLS, VECTOR_CONTROLS
+
+_MASK64 = (1 << 64) - 1
+DIGEST_BYTES = 32  # sha256
+
+
+@dataclasses.dataclass
+class Checkpoint:
+    """Everything needed to continue a run bit for bit (``N`` particles, ``M`` sticks, ``W`` worlds,
+    ``C`` controls the scene accepts, named by ``control_names``).
+
+    Attributes:
+        q: ``[N, 3]`` float32 positions [m].
+        q_prev: ``[N, 3]`` float32 positions one step earlier [m] (Verlet's implicit velocity).
+        time: ``[1]`` float64 simulated time [s].
+        steps: ``[1]`` int64 solver steps taken since the scene started.
+        stick_rest: ``[M]`` float32 current rest lengths [m] (the pilot's control sticks change).
+        nail_target: ``[N, 3]`` float32 where each nailed particle is held [m] (the kite's anchor moves).
+        wind: ``[W, 3]`` float32 current wind of each world [m/s].
+        gust_active: ``[W]`` uint8, 1 where the world has gusts.
+        gust_g: ``[W, 3]`` float64 the gust processes' current values (dimensionless).
+        gust_mean: ``[W, 3]`` float64 the mean wind the gusts blow around [m/s].
+        gust_rng: ``[W, 6]`` uint64 PCG64 states: state (high, low 64 bits), increment (high, low),
+            ``has_uint32``, ``uinteger``.
+        control_set: ``[C]`` uint8, 1 where the control has been set (is in force).
+        control_value: ``[C, 3]`` float64 value in force (scalars in column 0; NaN padding).
+        scheduled_set: ``[C]`` uint8, 1 where the schedule has set the control.
+        scheduled_value: ``[C, 3]`` float64 the schedule's last value (so that held values are not set again).
+        control_names: the ``C`` control names (not an array; fixed by the scene).
+    """
+
+    q: np.ndarray
+    q_prev: np.ndarray
+    time: np.ndarray
+    steps: np.ndarray
+    stick_rest: np.ndarray
+    nail_target: np.ndarray
+    wind: np.ndarray
+    gust_active: np.ndarray
+    gust_g: np.ndarray
+    gust_mean: np.ndarray
+    gust_rng: np.ndarray
+    control_set: np.ndarray
+    control_value: np.ndarray
+    scheduled_set: np.ndarray
+    scheduled_value: np.ndarray
+    control_names: tuple[str, ...] = ()
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The array fields by name, in a fixed order (what a recording stores)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "control_names"}
+
+    def digest(self, frame: int) -> np.ndarray:
+        """sha256 of ``frame``, the control names and every array's dtype, shape and bytes: ``[32]`` uint8."""
+        h = hashlib.sha256()
+        h.update(np.int64(frame).tobytes())
+        h.update("\0".join(self.control_names).encode())
+        for name, a in self.arrays().items():
+            a = np.ascontiguousarray(a)
+            h.update(f"{name}:{a.dtype.str}:{a.shape}".encode())
+            h.update(a.tobytes())
+        return np.frombuffer(h.digest(), dtype=np.uint8).copy()
+
+    def check_like(self, other: Checkpoint) -> None:
+        """Raise ``ValueError`` naming the first field whose shape or dtype differs from ``other``'s."""
+        if tuple(self.control_names) != tuple(other.control_names):
+            raise ValueError(f"controls {list(self.control_names)} differ from the scene's {list(other.control_names)}")
+        for name, a in self.arrays().items():
+            b = getattr(other, name)
+            if a.shape != b.shape or a.dtype != b.dtype:
+                raise ValueError(
+                    f"checkpoint field {name} is {a.dtype}{list(a.shape)}, expected {b.dtype}{list(b.shape)}"
+                )
+        if not (np.isfinite(self.q).all() and np.isfinite(self.q_prev).all() and np.isfinite(self.time).all()):
+            raise ValueError("checkpoint positions or time are not finite")
+        if self.steps[0] < 0:
+            raise ValueError(f"checkpoint step count {self.steps[0]} is negative")
+
+
+def pack_rng(state: dict) -> np.ndarray:
+    """A PCG64 ``bit_generator.state`` dict as ``[6]`` uint64 (see :attr:`Checkpoint.gust_rng`)."""
+    if state.get("bit_generator") != "PCG64":
+        raise ValueError(f"gusts use {state.get('bit_generator')!r}; checkpoints store PCG64 states")
+    s, inc = int(state["state"]["state"]), int(state["state"]["inc"])
+    return np.array(
+        [s >> 64, s & _MASK64, inc >> 64, inc & _MASK64, int(state["has_uint32"]), int(state["uinteger"])],
+        dtype=np.uint64,
+    )
+
+
+def unpack_rng(packed: np.ndarray) -> dict:
+    """The ``bit_generator.state`` dict of a :func:`pack_rng` array."""
+    v = [int(x) for x in packed]
+    return {
+        "bit_generator": "PCG64",
+        "state": {"state": (v[0] << 64) | v[1], "inc": (v[2] << 64) | v[3]},
+        "has_uint32": v[4],
+        "uinteger": v[5],
+    }
+
+
+def pack_controls(names: tuple[str, ...], values: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Controls by name (floats, or tuples for vectors) as ``([C] set flags, [C, 3] values)``."""
+    flags = np.zeros(len(names), dtype=np.uint8)
+    table = np.full((len(names), 3), np.nan, dtype=np.float64)
+    for k, name in enumerate(names):
+        if name in values:
+            flags[k] = 1
+            v = np.atleast_1d(np.asarray(values[name], dtype=np.float64))
+            table[k, : len(v)] = v
+    return flags, table
+
+
+def unpack_controls(names: tuple[str, ...], flags: np.ndarray, table: np.ndarray) -> dict:
+    """The controls dict of a :func:`pack_controls` pair (floats for unit controls, tuples for vectors)."""
+    out = {}
+    for k, name in enumerate(names):
+        if not flags[k]:
+            continue
+        if name in UNIT_CONTROLS:
+            out[name] = float(table[k, 0])
+        else:
+            out[name] = tuple(float(v) for v in table[k, : VECTOR_CONTROLS[name]])
+    return out

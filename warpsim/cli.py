@@ -330,15 +330,17 @@ def _checked_output(check, value: str | None, flag: str) -> Path | None:
 
 
 class _StopRequests:
-    """SIGINT (Ctrl-C) and SIGTERM ask a run to stop after the current frame; a second one stops at once, except
-    once the outputs are being finished (:meth:`finishing`): then they are only noted, so that a stage being
-    exported and a recording being closed are always completed."""
+    """SIGINT (Ctrl-C) and SIGTERM ask a run to stop after the current frame, then the outputs are finished.
+
+    Further signals change nothing: raising from a signal handler can land anywhere (inside a clean-up callback,
+    inside the stage export) and lose what was being written; a frame takes well under a second, and SIGKILL
+    still ends a run at once (the recording keeps its last checkpoint).
+    """
 
     def __init__(self):
         import signal
 
         self.requested = False
-        self.finishing_outputs = False
         self.previous = {}
         for sig in (signal.SIGINT, signal.SIGTERM):
             try:
@@ -347,13 +349,7 @@ class _StopRequests:
                 pass
 
     def _handle(self, signum, frame):
-        if self.requested and not self.finishing_outputs:
-            raise KeyboardInterrupt
         self.requested = True
-
-    def finishing(self) -> None:
-        """From now on signals do not interrupt (the outputs are being written)."""
-        self.finishing_outputs = True
 
     def __call__(self) -> bool:
         return self.requested
@@ -494,7 +490,6 @@ def _run(args, device: str, usd_path: Path | None, h5_path: Path | None, lock) -
         except BlowUpError as err:
             blowup, summary = err, err.summary
     finally:
-        stop.finishing()
         for output in (recorder, usd):
             if output is not None:
                 try:

@@ -26,7 +26,7 @@ def reason(err: BaseException) -> str:
     code = getattr(err, "errno", None)
     if isinstance(code, int) and code > 0:
         return os.strerror(code)
-    text = str(err).strip().splitlines()
+    text = str(err.args[0] if isinstance(err, KeyError) and err.args else err).strip().splitlines()
     return text[0][:200] if text else type(err).__name__
 
 

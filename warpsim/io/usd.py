@@ -22,6 +22,7 @@ temporary is removed by the next export there). ``.usdz`` packages a ``.usdc`` l
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import sys
 import tempfile
@@ -31,7 +32,7 @@ from pathlib import Path
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdUtils, Vt
 
-from . import OutputWriteError, check_output_path, reason, remove_stale_temporaries, temporary_path
+from . import OutputWriteError, check_output_path, remove_stale_temporaries, temporary_path
 
 EXTENSIONS = (".usda", ".usdc", ".usdz")
 
@@ -209,8 +210,10 @@ class UsdWriter:
                     self._export(tmp, scratch)
                     _check_stage(tmp)
                 except Exception as err:  # noqa: BLE001 - USD reports write errors as several exception types
-                    detail = captured() or reason(err)
-                    raise OutputWriteError(f"{self.path}: could not write the stage ({detail})") from None
+                    detail = _cause(f"{captured()}\n{err}")
+                    raise OutputWriteError(
+                        f"{self.path}: could not write the stage ({detail}); nothing was written under that name"
+                    ) from None
             os.chmod(tmp, 0o666 & ~umask)  # an ordinary output file
             os.replace(tmp, self.path)
         finally:
@@ -244,10 +247,25 @@ def _check_stage(path: Path) -> None:
         raise OSError("the written stage does not open")
 
 
+_ERRNO_TEXTS = tuple(
+    os.strerror(code) for code in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EROFS, errno.EACCES)
+)
+
+
+def _cause(text: str) -> str:
+    """The cause in a USD error text: a system error message when one is named (without USD's source file and
+    line), else its first line (at most 200 characters)."""
+    for cause in _ERRNO_TEXTS:
+        if cause in text:
+            return cause
+    lines = text.strip().splitlines()
+    return lines[0].strip()[:200] if lines else "unknown error"
+
+
 @contextlib.contextmanager
 def _stderr_captured():
     """Send what USD prints to the process's stderr (fd 2) to a temporary file inside the block; yields a function
-    returning its first line (USD can print thousands of lines about one failed write)."""
+    returning the first 64 KiB of it (USD can print thousands of lines about one failed write)."""
     sys.stderr.flush()
     try:
         saved = os.dup(2)
@@ -257,16 +275,16 @@ def _stderr_captured():
     with tempfile.TemporaryFile() as sink:
         os.dup2(sink.fileno(), 2)
 
-        def first_line() -> str:
+        def printed() -> str:
             try:
                 sink.seek(0)
-                lines = sink.read(4096).decode("utf-8", "replace").strip().splitlines()
+                text = sink.read(65536).decode("utf-8", "replace")
             except OSError:
                 return ""
-            return lines[0].strip()[:200] if lines else ""
+            return text
 
         try:
-            yield first_line
+            yield printed
         finally:
             os.dup2(saved, 2)
             os.close(saved)

@@ -256,3 +256,113 @@ def test_object_builders_take_edge_values(override):
         event("built and ran")
     except BlowUpError:
         event("built, blew up")
+
+
+# Recordings as hostile input: flipped bytes, cuts, foreign HDF5, missing or wrong attributes and datasets.
+_PRISTINE: dict[str, bytes] = {}
+
+
+def _pristine_recording() -> bytes:
+    """A short kite recording (made once per test session)."""
+    if not _PRISTINE:
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp) / "rec.h5"
+            assert main(["run", "kite", "--seconds", "0.3", "--quiet", "--h5", str(path)]) == 0
+            _PRISTINE["rec"] = path.read_bytes()
+    return _PRISTINE["rec"]
+
+
+ODD_VALUES = st.sampled_from([-1, 0, 2, 99, 1e300, math.nan, "x", "", b"\xff", [1, 2]])
+
+
+@st.composite
+def hostile_recordings(draw) -> tuple[str, object]:
+    """``(kind, detail)``: how to spoil the pristine recording (see ``_spoil``)."""
+    kind = draw(st.sampled_from(["flip", "flip", "cut", "drop", "attr", "foreign", "reshape"]))
+    if kind == "flip":
+        return kind, draw(st.lists(st.tuples(st.integers(0, 10**7), st.integers(1, 255)), min_size=1, max_size=4))
+    if kind == "cut":
+        return kind, draw(st.floats(0.0, 0.999))
+    if kind == "drop":
+        names = [
+            "time",
+            "positions",
+            "diagnostics",
+            "topology/sticks",
+            "topology/particle_mass",
+            "checkpoint",
+            "checkpoint/slot0",
+            "checkpoint/slot1/q",
+            "checkpoint/slot0/digest",
+        ]
+        return kind, draw(st.sampled_from(names + ["@format", "@descriptor", "@frame_interval", "@format_version"]))
+    if kind == "attr":
+        name = draw(
+            st.sampled_from(["format", "format_version", "descriptor", "frame_interval", "dt", "steps_per_frame"])
+        )
+        return kind, (name, draw(ODD_VALUES))
+    if kind == "reshape":
+        return kind, draw(st.sampled_from(["positions", "time", "topology/particle_mass", "checkpoint/slot0/q"]))
+    return kind, draw(st.dictionaries(st.text("abc", min_size=1, max_size=3), st.integers(-1000, 1000), max_size=3))
+
+
+def _spoil(path: Path, kind: str, detail) -> None:
+    import h5py
+    import numpy as np
+
+    data = bytearray(_pristine_recording())
+    if kind == "flip":
+        for offset, mask in detail:
+            data[offset % len(data)] ^= mask
+    elif kind == "cut":
+        data = data[: int(len(data) * detail)]
+    path.write_bytes(bytes(data))
+    if kind in ("drop", "attr", "reshape"):
+        with h5py.File(path, "r+") as f:
+            if kind == "drop" and detail.startswith("@"):
+                del f.attrs[detail[1:]]
+            elif kind == "drop":
+                del f[detail]
+            elif kind == "attr":
+                name, value = detail
+                f.attrs[name] = np.void(value) if isinstance(value, bytes) else value
+            else:
+                old = f[detail][()]
+                del f[detail]
+                f[detail] = np.zeros(old.shape[:-1] + (old.shape[-1] + 1,) if old.ndim else (2,), old.dtype)
+    elif kind == "foreign":
+        with h5py.File(path, "w") as f:
+            for key, value in detail.items():
+                f[key] = value
+
+
+@settings(max_examples=int(os.environ.get("WARPSIM_FUZZ_EXAMPLES", "60")), deadline=None)
+@given(hostile_recordings(), st.sampled_from(["convert", "render", "resume"]))
+def test_hostile_recordings_are_refused_clearly(spoil, command):
+    """Whatever a recording holds, reading it ends in exit 0, or 2 with one line, within seconds (a watchdog
+    ends the test run with a stack dump if HDF5 hangs)."""
+    import faulthandler
+
+    kind, detail = spoil
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "rec.h5"
+        _spoil(path, kind, detail)
+        argv = {
+            "convert": ["convert", str(path), str(Path(tmp) / "out.usda")],
+            "render": ["render", str(path), str(Path(tmp) / "out.png")],
+            "resume": ["run", "--resume", str(path), "--seconds", "0.06", "--quiet"],
+        }[command]
+        out, err = io.StringIO(), io.StringIO()
+        faulthandler.dump_traceback_later(120, exit=True)
+        try:
+            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+                code = main(argv)
+        finally:
+            faulthandler.cancel_dump_traceback_later()
+        event(f"{kind}: exit {code}")
+        errors = [line for line in err.getvalue().splitlines() if line.strip()]
+        assert code in (0, 2), (spoil, command, code, errors)
+        if code == 2:
+            assert len(errors) == 1 and "error:" in errors[0], (spoil, errors)
+        else:
+            assert errors == [], (spoil, errors)

@@ -132,18 +132,36 @@ def _read_attempts_setter():
     return _LIBRARY[0]
 
 
-def open_for_reading(path, live: bool) -> h5py.File:
-    """Open ``path`` read-only for SWMR reading, HDF5 locking off; ``live`` (a writer is running) allows
-    HDF5's usual metadata read retries, otherwise one attempt, so that a corrupted file fails at once."""
+def _access(attempts: int):
+    """File access properties: latest format, strong close, HDF5 locking off, ``attempts`` metadata reads."""
     fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
     fapl.set_fclose_degree(h5py.h5f.CLOSE_STRONG)
     fapl.set_libver_bounds(h5py.h5f.LIBVER_LATEST, h5py.h5f.LIBVER_LATEST)
     fapl.set_file_locking(False, True)
     lib = _read_attempts_setter()
     if lib is not None:
-        lib.H5Pset_metadata_read_attempts(fapl.id, _READ_ATTEMPTS_LIVE if live else 1)
-    fid = h5py.h5f.open(os.fsencode(path), h5py.h5f.ACC_RDONLY | h5py.h5f.ACC_SWMR_READ, fapl=fapl)
-    return h5py.File(fid)
+        lib.H5Pset_metadata_read_attempts(fapl.id, attempts)
+    return fapl
+
+
+def open_for_reading(path, live: bool) -> h5py.File:
+    """Open ``path`` read-only for SWMR reading, HDF5 locking off; ``live`` (a writer is running) allows
+    HDF5's usual metadata read retries, otherwise one attempt, so that a corrupted file fails at once."""
+    fapl = _access(_READ_ATTEMPTS_LIVE if live else 1)
+    return h5py.File(h5py.h5f.open(os.fsencode(path), h5py.h5f.ACC_RDONLY | h5py.h5f.ACC_SWMR_READ, fapl=fapl))
+
+
+def open_for_writing(path, create: bool = False, swmr: bool = True) -> h5py.File:
+    """Create (truncating) or open ``path`` for writing, HDF5 locking off (the caller holds a :class:`WriterLock`)
+    and one metadata read attempt. ``swmr``: open straight into SWMR write mode (not with ``create``). HDF5
+    honours the attempts only for a file opened in SWMR mode; one switched to it later (``swmr_mode = True``)
+    retries a damaged block for minutes, so writers set their file up, close it and open it again this way."""
+    fapl = _access(1)
+    name = os.fsencode(path)
+    if create:
+        return h5py.File(h5py.h5f.create(name, h5py.h5f.ACC_TRUNC, fapl=fapl))
+    flags = h5py.h5f.ACC_RDWR | (h5py.h5f.ACC_SWMR_WRITE if swmr else 0)
+    return h5py.File(h5py.h5f.open(name, flags, fapl=fapl))
 
 
 def _rot(x: int, k: int) -> int:

@@ -50,12 +50,19 @@ import stat
 import time
 from pathlib import Path
 
-import h5py
 import numpy as np
 
 from ..checkpoint import DIGEST_BYTES, Checkpoint
 from . import OutputWriteError, check_output_path, reason
-from .h5safe import LockedError, WriterLock, abandon, clear_status_flags, open_for_reading, writer_active
+from .h5safe import (
+    LockedError,
+    WriterLock,
+    abandon,
+    clear_status_flags,
+    open_for_reading,
+    open_for_writing,
+    writer_active,
+)
 
 EXTENSIONS = (".h5", ".hdf5")
 FORMAT = "warpsim-recording"
@@ -208,16 +215,47 @@ class H5Recorder:
 
     def _open_existing(self) -> None:
         clear_status_flags(self.path)  # a killed writer's flags; we hold the lock
-        self.file = h5py.File(self.path, "r+", libver="latest", locking=False)
-        frame, slot, _ = _newest_checkpoint(self.file, self.path)
-        if frame < 0:
-            raise RecordingError(f"{self.path}: the recording has no frame to resume from")
-        for name in _FRAME_DATASETS:
-            self.file[name].resize(frame + 1, axis=0)
+        with _reading(self.path):
+            self.file = open_for_writing(self.path, swmr=False)
+            frame, slot, _ = _newest_checkpoint(self.file, self.path)
+            self._check_layout()
+            if frame < 0:
+                raise RecordingError(f"{self.path}: the recording has no frame to resume from")
+            for name in _FRAME_DATASETS:
+                self.file[name].resize(frame + 1, axis=0)
+            self.committed = (frame, float(self.file["time"][frame]))
+            self.file.close()
+            self.file = open_for_writing(self.path)
         self.frames = frame + 1
-        self.committed = (frame, float(self.file["time"][frame]))
         self._next_slot = 1 - slot
-        self.file.swmr_mode = True
+
+    def _check_layout(self) -> None:
+        """Raise :class:`RecordingError` unless every dataset a resume writes has the shape, type and growth this
+        simulation writes (a recording edited or damaged since could not take its frames)."""
+        model, f = self.sim.model, self.file
+        n, objects = model.particle_count, len(model.objects)
+        expected = {
+            "time": ((), "f8"),
+            "positions": ((n, 3), "f4"),
+            "diagnostics/worst_stretch": ((), "f4"),
+            "diagnostics/kinetic_energy": ((), "f8"),
+            "diagnostics/centre": ((objects, 3), "f4"),
+            "diagnostics/altitude": ((objects,), "f4"),
+            "diagnostics/airspeed": ((objects,), "f4"),
+        }
+        for name, (tail, dtype) in expected.items():
+            d = f[name]
+            if d.shape[1:] != tail or d.dtype != np.dtype(dtype) or d.chunks is None or d.maxshape[0] is not None:
+                raise RecordingError(f"{self.path}: dataset {name} is {d.dtype}{list(d.shape)}; cannot append to it")
+        for slot in SLOTS:
+            group = f[f"checkpoint/{slot}"]
+            for name, data in self.sim.checkpoint().arrays().items():
+                d = group.get(name)
+                if d is None or d.shape != data.shape or d.dtype != data.dtype:
+                    raise RecordingError(f"{self.path}: checkpoint/{slot}/{name} does not fit this scene")
+            for name, shape in (("frame", (1,)), ("digest", (DIGEST_BYTES,))):
+                if name not in group or group[name].shape != shape:
+                    raise RecordingError(f"{self.path}: checkpoint/{slot}/{name} is missing or damaged")
 
     def _create(self, descriptor_text: str, scene: str) -> None:
         import warp as wp
@@ -227,7 +265,7 @@ class H5Recorder:
         sim = self.sim
         model = sim.model
         n, objects = model.particle_count, len(model.objects)
-        self.file = f = h5py.File(self.path, "w", libver="latest", locking=False)
+        self.file = f = open_for_writing(self.path, create=True)
         object_names, parts, particle_part, triangle_part, particle_object = _names(sim)
         f.attrs.update(
             {
@@ -284,10 +322,11 @@ class H5Recorder:
             g.create_dataset("digest", data=np.zeros(DIGEST_BYTES, dtype=np.uint8))
             for name, data in cp.arrays().items():
                 g.create_dataset(name, data=data)
+        f.close()
+        self.file = open_for_writing(self.path)  # in SWMR mode with bounded reads (see open_for_writing)
         self.frames = 0
         self.committed = (-1, float("nan"))
         self._next_slot = 0
-        f.swmr_mode = True
 
     def write(self, frame) -> None:
         """Store one :class:`warpsim.runner.Frame` as row ``frame.index`` (the next row, or the last one again
@@ -445,6 +484,7 @@ class Recording:
             raise RecordingError(f"{path}: no such file") from None
         if not stat.S_ISREG(info.st_mode):
             raise RecordingError(f"{path}: not a regular file")
+        self.owner = owner
         self.live = not owner and writer_active(self.path)
         with _reading(path):
             try:
@@ -485,6 +525,9 @@ class Recording:
         self.checkpoint_frame, self._slot, self._checkpoint = _newest_checkpoint(f, path)
         if self._checkpoint is not None and self._checkpoint.q.shape != (n, 3):
             raise RecordingError(f"{path}: the checkpoint holds {self._checkpoint.q.shape[0]} particles, not {n}")
+        if self.owner:  # a resume appends: read every chunk index now, not half-way through the run
+            for name in _FRAME_DATASETS:
+                f[name].id.get_num_chunks()
         written = min(f[name].shape[0] for name in _FRAME_DATASETS)
         self.frame_count = min(written, self.checkpoint_frame + 1)
         self.time = f["time"][: self.frame_count]

@@ -525,11 +525,12 @@ class Recording:
         self.checkpoint_frame, self._slot, self._checkpoint = _newest_checkpoint(f, path)
         if self._checkpoint is not None and self._checkpoint.q.shape != (n, 3):
             raise RecordingError(f"{path}: the checkpoint holds {self._checkpoint.q.shape[0]} particles, not {n}")
-        if self.owner:  # a resume appends: read every chunk index now, not half-way through the run
-            for name in _FRAME_DATASETS:
-                f[name].id.get_num_chunks()
         written = min(f[name].shape[0] for name in _FRAME_DATASETS)
         self.frame_count = min(written, self.checkpoint_frame + 1)
+        if self.owner and self.frame_count:  # a resume appends: read what it will rewrite now, not half-way through
+            for name in _FRAME_DATASETS:
+                f[name].id.get_num_chunks()  # the whole chunk index
+                f[name][self.frame_count - 1]  # the chunk the next frames share (its checksum is checked)
         self.time = f["time"][: self.frame_count]
         if not np.isfinite(self.time).all():
             raise RecordingError(f"{path}: frame times are not finite")

@@ -146,6 +146,7 @@ class SolverVerlet(_Solver):
         self.chebyshev = float(chebyshev)
         self.mass_splitting = bool(mass_splitting)
         self.projector = StickProjector(model, self.relaxation, self.mass_splitting, self.chebyshev, constraint_scheme)
+        self.projector.prepare(self.iterations)  # before any graph capture
 
     def _launch(self, state: State, control: Control, dt: float) -> None:
         m = self.model

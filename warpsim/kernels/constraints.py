@@ -432,6 +432,22 @@ class StickProjector:
             self.origin = wp.zeros(n, dtype=wp.vec3, device=device)
             self.scratch = wp.zeros(n, dtype=wp.vec3, device=device) if scheme == "gather" else None  # ping-pong
 
+    def prepare(self, iterations: int):
+        """Make the device array of ``iterations``' Chebyshev weights the fused scheme reads (once per count).
+
+        Call it before a graph capture that projects with that count: with the array made during the capture,
+        the replayed CPU graph read wrong weights for 256 iterations and more (every position NaN at step 3);
+        made beforehand, every count gives the scatter scheme's positions bit for bit. Returns the array
+        (None for the other schemes).
+        """
+        if self.scheme != "fused":
+            return None
+        weights = self._omegas.get(iterations)
+        if weights is None:
+            omegas = np.array(chebyshev_weights(iterations, self.chebyshev), dtype=np.float32)
+            weights = self._omegas[iterations] = wp.array(omegas, dtype=wp.float32, device=self.model.device)
+        return weights
+
     def project(self, state, control, iterations: int) -> None:
         """Run ``iterations`` Jacobi iterations on ``state.particle_q`` in place.
 
@@ -443,9 +459,7 @@ class StickProjector:
             return
         omegas = chebyshev_weights(iterations, self.chebyshev)
         if self.scheme == "fused":
-            weights = self._omegas.get(iterations)
-            if weights is None:
-                weights = self._omegas[iterations] = wp.array(omegas, dtype=wp.float32, device=m.device)
+            weights = self.prepare(iterations)
             wp.launch(
                 _fused_projection,
                 dim=1,

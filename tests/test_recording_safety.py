@@ -447,7 +447,9 @@ def test_ctrl_c_during_start_up_is_one_line(delay, tmp_path):
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=120)
     lines = [line for line in err.splitlines() if line.strip() and CUDA_NOTE not in line and not line.startswith("\r")]
-    assert "Traceback" not in err and proc.returncode in (0, EXIT_INTERRUPTED), err
+    # -2: Python ends by re-raising SIGINT when an interrupt lands in its own start-up or shut-down; a shell
+    # shows that as 130 too
+    assert "Traceback" not in err and proc.returncode in (0, EXIT_INTERRUPTED, -signal.SIGINT), err
     assert len(lines) <= 1, err
     if (tmp_path / "k.h5").exists():  # either no file or a readable recording
         with Recording(tmp_path / "k.h5") as r:

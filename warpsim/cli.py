@@ -212,7 +212,7 @@ def _world_arguments(parser) -> None:
         default=[],
         metavar="KEY=VALUES",
         help="a value that differs between worlds: START:STOP spread over the N worlds, or one value per "
-        "world, e.g. --vary wind.speed=4:12, --vary wind.gust_seed=0:255, --vary kite.line_length=20,30 "
+        "world, e.g. --vary wind.speed=4:12, --vary wind.gust_seed=0:255, --vary kite.rope_length=20,30 "
         "(keys of [wind] or of the object's section; repeatable)",
     )
 
@@ -287,6 +287,8 @@ def cmd_list(args) -> int:
 
 def cmd_info(args) -> int:
     """Print counts, masses and settings of a scene."""
+    import numpy as np
+
     from .descriptor import to_toml
     from .runner import build_model
 
@@ -301,10 +303,16 @@ def cmd_info(args) -> int:
     for record in model.objects:
         mass = model.particle_mass[record.particles]
         print(f"  {record.name}: total mass {mass[mass != float('inf')].sum():.3f} kg (nailed particles excluded)")
+        earlier: set[int] = set()  # parts may share particles (the flag's pole column is cloth too)
         for part, ids in record.parts.items():
             pm = model.particle_mass[ids]
             finite = pm[pm != float("inf")]
-            print(f"    part {part:<10} {len(ids):5d} particles, {finite.sum():9.3f} kg")
+            shared = len(earlier.intersection(int(i) for i in ids))
+            nailed = int(np.isinf(pm).sum())
+            notes = ([f"{shared} also in a part above"] if shared else []) + ([f"{nailed} nailed"] if nailed else [])
+            note = f" ({', '.join(notes)})" if notes else ""
+            print(f"    part {part:<10} {len(ids):5d} particles, {finite.sum():9.3f} kg{note}")
+            earlier.update(int(i) for i in ids)
         paper = record.meta.get("paper_counts")
         if paper:
             print(
@@ -510,10 +518,13 @@ def _run(args, device: str, usd_path: Path | None, h5_path: Path | None, lock) -
     if failures:
         return EXIT_OUTPUT
     if blowup is not None:
-        sys.stderr.write(
-            f"warpsim run: error: {one_line(str(blowup))}\n"
-            "  (try a smaller --dt, more --iterations, or see README: Blow-ups)\n"
+        hint = (
+            "try a smaller --dt (explicit Euler springs need dt well below sqrt(mass / solver.spring_stiffness)), "
+            "or solver.method=verlet"
+            if descriptor["solver"]["method"] == "euler"
+            else "try a smaller --dt or more --iterations"
         )
+        sys.stderr.write(f"warpsim run: error: {one_line(str(blowup))}\n  ({hint}; see README: Blow-ups)\n")
         return EXIT_BLOWUP
     return EXIT_INTERRUPTED if summary.interrupted else 0
 
@@ -558,9 +569,9 @@ def main(argv: list[str] | None = None) -> int:
 def _main(argv: list[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    import warp as wp
+    from . import _warp
 
-    wp.config.log_level = wp.LOG_WARNING  # no per-module load lines on the user's terminal
+    _warp.init()  # quietly: no banner, module load lines or CUDA-driver note on a CPU machine
     from .descriptor import DescriptorError
     from .io import OutputWriteError
 

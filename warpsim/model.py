@@ -11,8 +11,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import warp as wp
 
+from . import _warp
 from .kernels.collision import HeightfieldData
 from .terrain import Heightfield
+
+_warp.init()  # every warpsim object needs Warp; start it without its CPU-machine chatter
 
 GRAVITY = 9.80665
 """Standard gravity [m/s^2] (slide 14; the paper's text misprints 9.80655)."""

@@ -133,7 +133,8 @@ class BlowUpError(RuntimeError):
 
 @dataclass
 class RunSummary:
-    """What a run did: simulated time [s], steps, wall time [s], rates, worst stick stretch seen."""
+    """What a run did: simulated time [s], steps, wall time [s], rates, worst stick stretch seen, start-up time [s]
+    and the objects that touched the terrain."""
 
     simulated_time: float
     steps: int
@@ -141,6 +142,8 @@ class RunSummary:
     worst_stretch: float
     interrupted: bool = False
     blew_up: bool = False
+    startup_time: float = 0.0  # [s] model build and kernel load/compilation (not in the rates)
+    ground_contacts: tuple = ()  # (object name, time [s]) of each object's first touch of the terrain, by time
 
     @property
     def steps_per_second(self) -> float:
@@ -155,11 +158,20 @@ class RunSummary:
     def text(self) -> str:
         """Human-readable summary lines."""
         status = "blew up" if self.blew_up else "interrupted" if self.interrupted else "done"
-        return (
-            f"{status}: simulated {self.simulated_time:.3f} s in {self.steps} steps, wall {self.wall_time:.2f} s\n"
+        text = (
+            f"{status}: simulated {self.simulated_time:.3f} s in {self.steps} steps, wall {self.wall_time:.2f} s "
+            f"(+ {self.startup_time:.2f} s start-up: model and kernels)\n"
             f"  {self.steps_per_second:,.0f} steps/s, real-time factor {self.realtime_factor:.1f}x, "
             f"worst stick stretch {100 * self.worst_stretch:.3f}%"
+            + (" up to the last good frame" if self.blew_up else "")
         )
+        contacts = self.ground_contacts
+        if 0 < len(contacts) <= 3:
+            text += "".join(f"\n  {name} touched the terrain at t = {t:.2f} s" for name, t in contacts)
+        elif contacts:
+            name, t = contacts[0]
+            text += f"\n  {len(contacts)} objects touched the terrain, the first ({name}) at t = {t:.2f} s"
+        return text
 
 
 class Simulation:
@@ -173,6 +185,7 @@ class Simulation:
     """
 
     def __init__(self, descriptor: dict, device: str | None = "cpu", use_graph: bool = True, where: str = "scene"):
+        started = time.perf_counter()
         self.descriptor = descriptor
         self.model = build_model(descriptor, device, where)
         solver_cfg = descriptor["solver"]
@@ -234,6 +247,10 @@ class Simulation:
         self._scheduled: dict = {}  # the schedule's last values, so that held values are not set again
         fps = float(descriptor["scene"]["fps"])
         self.steps_per_frame = max(1, int(round(1.0 / (fps * self.dt))))
+        self._contact_setup()
+        self.solver.load_kernels()  # compile now, not in the first frame's time (the graph is captured there)
+        wp.synchronize_device(self.model.device)
+        self.startup_time = time.perf_counter() - started  # [s] model build, kernel load/compilation
 
     def set_controls(self, **values) -> None:
         """Set controls between steps, e.g. ``set_controls(pitch=0.5, roll=-0.2)`` (each in [-1, 1]) for the
@@ -334,6 +351,43 @@ class Simulation:
                 f"(limit solver.max_stretch = {100 * limit:g}%)",
             )
         return None
+
+    # parts that lie on the ground or hold an object to it by design; their contact is not news
+    GROUNDED_PARTS = ("rope", "pole", "lines", "virtual")
+    CONTACT_DISTANCE = 0.02  # [m] a particle this close to the terrain surface touches it
+
+    def _contact_setup(self) -> None:
+        model = self.model
+        free = np.isfinite(model.particle_mass)
+        ids, owner = [], []
+        for k, record in enumerate(model.objects):
+            grounded = set()
+            for part in self.GROUNDED_PARTS:
+                grounded.update(int(i) for i in record.parts.get(part, []))
+            mine = [int(i) for i in record.particles if free[i] and int(i) not in grounded]
+            ids += mine
+            owner += [k] * len(mine)
+        self._contact_ids = np.array(ids, dtype=np.int64)
+        self._contact_owner = np.array(owner, dtype=np.int64)
+        self._terrain_top = float(model.terrain.heights.max()) + self.CONTACT_DISTANCE
+        self.ground_contacts: dict[str, float] = {}  # object name -> first time [s] it touched the terrain
+
+    def _note_contacts(self, frame: Frame) -> None:
+        """Record the objects that touch the terrain in ``frame`` for the first time."""
+        if len(self.ground_contacts) == len(self.model.objects) or not len(self._contact_ids):
+            return
+        z = frame.positions[self._contact_ids, 2]
+        low = np.flatnonzero(z < self._terrain_top)  # only those can touch: a cheap test first
+        if not len(low):
+            return
+        p = frame.positions[self._contact_ids[low]]
+        touching = low[p[:, 2] - self.model.terrain.height(p[:, 0], p[:, 1]) < self.CONTACT_DISTANCE]
+        for k in np.unique(self._contact_owner[touching]):
+            name = self.model.objects[int(k)].name
+            self.ground_contacts.setdefault(name, float(frame.time))
+
+    def _contacts(self) -> tuple:
+        return tuple(sorted(self.ground_contacts.items(), key=lambda item: item[1]))
 
     def _object_of(self, particle: int) -> str:
         for record in self.model.objects:
@@ -459,9 +513,18 @@ class Simulation:
                     self.restore(good)
                     steps -= bad_step - self.steps_taken
                     wp.synchronize_device(self.model.device)
-                    summary = RunSummary(steps * self.dt, steps, time.perf_counter() - start, worst, blew_up=True)
+                    summary = RunSummary(
+                        steps * self.dt,
+                        steps,
+                        time.perf_counter() - start,
+                        worst,
+                        blew_up=True,
+                        startup_time=self.startup_time,
+                        ground_contacts=self._contacts(),
+                    )
                     raise BlowUpError(bad_step, frame.time, *problem, good_frame.index, good_frame.time, summary)
                 worst = max(worst, frame.worst_stretch)
+                self._note_contacts(frame)
                 good, good_frame = self.checkpoint(), frame
                 if on_frame:
                     on_frame(frame)
@@ -476,4 +539,5 @@ class Simulation:
         except KeyboardInterrupt:
             interrupted = True
         wp.synchronize_device(self.model.device)
-        return RunSummary(steps * self.dt, steps, time.perf_counter() - start, worst, interrupted)
+        wall = time.perf_counter() - start
+        return RunSummary(steps * self.dt, steps, wall, worst, interrupted, False, self.startup_time, self._contacts())

@@ -78,23 +78,37 @@ class _Solver:
     def _launch(self, state: State, control: Control, dt: float) -> None:
         raise NotImplementedError
 
+    def load_kernels(self) -> None:
+        """Load every kernel module on the model's device, compiling those not in Warp's cache (seconds)."""
+        for module in MODULES:
+            wp.load_module(module, device=self.model.device)
+
+    def prepare(self, state: State, control: Control, dt: float):
+        """Load the kernels and, with ``use_graph``, capture the step for ``(state, control, dt)`` without
+        running it, so that the next :meth:`step` only replays; the capture reads the model's values (gravity)
+        as they are now. Returns the graph entry (None without graphs)."""
+        dt = _check_dt(dt)
+        self.load_kernels()
+        if not self.use_graph:
+            return None
+        key = (id(state), id(control), dt)
+        entry = self._graphs.get(key)
+        if entry is None:
+            if len(self._graphs) >= self.max_cached_graphs:
+                self._graphs.clear()
+            with wp.ScopedCapture(device=self.model.device) as capture:
+                self._launch(state, control, dt)
+            # keep state and control alive with the graph so their ids cannot be reused
+            entry = self._graphs[key] = (capture.graph, state, control)
+        return entry
+
     def step(self, state: State, control: Control, dt: float) -> None:
         """Advance ``state`` by ``dt`` seconds (in place) under ``control``."""
         dt = _check_dt(dt)
         if not self.use_graph:
             self._launch(state, control, dt)
         else:
-            key = (id(state), id(control), dt)
-            entry = self._graphs.get(key)
-            if entry is None:
-                if len(self._graphs) >= self.max_cached_graphs:
-                    self._graphs.clear()
-                for module in MODULES:
-                    wp.load_module(module, device=self.model.device)
-                with wp.ScopedCapture(device=self.model.device) as capture:
-                    self._launch(state, control, dt)
-                # keep state and control alive with the graph so their ids cannot be reused
-                entry = self._graphs[key] = (capture.graph, state, control)
+            entry = self._graphs.get((id(state), id(control), dt)) or self.prepare(state, control, dt)
             wp.capture_launch(entry[0])
         state.time += dt
 

@@ -70,7 +70,13 @@ def add_rigid_frame(
         builder.stick_weight[s] = weight
     centre, up = np.asarray(centre, dtype=np.float64), np.asarray(up, dtype=np.float64)
     virtual = [builder.add_particle(centre + k * up, virtual_mass, vel) for k in offsets]
-    sticks += [builder.add_stick(v, p, weight=weight) for v in virtual for p in points]
+    q = np.asarray(builder.particle_q, dtype=np.float64)
+    # a virtual particle in the sail plane (offset 0) lands on a keel particle when the divisions are a multiple
+    # of 3 (the centroid is then a grid point): the two coincide, and a stick between them has no length
+    tol = 1e-9 * max(1.0, float(np.linalg.norm(up)))
+    sticks += [
+        builder.add_stick(v, p, weight=weight) for v in virtual for p in points if np.linalg.norm(q[v] - q[p]) > tol
+    ]
     sticks += [builder.add_stick(a, b, weight=weight) for a, b in zip(virtual[:-1], virtual[1:], strict=True)]
     return DeltaFrame(points, keel, virtual, sticks)
 

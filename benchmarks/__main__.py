@@ -71,6 +71,13 @@ def table(rows: list[dict]) -> str:
                 "(`warpsim run hang-glider --seconds 1`, fresh process) |||||||||"
             )
             continue
+        if r["case"] == "build-scaling":
+            sizes = ", ".join(f"{k}: {v:.1f} us" for k, v in r["us_per_particle"].items())
+            lines.append(
+                f"| build-scaling | model build per particle, {sizes}; growth {r['growth']:.2f}x per 4x particles "
+                "(1 = linear) |||||||||"
+            )
+            continue
         rt = r.get("realtime_factor")
         lines.append(
             "| "

@@ -238,6 +238,25 @@ def case_startup(opts: Options) -> dict:
     return {"case": "startup", "cold_start_s": times["cold"], "warm_start_s": times["warm"], "device": opts.device}
 
 
+BUILD_SIZES = (32, 64, 128, 256, 512)
+
+
+def case_build_scaling(opts: Options) -> dict:
+    """model build time of square flags from 32^2 to 512^2 particles: microseconds per particle (linear = flat)"""
+    per_particle = {}
+    for n in BUILD_SIZES:
+        desc = flag(n)
+        start = time.perf_counter()
+        model = Simulation(desc, device=opts.device).model
+        per_particle[n] = (time.perf_counter() - start) / model.particle_count * 1e6
+    return {
+        "case": "build-scaling",
+        "us_per_particle": {f"{n}x{n}": round(v, 2) for n, v in per_particle.items()},
+        "growth": per_particle[BUILD_SIZES[-1]] / per_particle[BUILD_SIZES[-2]],  # ~1 when the build is linear
+        "device": opts.device,
+    }
+
+
 CASES: dict[str, Callable[[Options], dict]] = {
     "hang-glider": case_object("hang-glider"),
     "kite": case_object("kite"),
@@ -249,4 +268,5 @@ CASES: dict[str, Callable[[Options], dict]] = {
     "numpy-flag-256": case_numpy("flag-256"),
     **{f"newton-flag-{n}": case_newton(n) for n in FLAG_SIZES},
     "startup": case_startup,
+    "build-scaling": case_build_scaling,
 }

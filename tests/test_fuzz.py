@@ -66,8 +66,13 @@ def _toml(value) -> str:
 def descriptors(draw) -> str:
     """TOML text: a few sections with known or random keys holding any value, sometimes [[controls]]."""
     lines = []
-    kind = draw(st.sampled_from(["flag", "kite", "hang-glider", "parachute", "glider", 3]))
+    kind = draw(st.one_of(st.sampled_from(["flag", "kite", "hang-glider", "parachute", "glider", 3]), VALUES))
     lines += ["[scene]", f"object = {_toml(kind)}", f"seconds = {draw(st.sampled_from([0.02, 0.05, -1, 0]))}"]
+    if draw(st.integers(0, 9)) == 0:  # deep nesting, a byte-order mark
+        depth = draw(st.integers(5, 600))
+        lines.append(f"deep = {'[' * depth}{']' * depth}")
+    if draw(st.integers(0, 9)) == 0:
+        lines.insert(0, "\ufeff")
     for section in draw(st.lists(st.sampled_from(SECTIONS + ["nonsense"]), max_size=3, unique=True)):
         lines.append(f"[{section}]")
         keys = draw(st.lists(st.sampled_from(_keys(section) + ["speed", "typo"]), min_size=1, max_size=3, unique=True))

@@ -25,9 +25,15 @@ class UsageError(Exception):
     """A user mistake: printed as one line, exit code 2."""
 
 
+MAX_LINE = 600  # characters of an error line; a hostile value must not fill the terminal
+
+
 def one_line(message: str) -> str:
     """``message`` with every control or line-breaking character escaped (``\\n``, ``\\r``...), so that text a
-    user typed cannot break an error line apart."""
+    user typed cannot break an error line apart, and cut to about ``MAX_LINE`` characters (a value of megabytes
+    is not echoed whole)."""
+    if len(message) > MAX_LINE:
+        message = f"{message[: MAX_LINE - 120]} [... {len(message) - MAX_LINE + 100:,} characters ...] {message[-100:]}"
     return "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
 
 

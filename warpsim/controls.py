@@ -36,6 +36,10 @@ UNIT_CONTROLS = ("pitch", "roll")
 VECTOR_CONTROLS = {"anchor": 2, "wind": 3}
 """Controls whose values are vectors: name -> number of components ([m] for anchor, [m/s] for wind)."""
 
+VECTOR_LIMITS = {"anchor": 1e7, "wind": 200.0}
+"""Largest allowed magnitude of each component: [m] (the largest terrain), [m/s] (twice the strongest gusts
+measured on Earth); beyond them a run could only blow up."""
+
 
 class ControlError(ValueError):
     """A control value or schedule entry is invalid; the message names the entry and key."""
@@ -60,6 +64,9 @@ def check_value(name: str, value, where: str = "control"):
             raise ControlError(f"{where}: {name} must be a list of {size} numbers, got {value!r}")
         if not all(math.isfinite(v) for v in vector):
             raise ControlError(f"{where}: {name} must hold finite numbers, got {value!r}")
+        limit = VECTOR_LIMITS[name]
+        if any(abs(v) > limit for v in vector):
+            raise ControlError(f"{where}: {name} components must be within +-{limit:g}, got {value!r}")
         return vector
     raise ControlError(f"{where}: unknown control {name!r}")
 

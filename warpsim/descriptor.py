@@ -55,7 +55,9 @@ CHOICES = {
 # (low, high, low inclusive?) bounds on numbers
 BOUNDS = {
     ("scene", "seconds"): (0.0, None, False),
-    ("scene", "fps"): (0.0, None, False),
+    ("scene", "fps"): (1e-6, 1e6, True),
+    ("terrain", "amplitude"): (-1e4, 1e4, True),
+    ("terrain", "height"): (-1e5, 1e5, True),
     ("solver", "dt"): (1e-7, 1.0, True),
     ("solver", "iterations"): (1, 10000, True),
     ("solver", "relaxation"): (0.0, 2.0, False),
@@ -66,7 +68,7 @@ BOUNDS = {
     ("solver", "spring_damping"): (0.0, None, True),
     ("air", "scale"): (0.0, None, True),
     ("air", "density"): (0.0, None, True),
-    ("terrain", "size"): (0.0, None, False),
+    ("terrain", "size"): (0.0, 1e7, False),
     ("ground", "friction"): (0.0, None, True),
     ("wind", "gust_intensity"): (0.0, None, True),
     ("wind", "gust_period"): (0.0, None, False),
@@ -331,14 +333,35 @@ def parse_vary(text: str, count: int | None) -> tuple[str, str, list]:
     return section, key, values
 
 
+MAX_DEPTH = 8  # a descriptor's deepest nesting is 4 ([worlds] -> wind -> velocity -> numbers)
+
+
+def _depth(value, level: int = 0) -> int:
+    """Nesting depth of parsed TOML (iterative: hostile input may nest thousands deep)."""
+    deepest, stack = level, [(value, level)]
+    while stack:
+        item, depth = stack.pop()
+        deepest = max(deepest, depth)
+        if deepest > MAX_DEPTH:
+            return deepest
+        children = item.values() if isinstance(item, dict) else item if isinstance(item, list) else ()
+        stack += [(child, depth + 1) for child in children]
+    return deepest
+
+
 def load_text(text: str, where: str) -> dict:
     """Parse and validate descriptor ``text``; ``where`` names its origin in error messages."""
+    text = text.removeprefix("\ufeff")  # a UTF-8 byte-order mark, as some editors write
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise DescriptorError(f"{where}: not valid TOML: {err}") from None
+    except RecursionError:
+        raise DescriptorError(f"{where}: arrays or tables nested too deep") from None
+    if _depth(raw) > MAX_DEPTH:
+        raise DescriptorError(f"{where}: arrays or tables nested deeper than {MAX_DEPTH} levels")
     kind = raw.get("scene", {}).get("object", "flag") if isinstance(raw.get("scene"), dict) else "flag"
-    if kind not in registry.OBJECTS:
+    if not isinstance(kind, str) or kind not in registry.OBJECTS:
         choices = tuple(registry.OBJECTS)
         raise DescriptorError(
             f"{where}: scene.object = {kind!r} is not one of {', '.join(choices)}{_suggest(str(kind), choices)}"

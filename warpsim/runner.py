@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import warp as wp
 
-from .builder import ModelBuilder
+from .builder import ModelBuilder, check_memory
 from .checkpoint import Checkpoint, pack_controls, pack_rng, unpack_controls, unpack_rng
 from .controls import ControlError, ControlSchedule, Gusts, check_value
 from .descriptor import DescriptorError, world_descriptor
@@ -75,6 +75,10 @@ def build_model(descriptor: dict, device: str | None = "cpu", where: str = "scen
         values = world_descriptor(descriptor, world)[registry.section(kind)]
         try:
             record = spec.build(builder, object_config(kind, values), terrain)
+            if world == 0 and count > 1:  # the first world tells the size of all: refuse what cannot fit
+                check_memory(
+                    builder.particle_count * count, f"{count:,} worlds of {builder.particle_count:,} particles"
+                )
         except ValueError as err:
             at = f" (world {world})" if count > 1 else ""
             raise DescriptorError(f"{where}: [{registry.section(kind)}]{at}: {err}") from None

@@ -7,11 +7,15 @@ the grid the edge heights are extended.
 
 from __future__ import annotations
 
+import os
+import stat
 from pathlib import Path
 
 import numpy as np
 
 DEFAULT_RESOLUTION = 256
+MAX_SIDE = 8192  # samples per side of a terrain file (512 MB of float64 heights)
+MAX_HEIGHT = 1e5  # [m] largest terrain height a file may hold
 
 
 class Heightfield:
@@ -81,9 +85,39 @@ class Heightfield:
         path = Path(path)
         if path.suffix.lower() != ".npy":
             raise ValueError(f"{path}: terrain files must be .npy arrays of heights")
-        if not path.exists():
-            raise ValueError(f"{path}: terrain file not found")
-        return cls(np.load(path) * vertical_scale, (size, size))
+        try:
+            info = os.stat(path)
+        except FileNotFoundError:
+            raise ValueError(f"{path}: terrain file not found") from None
+        if not stat.S_ISREG(info.st_mode):  # a FIFO would block the reader, a device never end
+            raise ValueError(f"{path}: not a regular file")
+        with open(path, "rb") as f:
+            # the header first: shape and type are checked before any data is read
+            try:
+                version = np.lib.format.read_magic(f)
+                readers = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
+                if version not in readers:
+                    raise ValueError(f".npy format version {version} is not supported")
+                shape, fortran, dtype = readers[version](f)
+            except (ValueError, OSError, SyntaxError, TypeError) as err:
+                raise ValueError(f"{path}: not a .npy array ({err})") from None
+            if dtype.kind not in "fiu" or dtype.hasobject:
+                raise ValueError(f"{path}: heights must be real numbers, the file holds {dtype}")
+            if len(shape) != 2 or not all(2 <= n <= MAX_SIDE for n in shape):
+                raise ValueError(f"{path}: heights must be a 2-D array of 2 to {MAX_SIDE} samples a side, got {shape}")
+            expected = int(np.prod(shape)) * dtype.itemsize
+            if info.st_size - f.tell() != expected:
+                raise ValueError(
+                    f"{path}: the header announces {expected:,} bytes of heights, the file holds "
+                    f"{info.st_size - f.tell():,}"
+                )
+            heights = np.fromfile(f, dtype=dtype, count=int(np.prod(shape))).reshape(
+                shape, order="F" if fortran else "C"
+            )
+        heights = heights.astype(np.float64) * vertical_scale
+        if not np.isfinite(heights).all() or np.abs(heights).max() > MAX_HEIGHT:
+            raise ValueError(f"{path}: heights must be finite and within +-{MAX_HEIGHT:g} m")
+        return cls(heights, (size, size))
 
     # ------------------------------------------------------------------ queries (host, NumPy)
     def _cell_coords(self, x, y):

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..builder import ModelBuilder
+from ..builder import ModelBuilder, check_memory
 from ..model import ObjectRecord
 from ..terrain import Heightfield
 
@@ -50,6 +50,7 @@ def build_flag(builder: ModelBuilder, cfg: FlagConfig, terrain: Heightfield) -> 
             "height-to-width ratio"
         )
     count_v = max(2, int(round(rows)) + 1)
+    check_memory(count_u * count_v, f"a flag of {count_u} x {count_v}")
     x0, y0 = cfg.position
     top = float(terrain.height(x0, y0)) + cfg.pole_height
     p0 = builder.particle_count

@@ -233,6 +233,29 @@ def clear_status_flags(path) -> bool:
     return True
 
 
+def extend_to_stored_end(path) -> bool:
+    """Grow ``path`` with zeros up to the end of file its superblock records, when a failed write (a file-size
+    limit, a full disk) left it shorter: HDF5 refuses to open such a file for writing ("truncated file"). The
+    space added belongs to writes that never completed, after the last checkpoint; whatever a reader then
+    finds there fails its checksums. Only under the caller's :class:`WriterLock`; superblock versions 2 and 3.
+    Returns True when the file was extended."""
+    with open(path, "r+b") as f:
+        head = f.read(64)
+        if len(head) < 13 or head[:8] != SIGNATURE or head[8] not in (2, 3):
+            return False
+        size = head[9]
+        end = 12 + 4 * size
+        if len(head) < end + 4 or int.from_bytes(head[end : end + 4], "little") != lookup3(head[:end]):
+            return False
+        base = int.from_bytes(head[12 : 12 + size], "little")
+        stored = base + int.from_bytes(head[12 + 2 * size : 12 + 3 * size], "little")
+        actual = os.fstat(f.fileno()).st_size
+        if actual >= stored:
+            return False
+        f.truncate(stored)
+    return True
+
+
 def abandon(file: h5py.File) -> None:
     """Close ``file`` after a write to it failed, leaving on disk what was written before (see module notes)."""
     try:

@@ -59,6 +59,7 @@ from .h5safe import (
     WriterLock,
     abandon,
     clear_status_flags,
+    extend_to_stored_end,
     open_for_reading,
     open_for_writing,
     writer_active,
@@ -215,6 +216,7 @@ class H5Recorder:
 
     def _open_existing(self) -> None:
         clear_status_flags(self.path)  # a killed writer's flags; we hold the lock
+        extend_to_stored_end(self.path)  # a write that failed part-way left it short
         with _reading(self.path):
             self.file = open_for_writing(self.path, swmr=False)
             frame, slot, _ = _newest_checkpoint(self.file, self.path)

@@ -206,6 +206,19 @@ def lookup3(data: bytes, initval: int = 0) -> int:
     return c
 
 
+def _superblock(f) -> tuple[bytes, int] | None:
+    """``(first bytes, length of the checksummed part)`` of a version 2 or 3 superblock at the start of the open
+    file ``f`` whose stored checksum holds; None for anything else (then nothing is changed)."""
+    f.seek(0)
+    head = f.read(64)
+    if len(head) < 13 or head[:8] != SIGNATURE or head[8] not in (2, 3):
+        return None
+    end = 12 + 4 * head[9]  # signature, version, sizes, flags, then four addresses of size_of_offsets bytes
+    if len(head) < end + 4 or int.from_bytes(head[end : end + 4], "little") != lookup3(head[:end]):
+        return None
+    return head, end
+
+
 def clear_status_flags(path) -> bool:
     """Clear the superblock's "open for write / SWMR write" flags that a killed writer left (``h5clear -s``).
 
@@ -214,14 +227,10 @@ def clear_status_flags(path) -> bool:
     flags were cleared, False when none were set or the superblock is not one it knows (left untouched).
     """
     with open(path, "r+b") as f:
-        head = f.read(64)
-        if len(head) < 13 or head[:8] != SIGNATURE or head[8] not in (2, 3):
+        found = _superblock(f)
+        if found is None or found[0][11] == 0:
             return False
-        end = 12 + 4 * head[9]  # signature, version, sizes, flags, then four addresses of size_of_offsets bytes
-        if len(head) < end + 4 or int.from_bytes(head[end : end + 4], "little") != lookup3(head[:end]):
-            return False
-        if head[11] == 0:
-            return False
+        head, end = found
         block = bytearray(head[:end])
         block[11] = 0
         f.seek(11)
@@ -240,17 +249,13 @@ def extend_to_stored_end(path) -> bool:
     finds there fails its checksums. Only under the caller's :class:`WriterLock`; superblock versions 2 and 3.
     Returns True when the file was extended."""
     with open(path, "r+b") as f:
-        head = f.read(64)
-        if len(head) < 13 or head[:8] != SIGNATURE or head[8] not in (2, 3):
+        found = _superblock(f)
+        if found is None:
             return False
-        size = head[9]
-        end = 12 + 4 * size
-        if len(head) < end + 4 or int.from_bytes(head[end : end + 4], "little") != lookup3(head[:end]):
-            return False
+        head, size = found[0], found[0][9]
         base = int.from_bytes(head[12 : 12 + size], "little")
         stored = base + int.from_bytes(head[12 + 2 * size : 12 + 3 * size], "little")
-        actual = os.fstat(f.fileno()).st_size
-        if actual >= stored:
+        if os.fstat(f.fileno()).st_size >= stored:
             return False
         f.truncate(stored)
     return True

@@ -363,16 +363,15 @@ class Simulation:
     def _contact_setup(self) -> None:
         model = self.model
         free = np.isfinite(model.particle_mass)
-        ids, owner = [], []
+        ids, owner = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
         for k, record in enumerate(model.objects):
-            grounded = set()
-            for part in self.GROUNDED_PARTS:
-                grounded.update(int(i) for i in record.parts.get(part, []))
-            mine = [int(i) for i in record.particles if free[i] and int(i) not in grounded]
-            ids += mine
-            owner += [k] * len(mine)
-        self._contact_ids = np.array(ids, dtype=np.int64)
-        self._contact_owner = np.array(owner, dtype=np.int64)
+            particles = np.asarray(record.particles, dtype=np.int64)
+            grounded = [np.asarray(record.parts[p], dtype=np.int64) for p in self.GROUNDED_PARTS if p in record.parts]
+            keep = free[particles] & ~np.isin(particles, np.concatenate([np.zeros(0, np.int64), *grounded]))
+            ids.append(particles[keep])
+            owner.append(np.full(int(keep.sum()), k, dtype=np.int64))
+        self._contact_ids = np.concatenate(ids)
+        self._contact_owner = np.concatenate(owner)
         self._terrain_top = float(model.terrain.heights.max()) + self.CONTACT_DISTANCE
         self.ground_contacts: dict[str, float] = {}  # object name -> first time [s] it touched the terrain
 

@@ -201,16 +201,17 @@ class UsdWriter:
         self.stage.SetEndTimeCode(self.last)
         remove_stale_temporaries(self.path)
         tmp = temporary_path(self.path)
-        scratch = temporary_path(self.path, ".usdc")  # the layer a .usdz packages
         umask = os.umask(0)
         os.umask(umask)
         try:
             with _stderr_captured() as captured:
                 try:
-                    self._export(tmp, scratch)
+                    self._export(tmp)
                     _check_stage(tmp)
                 except Exception as err:  # noqa: BLE001 - USD reports write errors as several exception types
                     detail = _cause(f"{captured()}\n{err}")
+                    if detail not in _ERRNO_TEXTS and _free_bytes(self.path.parent) < 1 << 20:
+                        detail = f"{os.strerror(errno.ENOSPC)}: {detail}"  # USD did not say why; the disk is full
                     raise OutputWriteError(
                         f"{self.path}: could not write the stage ({detail}); nothing was written under that name"
                     ) from None
@@ -218,16 +219,18 @@ class UsdWriter:
             os.replace(tmp, self.path)
         finally:
             tmp.unlink(missing_ok=True)
-            scratch.unlink(missing_ok=True)
         return self.path
 
-    def _export(self, tmp: Path, scratch: Path) -> None:
-        """Write the stage to ``tmp`` (packaging ``scratch`` for .usdz) and sync it to disk."""
+    def _export(self, tmp: Path) -> None:
+        """Write the stage to ``tmp`` and sync it to disk; a .usdz packages a ``STEM.usdc`` layer written to a
+        private temporary directory first."""
         if self.path.suffix.lower() == ".usdz":
-            if not self.stage.GetRootLayer().Export(str(scratch)):
-                raise OSError("the layer export failed")
-            if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(scratch)), str(tmp)):
-                raise OSError("packaging failed")
+            with tempfile.TemporaryDirectory() as scratch:
+                layer = Path(scratch) / f"{self.path.stem}.usdc"
+                if not self.stage.GetRootLayer().Export(str(layer)):
+                    raise OSError("the layer export failed")
+                if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(layer)), str(tmp)):
+                    raise OSError("packaging failed")
         elif not self.stage.GetRootLayer().Export(str(tmp)):
             raise OSError("the export failed")
         with open(tmp, "rb+") as f:
@@ -250,6 +253,15 @@ def _check_stage(path: Path) -> None:
 _ERRNO_TEXTS = tuple(
     os.strerror(code) for code in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EROFS, errno.EACCES)
 )
+
+
+def _free_bytes(directory: Path) -> int:
+    """Bytes an unprivileged process can still write in ``directory`` (a large number where unknown)."""
+    try:
+        info = os.statvfs(directory)
+    except OSError:
+        return 1 << 62
+    return info.f_bavail * info.f_frsize
 
 
 def _cause(text: str) -> str:

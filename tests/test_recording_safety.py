@@ -434,7 +434,8 @@ def test_second_signal_during_the_export_still_writes_the_stage(gap, tmp_path):
     time.sleep(gap)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=120)
-    assert proc.returncode == EXIT_INTERRUPTED and "Traceback" not in err, err
+    # -2 (a shell shows 130): the second signal came after the outputs were finished and the handlers restored
+    assert proc.returncode in (EXIT_INTERRUPTED, -signal.SIGINT) and "Traceback" not in err, err
     with Recording(rec) as r:
         frames = r.frame_count
     stage = Usd.Stage.Open(str(usd))

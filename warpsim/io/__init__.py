@@ -21,13 +21,42 @@ class OutputWriteError(OSError):
     """Writing an output failed part-way (disk full, I/O error); the message says what was kept."""
 
 
+SYSTEM_CAUSES = tuple(
+    os.strerror(code) for code in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EROFS, errno.EACCES)
+)
+"""System error messages that name why a write failed; looked for in libraries' long error texts."""
+
+
+def cause(text: str) -> str:
+    """The cause in a library's error text: a system error message when one is named (HDF5 and USD bury it in
+    file names, line numbers and buffer addresses), else the first line (at most 200 characters)."""
+    for known in SYSTEM_CAUSES:
+        if known in text:
+            return known
+    lines = text.strip().splitlines()
+    return lines[0].strip()[:200] if lines else "unknown error"
+
+
+def with_disk_state(detail: str, path) -> str:
+    """``detail`` of a failed write to ``path``, prefixed with "No space left on device" when it names no system
+    cause and less than 1 MiB is free beside ``path`` (libraries do not always say why a write failed)."""
+    if detail in SYSTEM_CAUSES:
+        return detail
+    try:
+        info = os.statvfs(Path(path).parent)
+    except OSError:
+        return detail
+    if info.f_bavail * info.f_frsize < 1 << 20:
+        return f"{os.strerror(errno.ENOSPC)}: {detail}"
+    return detail
+
+
 def reason(err: BaseException) -> str:
     """A short, one-line cause of an ``OSError`` (``No space left on device``), for error messages."""
     code = getattr(err, "errno", None)
     if isinstance(code, int) and code > 0:
         return os.strerror(code)
-    text = str(err.args[0] if isinstance(err, KeyError) and err.args else err).strip().splitlines()
-    return text[0][:200] if text else type(err).__name__
+    return cause(str(err.args[0] if isinstance(err, KeyError) and err.args else err) or type(err).__name__)
 
 
 def check_output_path(path, extensions: tuple[str, ...], kind: str) -> Path:

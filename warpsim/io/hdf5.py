@@ -53,7 +53,7 @@ from pathlib import Path
 import numpy as np
 
 from ..checkpoint import DIGEST_BYTES, Checkpoint
-from . import OutputWriteError, check_output_path, reason
+from . import OutputWriteError, check_output_path, reason, with_disk_state
 from .h5safe import (
     LockedError,
     WriterLock,
@@ -375,7 +375,7 @@ class H5Recorder:
             frame, t = self.committed
             kept = f"frames 0-{frame} (t = {t:.3f} s)" if frame >= 0 else "no frame"
             self.failed = OutputWriteError(
-                f"{self.path}: writing failed ({reason(err)}); the recording keeps {kept}"
+                f"{self.path}: writing failed ({with_disk_state(reason(err), self.path)}); the recording keeps {kept}"
                 + (f"; continue it with `warpsim run --resume {self.path}` once fixed" if frame >= 0 else "")
             )
             raise self.failed from None

@@ -22,7 +22,6 @@ temporary is removed by the next export there). ``.usdz`` packages a ``.usdc`` l
 from __future__ import annotations
 
 import contextlib
-import errno
 import os
 import sys
 import tempfile
@@ -32,7 +31,14 @@ from pathlib import Path
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdUtils, Vt
 
-from . import OutputWriteError, check_output_path, remove_stale_temporaries, temporary_path
+from . import (
+    OutputWriteError,
+    cause,
+    check_output_path,
+    remove_stale_temporaries,
+    temporary_path,
+    with_disk_state,
+)
 
 EXTENSIONS = (".usda", ".usdc", ".usdz")
 
@@ -209,9 +215,7 @@ class UsdWriter:
                     self._export(tmp)
                     _check_stage(tmp)
                 except Exception as err:  # noqa: BLE001 - USD reports write errors as several exception types
-                    detail = _cause(f"{captured()}\n{err}")
-                    if detail not in _ERRNO_TEXTS and _free_bytes(self.path.parent) < 1 << 20:
-                        detail = f"{os.strerror(errno.ENOSPC)}: {detail}"  # USD did not say why; the disk is full
+                    detail = with_disk_state(cause(f"{captured()}\n{err}"), self.path)
                     raise OutputWriteError(
                         f"{self.path}: could not write the stage ({detail}); nothing was written under that name"
                     ) from None
@@ -248,30 +252,6 @@ def _check_stage(path: Path) -> None:
     stage = Usd.Stage.Open(str(path), Usd.Stage.LoadNone)
     if stage is None or not stage.GetPrimAtPath("/World"):
         raise OSError("the written stage does not open")
-
-
-_ERRNO_TEXTS = tuple(
-    os.strerror(code) for code in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EROFS, errno.EACCES)
-)
-
-
-def _free_bytes(directory: Path) -> int:
-    """Bytes an unprivileged process can still write in ``directory`` (a large number where unknown)."""
-    try:
-        info = os.statvfs(directory)
-    except OSError:
-        return 1 << 62
-    return info.f_bavail * info.f_frsize
-
-
-def _cause(text: str) -> str:
-    """The cause in a USD error text: a system error message when one is named (without USD's source file and
-    line), else its first line (at most 200 characters)."""
-    for cause in _ERRNO_TEXTS:
-        if cause in text:
-            return cause
-    lines = text.strip().splitlines()
-    return lines[0].strip()[:200] if lines else "unknown error"
 
 
 @contextlib.contextmanager

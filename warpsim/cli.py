@@ -388,8 +388,8 @@ def _same_file_check(scene: str, outputs: dict) -> None:
 
 def cmd_run(args) -> int:
     """Run a scene (or continue a recording) and print the summary."""
+    from .io import check_stage_path
     from .io.hdf5 import RecordingError, check_recording_path, claim
-    from .io.usd import check_stage_path
 
     if args.resume and args.scene:
         raise UsageError("give either SCENE or --resume REC.h5, not both (a recording holds its scene)")
@@ -429,7 +429,6 @@ def _run(args, device: str, usd_path: Path | None, h5_path: Path | None, lock) -
     from .descriptor import load_text, to_toml
     from .io import OutputWriteError
     from .io.hdf5 import H5Recorder, Recording, RecordingError
-    from .io.usd import UsdWriter
     from .runner import BlowUpError, Simulation
 
     checkpoint = None
@@ -481,6 +480,8 @@ def _run(args, device: str, usd_path: Path | None, h5_path: Path | None, lock) -
         except RecordingError as err:
             raise UsageError(str(err)) from None
         if usd_path:
+            from .io.usd import UsdWriter  # USD loads here, after Ctrl-C no longer raises (see _StopRequests)
+
             usd = UsdWriter(usd_path, sim.model, sim.steps_per_frame * sim.dt)
 
         def on_frame(frame):

@@ -12,6 +12,15 @@ import os
 import stat
 from pathlib import Path
 
+STAGE_EXTENSIONS = (".usda", ".usdc", ".usdz")
+"""File names a USD stage may take (text, binary, package)."""
+
+
+def check_stage_path(path) -> Path:
+    """Check that ``path`` can be written as a USD stage (raises ``OutputPathError``); here rather than in
+    :mod:`warpsim.io.usd` so that checking a path does not load USD (seconds of start-up)."""
+    return check_output_path(path, STAGE_EXTENSIONS, "USD")
+
 
 class OutputPathError(ValueError):
     """An output path that cannot be written: unknown extension, missing or unwritable directory, not a file."""

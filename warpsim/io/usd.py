@@ -32,15 +32,16 @@ import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdUtils, Vt
 
 from . import (
+    STAGE_EXTENSIONS,
     OutputWriteError,
     cause,
-    check_output_path,
+    check_stage_path,
     remove_stale_temporaries,
     temporary_path,
     with_disk_state,
 )
 
-EXTENSIONS = (".usda", ".usdc", ".usdz")
+EXTENSIONS = STAGE_EXTENSIONS
 
 COLOURS = {
     "terrain": (0.42, 0.50, 0.32),
@@ -55,11 +56,6 @@ COLOURS = {
 }
 SPHERE_PARTS = {"pilot": 0.3, "person": 0.3}  # radius [m]
 CURVE_WIDTH = {"rope": 0.03, "lines": 0.02}  # [m]
-
-
-def check_stage_path(path) -> Path:
-    """Check that ``path`` is a USD file name in an existing directory (raises ``OutputPathError``)."""
-    return check_output_path(path, EXTENSIONS, "USD")
 
 
 def _vec3f_array(points: np.ndarray) -> Vt.Vec3fArray:

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from . import OutputWriteError, check_output_path, reason, remove_stale_temporaries, temporary_path
-from .usd import COLOURS, SPHERE_PARTS
+from .style import COLOURS, SPHERE_PARTS
 
 EXTENSIONS = (".png", ".gif")
 SKY_TOP, SKY_BOTTOM = np.array([0.55, 0.72, 0.92]), np.array([0.88, 0.93, 0.98])

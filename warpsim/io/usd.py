@@ -40,22 +40,9 @@ from . import (
     temporary_path,
     with_disk_state,
 )
+from .style import COLOURS, CURVE_WIDTH, SPHERE_PARTS
 
 EXTENSIONS = STAGE_EXTENSIONS
-
-COLOURS = {
-    "terrain": (0.42, 0.50, 0.32),
-    "sail": (0.15, 0.45, 0.85),
-    "cloth": (0.85, 0.20, 0.20),
-    "keel": (0.90, 0.35, 0.15),
-    "canopy": (0.95, 0.75, 0.20),
-    "rope": (0.15, 0.15, 0.15),
-    "lines": (0.25, 0.25, 0.25),
-    "pilot": (0.95, 0.55, 0.10),
-    "person": (0.95, 0.55, 0.10),
-}
-SPHERE_PARTS = {"pilot": 0.3, "person": 0.3}  # radius [m]
-CURVE_WIDTH = {"rope": 0.03, "lines": 0.02}  # [m]
 
 
 def _vec3f_array(points: np.ndarray) -> Vt.Vec3fArray:

@@ -168,6 +168,9 @@ def _rot(x: int, k: int) -> int:
     return ((x << k) | (x >> (32 - k))) & 0xFFFFFFFF
 
 
+_MIX_ORDER = ((0, 2, 1), (1, 0, 2), (2, 1, 0)) * 2  # (a, c, b), (b, a, c), (c, b, a) twice
+
+
 def lookup3(data: bytes, initval: int = 0) -> int:
     """Bob Jenkins' lookup3 ``hashlittle``: the checksum HDF5 puts on its metadata (superblock v2/v3)."""
     m = 0xFFFFFFFF
@@ -177,18 +180,11 @@ def lookup3(data: bytes, initval: int = 0) -> int:
         a = (a + int.from_bytes(data[k : k + 4], "little")) & m
         b = (b + int.from_bytes(data[k + 4 : k + 8], "little")) & m
         c = (c + int.from_bytes(data[k + 8 : k + 12], "little")) & m
-        a = ((a - c) & m) ^ _rot(c, 4)
-        c = (c + b) & m
-        b = ((b - a) & m) ^ _rot(a, 6)
-        a = (a + c) & m
-        c = ((c - b) & m) ^ _rot(b, 8)
-        b = (b + a) & m
-        a = ((a - c) & m) ^ _rot(c, 16)
-        c = (c + b) & m
-        b = ((b - a) & m) ^ _rot(a, 19)
-        a = (a + c) & m
-        c = ((c - b) & m) ^ _rot(b, 4)
-        b = (b + a) & m
+        v = [a, b, c]
+        for (x, y, z), r in zip(_MIX_ORDER, (4, 6, 8, 16, 19, 4), strict=True):  # lookup3's mix()
+            v[x] = ((v[x] - v[y]) & m) ^ _rot(v[y], r)
+            v[y] = (v[y] + v[z]) & m
+        a, b, c = v
         n, k = n - 12, k + 12
     if n == 0:
         return c

@@ -70,15 +70,24 @@ FORMAT = "warpsim-recording"
 FORMAT_VERSION = 2
 SLOTS = ("slot0", "slot1")
 _CHECKSUM = {"fletcher32": True}
-_FRAME_DATASETS = (
-    "time",
-    "positions",
-    "diagnostics/worst_stretch",
-    "diagnostics/kinetic_energy",
-    "diagnostics/centre",
-    "diagnostics/altitude",
-    "diagnostics/airspeed",
-)
+
+
+def _frame_layout(particles: int, objects: int) -> dict[str, tuple[tuple[int, ...], str, int]]:
+    """Each frame dataset: ``(shape of one frame, dtype, frames per chunk)``; what a recording is created with
+    and what a resume checks before it appends."""
+    return {
+        "time": ((), "f8", 256),
+        "positions": ((particles, 3), "f4", 1),
+        "diagnostics/worst_stretch": ((), "f4", 256),
+        "diagnostics/kinetic_energy": ((), "f8", 256),
+        "diagnostics/centre": ((objects, 3), "f4", 64),
+        "diagnostics/altitude": ((objects,), "f4", 64),
+        "diagnostics/airspeed": ((objects,), "f4", 64),
+    }
+
+
+_FRAME_DATASETS = tuple(_frame_layout(0, 0))
+
 _TOPOLOGY = (
     "sticks",
     "stick_rest",
@@ -235,23 +244,19 @@ class H5Recorder:
         """Raise :class:`RecordingError` unless every dataset a resume writes has the shape, type and growth this
         simulation writes (a recording edited or damaged since could not take its frames)."""
         model, f = self.sim.model, self.file
-        n, objects = model.particle_count, len(model.objects)
-        expected = {
-            "time": ((), "f8"),
-            "positions": ((n, 3), "f4"),
-            "diagnostics/worst_stretch": ((), "f4"),
-            "diagnostics/kinetic_energy": ((), "f8"),
-            "diagnostics/centre": ((objects, 3), "f4"),
-            "diagnostics/altitude": ((objects,), "f4"),
-            "diagnostics/airspeed": ((objects,), "f4"),
-        }
-        for name, (tail, dtype) in expected.items():
+        for name, (frame_shape, dtype, _) in _frame_layout(model.particle_count, len(model.objects)).items():
             d = f[name]
-            if d.shape[1:] != tail or d.dtype != np.dtype(dtype) or d.chunks is None or d.maxshape[0] is not None:
+            if (
+                d.shape[1:] != frame_shape
+                or d.dtype != np.dtype(dtype)
+                or d.chunks is None
+                or d.maxshape[0] is not None
+            ):
                 raise RecordingError(f"{self.path}: dataset {name} is {d.dtype}{list(d.shape)}; cannot append to it")
+        arrays = self.sim.checkpoint().arrays()
         for slot in SLOTS:
             group = f[f"checkpoint/{slot}"]
-            for name, data in self.sim.checkpoint().arrays().items():
+            for name, data in arrays.items():
                 d = group.get(name)
                 if d is None or d.shape != data.shape or d.dtype != data.dtype:
                     raise RecordingError(f"{self.path}: checkpoint/{slot}/{name} does not fit this scene")
@@ -301,20 +306,16 @@ class H5Recorder:
                 name, data=data, chunks=data.shape if data.size else None, **(_CHECKSUM if data.size else {})
             )
         gz = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
-        f.create_dataset("time", (0,), maxshape=(None,), dtype="f8", chunks=(256,), **_CHECKSUM)
-        f.create_dataset("positions", (0, n, 3), maxshape=(None, n, 3), dtype="f4", chunks=(1, n, 3), **gz, **_CHECKSUM)
-        d = f.create_group("diagnostics")
-        d.create_dataset("worst_stretch", (0,), maxshape=(None,), dtype="f4", chunks=(256,), **_CHECKSUM)
-        d.create_dataset("kinetic_energy", (0,), maxshape=(None,), dtype="f8", chunks=(256,), **_CHECKSUM)
-        d.create_dataset(
-            "centre", (0, objects, 3), maxshape=(None, objects, 3), dtype="f4", chunks=(64, objects, 3), **_CHECKSUM
-        )
-        d.create_dataset(
-            "altitude", (0, objects), maxshape=(None, objects), dtype="f4", chunks=(64, objects), **_CHECKSUM
-        )
-        d.create_dataset(
-            "airspeed", (0, objects), maxshape=(None, objects), dtype="f4", chunks=(64, objects), **_CHECKSUM
-        )
+        for name, (frame_shape, dtype, rows) in _frame_layout(n, objects).items():
+            f.create_dataset(
+                name,
+                (0, *frame_shape),
+                maxshape=(None, *frame_shape),
+                dtype=dtype,
+                chunks=(rows, *frame_shape),
+                **(gz if name == "positions" else {}),
+                **_CHECKSUM,
+            )
         c = f.create_group("checkpoint")
         cp = sim.checkpoint()  # shapes and types of what later checkpoints write
         c.attrs["control_names"] = list(cp.control_names)

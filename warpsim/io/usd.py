@@ -32,7 +32,6 @@ import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdUtils, Vt
 
 from . import (
-    STAGE_EXTENSIONS,
     OutputWriteError,
     cause,
     check_stage_path,
@@ -41,8 +40,6 @@ from . import (
     with_disk_state,
 )
 from .style import COLOURS, CURVE_WIDTH, SPHERE_PARTS
-
-EXTENSIONS = STAGE_EXTENSIONS
 
 
 def _vec3f_array(points: np.ndarray) -> Vt.Vec3fArray:

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from warpsim.kernels.aero import AeroModel
+from warpsim.kernels.collision import CollisionMode
 from warpsim.kernels.constraints import chebyshev_weights
 from warpsim.runner import Simulation
 
@@ -40,6 +42,7 @@ class NumpyVerlet:
         self.tri_loading = m.tri_loading.numpy()[: m.tri_count]
         self.tri_world = m.particle_world_np[self.tris[:, 0]] if m.tri_count else np.zeros(0, dtype=np.int32)
         self.air = solver.air
+        self.wind_profile = solver.wind
         self.ground = solver.ground
         t = m.terrain
         self.heights = t.heights.astype(F32)
@@ -48,9 +51,10 @@ class NumpyVerlet:
         self.ends = m.stick_particles_np
         self.coef = solver.projector.stick_coef.numpy()[: m.stick_count]
         self.scale = solver.projector.particle_scale.numpy()
-        self.relaxation = F32(solver.relaxation)
-        self.damping = F32(solver.damping)
-        self.omegas = [F32(w) for w in chebyshev_weights(solver.iterations, solver.chebyshev)]
+        cfg = solver.config
+        self.relaxation = F32(cfg.relaxation)
+        self.damping = F32(cfg.damping)
+        self.omegas = [F32(w) for w in chebyshev_weights(cfg.iterations, cfg.chebyshev)]
         self.rest = sim.control.stick_rest.numpy()[: m.stick_count]
         self.nail_target = sim.control.nail_target.numpy().reshape(-1, 3)
         self.wind = sim.control.wind.numpy().reshape(-1, 3)
@@ -61,9 +65,11 @@ class NumpyVerlet:
 
     def _cell(self, x, y):
         ny, nx = self.heights.shape
-        fx = np.clip((x - self.origin[0]) / self.cell[0], F32(0.0), F32(nx - 1.000001))
-        fy = np.clip((y - self.origin[1]) / self.cell[1], F32(0.0), F32(ny - 1.000001))
-        ix, iy = np.floor(fx).astype(np.int64), np.floor(fy).astype(np.int64)
+        fx = np.clip((x - self.origin[0]) / self.cell[0], F32(0.0), F32(nx - 1))
+        fy = np.clip((y - self.origin[1]) / self.cell[1], F32(0.0), F32(ny - 1))
+        # the last cell reaches the far edge inclusive: no sample past the grid is read
+        ix = np.minimum(np.floor(fx).astype(np.int64), nx - 2)
+        iy = np.minimum(np.floor(fy).astype(np.int64), ny - 2)
         h = self.heights
         return fx - ix, fy - iy, h[iy, ix], h[iy, ix + 1], h[iy + 1, ix], h[iy + 1, ix + 1]
 
@@ -97,12 +103,13 @@ class NumpyVerlet:
         velocity = ((a - qp[t[:, 0]]) + (b - qp[t[:, 1]]) + (c - qp[t[:, 2]])) / (F32(3.0) * self.dt)
         centre = (a + b + c) / F32(3.0)
         wind = self.wind[self.tri_world]
-        if self.air.shear_exponent != 0.0:
+        shear = self.wind_profile
+        if shear.shear_exponent != 0.0:
             h = np.maximum(centre[:, 2] - self.height(centre[:, 0], centre[:, 1]), F32(0.1))
-            wind = wind * ((h / F32(self.air.shear_reference_height)) ** F32(self.air.shear_exponent))[:, None]
+            wind = wind * ((h / F32(shear.reference_height)) ** F32(shear.shear_exponent))[:, None]
         w = wind - velocity
         wn = np.einsum("ij,ij->i", n, w)
-        if int(self.air.model) == 0:
+        if self.air.model == AeroModel.PAPER:
             mag = self.air_density * wn * np.abs(wn) * area
         else:
             speed = np.linalg.norm(w, axis=1)
@@ -161,7 +168,7 @@ class NumpyVerlet:
             return
         p = x[below]
         hb = h[below]
-        if int(self.ground.mode) == 1:
+        if self.ground.collision == CollisionMode.NORMAL:
             n = self.normal(p[:, 0], p[:, 1])
             depth = (hb - p[:, 2]) * n[:, 2]
             p = p + n * depth[:, None]

@@ -75,7 +75,7 @@ def _row(case: str, sim: Simulation, rate: float) -> dict:
         "sticks": m.stick_count,
         "triangles": m.tri_count,
         "worlds": m.world_count,
-        "iterations": getattr(sim.solver, "iterations", None),
+        "iterations": sim.solver.config.iterations if sim.solver.config.method == "verlet" else None,
         "method": sim.descriptor["solver"]["method"],
         "device": str(m.device),
     }
@@ -204,7 +204,7 @@ def case_newton(size: int) -> Callable[[Options], dict]:
         for i, j in m.stick_particles_np:
             builder.add_spring(int(i), int(j), ke=1.0e6, kd=0.0, control=0.0)
         model = builder.finalize(device=opts.device)
-        solver = newton.solvers.SolverXPBD(model, iterations=sim.solver.iterations)
+        solver = newton.solvers.SolverXPBD(model, iterations=sim.solver.config.iterations)
         s0, s1, control = model.state(), model.state(), model.control()
         solver.step(s0, s1, control, None, sim.dt)
         with wp.ScopedCapture(device=model.device) as capture:
@@ -216,7 +216,7 @@ def case_newton(size: int) -> Callable[[Options], dict]:
                 wp.capture_launch(capture.graph)
 
         rate = time_steps(step, opts.min_time, lambda: wp.synchronize_device(model.device))
-        return _compare(row, f"Newton {newton.__version__} SolverXPBD, {sim.solver.iterations} iterations", rate)
+        return _compare(row, f"Newton {newton.__version__} SolverXPBD, {sim.solver.config.iterations} iterations", rate)
 
     run.__doc__ = f"warpsim against Newton's SolverXPBD on a {size}x{size} grid of the same sticks"
     return run

@@ -18,7 +18,7 @@ def _plate(device, flip=False, aero=ws.AeroModel.PAPER, wind=(10.0, 0.0, 0.0)):
     s, c = m.state(), m.control()
     c.set_wind(wind)
     out = ws.SolverVerlet(m).tri_force
-    triangle_air_force(m, s, c, 0.01, ws.AirSettings(model=aero), out)
+    triangle_air_force(m, s, c, 0.01, ws.AirConfig(model=aero), ws.WindConfig(), out)
     return 3.0 * out.numpy().sum(axis=0)  # per-vertex thirds back to the whole force
 
 
@@ -64,8 +64,7 @@ def test_moving_plate_in_still_air_is_braked(device):
     b = ws.ModelBuilder(gravity=0.0)
     ids, _, _ = b.add_grid((0, 0, 50), (0.0, 0.5, 0), (0, 0, 0.5), 3, 3, mass=0.5, vel=(5.0, 0, 0))
     m = b.finalize(device)
-    s, c = m.state(), m.control()
-    s.set_velocity(m.particle_qd0, 0.01)
+    s, c = m.state(0.01), m.control()
     solver = ws.SolverVerlet(m)
     for _ in range(50):
         solver.step(s, c, 0.01)
@@ -78,18 +77,19 @@ def _glider_centre_of_pressure(device, alpha_deg: float, chord_loading: bool) ->
     from warpsim.objects.hang_glider import HangGliderConfig, build_hang_glider
 
     b = ws.ModelBuilder()
-    cfg = HangGliderConfig(nose_up=0.0, washout=0.0, position=(0.0, 0.0), altitude=50.0, chord_loading=chord_loading)
+    cfg = HangGliderConfig(
+        nose_up=0.0, washout=0.0, position=(0.0, 0.0), altitude=50.0, speed=0.0, chord_loading=chord_loading
+    )  # at rest in the wind: the wind is the relative wind
     rec = build_hang_glider(b, cfg, ws.Heightfield.flat())
     m = b.finalize(device)
     s, c = m.state(), m.control()
-    s.particle_q_prev.assign(s.particle_q)  # at rest in the wind: the wind is the relative wind
     a = np.radians(alpha_deg)
     c.set_wind((-10.0 * np.cos(a), 0.0, 10.0 * np.sin(a)))  # from ahead and below
     out = ws.SolverVerlet(m).tri_force
-    triangle_air_force(m, s, c, 0.01, ws.AirSettings(model=ws.AeroModel.PLATE), out)
+    triangle_air_force(m, s, c, 0.01, ws.AirConfig(model=ws.AeroModel.PLATE), ws.WindConfig(), out)
     lift = 3.0 * out.numpy()[rec.tri_parts["sail"], 2]
     centres = m.particle_q0[m.tri_indices_np[rec.tri_parts["sail"]]].mean(axis=1)
-    nose_x = m.particle_q0[rec.meta["nose"], 0]
+    nose_x = m.particle_q0[rec.nose, 0]
     return float(((nose_x - centres[:, 0]) * lift).sum() / lift.sum() / cfg.chord), float(lift.sum())
 
 

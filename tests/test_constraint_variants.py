@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import warpsim as ws
-from warpsim.kernels.constraints import chebyshev_weights, project_sticks
+from warpsim.kernels.constraints import chebyshev_weights
 
 
 def _mesh(rng, device, double_first: str | None = None, nail_first: bool = False):
@@ -24,28 +24,28 @@ def _mesh(rng, device, double_first: str | None = None, nail_first: bool = False
     return b.finalize(device)
 
 
-def _project(m, iterations=20, mass_splitting=False, chebyshev=0.0):
+def _project(project, m, iterations=20, mass_splitting=False, chebyshev=0.0):
     s, c = m.state(), m.control()
-    project_sticks(m, s, c, iterations, mass_splitting=mass_splitting, chebyshev=chebyshev)
+    project(m, s, c, iterations, mass_splitting=mass_splitting, chebyshev=chebyshev)
     return s.positions()
 
 
 @pytest.mark.parametrize("mass_splitting", [False, True])
-def test_weight_two_is_a_doubled_stick(device, mass_splitting):
-    weighted = _project(_mesh(np.random.default_rng(3), device, "weight"), mass_splitting=mass_splitting)
-    doubled = _project(_mesh(np.random.default_rng(3), device, "duplicate"), mass_splitting=mass_splitting)
-    plain = _project(_mesh(np.random.default_rng(3), device), mass_splitting=mass_splitting)
+def test_weight_two_is_a_doubled_stick(device, mass_splitting, project):
+    weighted = _project(project, _mesh(np.random.default_rng(3), device, "weight"), mass_splitting=mass_splitting)
+    doubled = _project(project, _mesh(np.random.default_rng(3), device, "duplicate"), mass_splitting=mass_splitting)
+    plain = _project(project, _mesh(np.random.default_rng(3), device), mass_splitting=mass_splitting)
     np.testing.assert_allclose(weighted, doubled, atol=2e-6)
     assert np.abs(weighted - plain).max() > 1e-4  # the weight really changed something
 
 
-def test_mass_splitting_conserves_momentum_plain_average_does_not(device):
+def test_mass_splitting_conserves_momentum_plain_average_does_not(device, project):
     m = _mesh(np.random.default_rng(5), device)
     mass = m.particle_mass[:, None]
     q0 = m.particle_q0.astype(np.float32).astype(np.float64)
     moments = {}
     for split in (False, True):
-        moved = _project(m, iterations=1, mass_splitting=split)
+        moved = _project(project, m, iterations=1, mass_splitting=split)
         moments[split] = np.abs((mass * (moved - q0)).sum(axis=0)).max()
         scale = np.abs(mass * (moved - q0)).sum(axis=0).max()
     assert moments[True] < 1e-5 * scale
@@ -85,7 +85,7 @@ def test_solver_refuses_bad_chebyshev(device):
 
 
 @pytest.mark.parametrize("iterations", [1, 20, 55])
-def test_schemes_agree_and_repeat_bit_for_bit(device, iterations):
+def test_schemes_agree_and_repeat_bit_for_bit(device, iterations, project):
     """fused and scatter do the same float operations in the same order (bit-identical); gather differs
     only in the order of float additions. Each repeats itself exactly. A moved nail is honoured by all."""
     m = _mesh(np.random.default_rng(11), device, nail_first=True)
@@ -95,7 +95,7 @@ def test_schemes_agree_and_repeat_bit_for_bit(device, iterations):
         for _ in range(2):
             s, c = m.state(), m.control()
             c.nail_target.assign(np.array([m.nail_target0[0] + (0.3, -0.2, 0.1)], dtype=np.float32))
-            project_sticks(m, s, c, iterations, mass_splitting=True, chebyshev=0.9, scheme=scheme)
+            project(m, s, c, iterations, mass_splitting=True, chebyshev=0.9, scheme=scheme)
             runs.append(s.positions())
         np.testing.assert_array_equal(runs[0], runs[1])
         np.testing.assert_allclose(runs[0][0], m.nail_target0[0] + (0.3, -0.2, 0.1), atol=1e-6)  # on its nail

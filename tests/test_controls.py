@@ -64,7 +64,7 @@ def test_pitch_schedule_drives_the_glider():
     rec = sim.model.objects[0]
     sim.run(1.0)
     assert sim.controls["pitch"] == 1.0
-    rest = sim.control.stick_rest.numpy()[rec.meta["control_sticks"]]
+    rest = sim.control.stick_rest.numpy()[rec.control_sticks]
     from warpsim.objects.hang_glider import control_rest_lengths
 
     np.testing.assert_allclose(rest, control_rest_lengths(rec, 1.0, 0.0), rtol=1e-6)

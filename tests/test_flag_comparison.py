@@ -29,7 +29,7 @@ def _worst(sim, seconds: float, signed: bool = True) -> float:
 
 def test_verlet_flag_within_one_percent_at_dt_100th():
     sim = _flag("verlet", 0.01)
-    assert sim.solver.iterations == 55
+    assert sim.solver.config.iterations == 55
     worst = _worst(sim, 10.0)
     assert worst < 0.01, f"worst stretch {100 * worst:.2f}%"
     assert np.abs(sim.state.positions() - sim.model.particle_q0).max() > 0.2  # it flies in the wind

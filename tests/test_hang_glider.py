@@ -39,7 +39,7 @@ def test_counts_match_info(capsys):
 def test_pitch_control_shortens_forward_sticks():
     rec = Simulation(defaults("hang-glider")).model.objects[0]
     neutral, pulled = control_rest_lengths(rec, 0.0, 0.0), control_rest_lengths(rec, 1.0, 0.0)
-    k = rec.meta["control_forward_count"]
+    k = rec.control_forward_count
     assert (pulled[:k] < neutral[:k]).all() and (pulled[k:] > neutral[k:]).all()
     with pytest.raises(ValueError, match=r"\[-1, 1\]"):
         control_rest_lengths(rec, 1.5, 0.0)
@@ -88,7 +88,7 @@ def test_frame_within_one_percent_over_ten_seconds(mass_splitting, aero):
     for _ in range(100):
         sim.step(10)
         worst = max(worst, np.abs(sim.model.stick_stretch(sim.state.positions())[frame]).max())
-    assert sim.solver.iterations == 55
+    assert sim.solver.config.iterations == 55
     assert worst < 0.01, f"frame stretch {100 * worst:.2f}%"
 
 

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 import warpsim as ws
-from warpsim.kernels.constraints import project_sticks
 
 
 def test_free_fall_matches_parabola(device):
@@ -53,20 +52,20 @@ def test_nailed_particle_never_moves(device):
 
 
 @pytest.mark.parametrize("length, direction", [(1.5, "shorter"), (0.5, "longer")])
-def test_stick_moves_towards_rest_length(device, length, direction):
+def test_stick_moves_towards_rest_length(device, length, direction, project):
     b = ws.ModelBuilder(gravity=0.0)
     i = b.add_particle((0, 0, 5), 1.0)
     j = b.add_particle((length, 0, 5), 1.0)
     b.add_stick(i, j, rest=1.0)
     m = b.finalize(device)
     s, c = m.state(), m.control()
-    project_sticks(m, s, c, 1)
+    project(m, s, c, 1)
     new_length = float(m.stick_lengths(s.positions())[0])
     assert (new_length < length) if direction == "shorter" else (new_length > length)
     assert new_length == pytest.approx(1.0, abs=1e-6)  # a lone stick is solved in one iteration
 
 
-def test_mass_weighting_ratio_four_to_one(device):
+def test_mass_weighting_ratio_four_to_one(device, project):
     b = ws.ModelBuilder(gravity=0.0)
     i = b.add_particle((0, 0, 5), 1.0)
     j = b.add_particle((2.0, 0, 5), 4.0)
@@ -74,7 +73,7 @@ def test_mass_weighting_ratio_four_to_one(device):
     m = b.finalize(device)
     s, c = m.state(), m.control()
     before = s.positions()
-    project_sticks(m, s, c, 1)
+    project(m, s, c, 1)
     moved = np.linalg.norm(s.positions() - before, axis=1)
     assert moved[0] / moved[1] == pytest.approx(4.0, rel=1e-5)
     assert moved.sum() == pytest.approx(1.0, rel=1e-5)
@@ -112,14 +111,14 @@ def _perturbed_mesh(rng, device, order=None):
 
 
 @pytest.mark.parametrize("scheme", ["fused", "scatter", "gather"])
-def test_jacobi_iteration_matches_numpy_oracle(device, rng, scheme):
+def test_jacobi_iteration_matches_numpy_oracle(device, rng, scheme, project):
     m = _perturbed_mesh(rng, device)
     s, c = m.state(), m.control()
     q0 = s.positions()
     expected = _oracle_iteration(
         q0, m.particle_inv_mass.numpy().astype(np.float64), m.stick_particles_np, m.stick_rest.numpy(), m.nail_particles
     )
-    project_sticks(m, s, c, 1, scheme=scheme)
+    project(m, s, c, 1, scheme=scheme)
     got = s.positions()
     np.testing.assert_allclose(got, expected, atol=2e-6)
     shared = np.bincount(m.stick_particles_np.ravel()) >= 3
@@ -127,7 +126,7 @@ def test_jacobi_iteration_matches_numpy_oracle(device, rng, scheme):
 
 
 @pytest.mark.parametrize("scheme", ["fused", "scatter", "gather"])
-def test_stick_order_does_not_change_result(device, scheme):
+def test_stick_order_does_not_change_result(device, scheme, project):
     rng_a, rng_b = np.random.default_rng(7), np.random.default_rng(7)
     m1 = _perturbed_mesh(rng_a, device)
     order = np.random.default_rng(99).permutation(m1.stick_count)
@@ -135,7 +134,7 @@ def test_stick_order_does_not_change_result(device, scheme):
     results = []
     for m in (m1, m2):
         s, c = m.state(), m.control()
-        project_sticks(m, s, c, 55, scheme=scheme)
+        project(m, s, c, 55, scheme=scheme)
         results.append(s.positions())
     np.testing.assert_allclose(results[0], results[1], atol=1e-6)
     assert np.abs(results[0] - m1.particle_q0).max() > 1e-3

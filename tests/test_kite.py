@@ -19,7 +19,7 @@ def flight():
         sim.step(50)
         q = sim.state.positions()
         samples.append(line_state(rec, q)["elevation_deg"])
-        anchor_err = max(anchor_err, np.abs(q[rec.meta["anchor_particle"]] - sim.model.nail_target0[0]).max())
+        anchor_err = max(anchor_err, np.abs(q[rec.anchor_particle] - sim.model.nail_target0[0]).max())
         frame = max(frame, np.abs(sim.model.stick_stretch(q)[rec.stick_groups["frame"]]).max())
     return sim, np.array(samples), anchor_err, frame
 
@@ -62,7 +62,7 @@ def test_moving_the_anchor_moves_the_kite():
         sim.step(1000)
         rec = sim.model.objects[0]
         q = sim.state.positions()
-        assert np.array_equal(q[rec.meta["anchor_particle"], :2], np.float32(anchor))
+        assert np.array_equal(q[rec.anchor_particle, :2], np.float32(anchor))
         sims.append(line_state(rec, q)["tow"])
     moved = sims[1] - sims[0]
     assert moved[0] > 5.0  # the kite followed the anchor downwind

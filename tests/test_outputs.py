@@ -27,7 +27,7 @@ def _record(kind, tmp_path, seconds=0.5, suffix=".usda", **overrides):
     usd_path, h5_path = tmp_path / f"{kind}{suffix}", tmp_path / f"{kind}.h5"
     frames = []
     writer = UsdWriter(usd_path, sim.model, sim.steps_per_frame * sim.dt)
-    with H5Recorder(h5_path, sim, to_toml(d), kind) as recorder:
+    with H5Recorder(h5_path, sim.model, d, sim.checkpoint, to_toml(d), kind) as recorder:
 
         def on_frame(frame):
             frames.append((frame.index, frame.time, frame.positions))
@@ -90,7 +90,7 @@ def _ids_of(sim, prim):
     part = prim.GetName()
     if prim.GetTypeName() == "Mesh":
         return np.unique(sim.model.tri_indices_np[record.tri_parts[part]].reshape(-1))
-    return np.concatenate([np.asarray(c) for c in record.meta["curves"][part]])
+    return np.concatenate([np.asarray(c) for c in record.curves[part]])
 
 
 def _all_drawn_ids(sim, drawn):

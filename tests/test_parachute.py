@@ -23,7 +23,7 @@ def _drop(hoop: bool, seconds: float = 10.0):
             hoop_stretch = max(hoop_stretch, np.abs(sim.model.stick_stretch(q)[rec.stick_groups["hoop"]]).max())
         if k % 2 == 1:
             radii.append(projected_radius(rec, q))
-    descent = -sim.state.velocities(sim.dt)[rec.meta["person"], 2]
+    descent = -sim.state.velocities(sim.dt)[rec.person, 2]
     return sim, np.array(radii), float(descent), hoop_stretch
 
 
@@ -77,7 +77,7 @@ def test_descent_does_not_depend_on_where_the_parachute_is():
         d["terrain"]["height"] = ground
         d["solver"]["mass_splitting"] = True
         sim = Simulation(d)
-        person = sim.model.objects[0].meta["person"]
+        person = sim.model.objects[0].person
         sim.step(1500)
         z0 = sim.state.positions()[person, 2]
         sim.step(500)

@@ -242,7 +242,7 @@ def test_a_damaged_checkpoint_falls_back_to_the_other_slot_and_two_are_refused(t
     rec = tmp_path / "k.h5"
     d = defaults("kite")
     sim = Simulation(d)
-    with H5Recorder(rec, sim, to_toml(d), "kite") as recorder:
+    with H5Recorder(rec, sim.model, d, sim.checkpoint, to_toml(d), "kite") as recorder:
         recorder.sync_interval = 0.0  # a checkpoint after every frame: both slots filled
         sim.run(1.0, on_frame=recorder.write)
     slots = _slot_offsets(rec)
@@ -462,7 +462,8 @@ def test_ctrl_c_during_start_up_is_one_line(delay, tmp_path):
 def test_empty_and_skeleton_recordings_are_refused(tmp_path, capsys):
     d = defaults("flag")
     empty = tmp_path / "empty.h5"
-    H5Recorder(empty, Simulation(d), to_toml(d), "flag").close()  # created, closed before any frame
+    sim = Simulation(d)
+    H5Recorder(empty, sim.model, d, sim.checkpoint, to_toml(d), "flag").close()  # created, closed before any frame
     skeleton = tmp_path / "skeleton.h5"
     with h5py.File(skeleton, "w") as f:
         f.attrs["format"] = "warpsim-recording"

@@ -54,9 +54,9 @@ def test_delta_objects_are_built_mirror_symmetric(name):
     """The sail, frame and pilot/rope map exactly onto their mirror images across the keel plane, so any
     turn the object makes comes from its flight dynamics (seeded by rounding), not from its mesh."""
     sim = Simulation(defaults(name))
-    model, meta = sim.model, sim.model.objects[0].meta
+    model, rec = sim.model, sim.model.objects[0]
     q = sim.state.positions().astype(np.float64)
-    tip_l, tip_r = q[meta["tips"][0]], q[meta["tips"][1]]
+    tip_l, tip_r = q[rec.tips[0]], q[rec.tips[1]]
     left = (tip_l - tip_r) / np.linalg.norm(tip_l - tip_r)
     mirrored = q - 2.0 * np.outer((q - 0.5 * (tip_l + tip_r)) @ left, left)
     dist = np.linalg.norm(mirrored[:, None, :] - q[None, :, :], axis=2)

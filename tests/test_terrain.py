@@ -40,9 +40,9 @@ def test_no_particle_below_terrain_after_any_step(device, mode):
     # 0.3 kg/m^2: the explicit air force is stable at dt = 0.01 s while rho |w| dt / (m/A) < ~1
     b.add_grid((-6, -6, 8), (0.6, 0, 0), (0, 0.6, 0), 20, 20, mass=20.0, vel=(3.0, 1.0, -5.0))
     m = b.finalize(device)
-    s, c = m.state(), m.control()
+    s, c = m.state(0.01), m.control()
     c.set_wind((6.0, 0.0, 0.0))
-    solver = ws.SolverVerlet(m, iterations=20, ground=ws.GroundSettings(mode=mode, friction=0.5))
+    solver = ws.SolverVerlet(m, iterations=20, ground=ws.GroundConfig(collision=mode, friction=0.5))
     touched = 0
     for _ in range(300):
         solver.step(s, c, 0.01)
@@ -64,7 +64,7 @@ def _slide_distance(device, friction, slope_deg=20.0):
     b.add_particle((0.0, 0.0, 0.5), 1.0)
     m = b.finalize(device)
     s, c = m.state(), m.control()
-    solver = ws.SolverVerlet(m, ground=ws.GroundSettings(friction=friction))
+    solver = ws.SolverVerlet(m, ground=ws.GroundConfig(friction=friction))
     for _ in range(200):
         solver.step(s, c, 0.01)
     return s.positions()[0, 0]

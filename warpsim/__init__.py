@@ -14,20 +14,24 @@ __version__ = "0.1.0"
 # name -> module: imported on first use, so that the command line starts (and answers --help or Ctrl-C) without
 # loading Warp first
 _EXPORTS = {
-    "AIR_DENSITY": "model",
-    "GRAVITY": "model",
+    "AIR_DENSITY": "config",
+    "GRAVITY": "config",
     "AeroModel": "kernels.aero",
-    "AirSettings": "solver",
+    "AirConfig": "config",
     "CollisionMode": "kernels.collision",
     "Control": "model",
-    "GroundSettings": "solver",
+    "GroundConfig": "config",
     "Heightfield": "terrain",
     "Model": "model",
     "ModelBuilder": "builder",
     "ObjectRecord": "model",
+    "Simulation": "runner",
+    "SolverConfig": "config",
     "SolverEuler": "solver",
     "SolverVerlet": "solver",
     "State": "model",
+    "WindConfig": "config",
+    "make_solver": "solver",
 }
 
 __all__ = [*sorted(_EXPORTS), "__version__"]

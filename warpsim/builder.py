@@ -8,7 +8,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import warp as wp
 
-from .model import AIR_DENSITY, GRAVITY, Model, ObjectRecord, heightfield_data
+from .config import AIR_DENSITY, GRAVITY
+from .model import Model, ObjectRecord
 from .terrain import Heightfield
 
 
@@ -376,7 +377,7 @@ class ModelBuilder:
         m.particle_tri_ids = wp.array(ids, dtype=wp.int32, device=device)
 
         m.terrain = self.terrain if self.terrain is not None else Heightfield.flat()
-        m.terrain_data = heightfield_data(m.terrain, device)
+        m.terrain_data = m.terrain.device_data(device)
         m.gravity = wp.vec3(0.0, 0.0, -self.gravity)
         m.air_density = self.air_density
         m.objects = list(self.objects)

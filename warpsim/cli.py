@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 from . import __version__
@@ -296,7 +297,7 @@ def cmd_info(args) -> int:
     import numpy as np
 
     from .descriptor import to_toml
-    from .runner import build_model
+    from .scene import build_model
 
     descriptor, _, where = _load(args)
     model = build_model(descriptor, "cpu", where)
@@ -319,7 +320,7 @@ def cmd_info(args) -> int:
             note = f" ({', '.join(notes)})" if notes else ""
             print(f"    part {part:<10} {len(ids):5d} particles, {finite.sum():9.3f} kg{note}")
             earlier.update(int(i) for i in ids)
-        paper = record.meta.get("paper_counts")
+        paper = record.paper_counts
         if paper:
             print(
                 f"  the paper's model: particles {paper['particles']}, sticks {paper['sticks']}, "
@@ -387,9 +388,40 @@ def _same_file_check(scene: str, outputs: dict) -> None:
 
 
 def cmd_run(args) -> int:
-    """Run a scene (or continue a recording) and print the summary."""
+    """Run a scene (or continue a recording) and print the summary: check the options, resolve the scene, open
+    the outputs, run, report."""
+    import contextlib
+
+    from .runner import BlowUpError
+
+    usd_path, h5_path = _check_run_options(args)
+    device = _check_device(args.device)
+    with contextlib.ExitStack() as outputs:
+        lock = _claim_recording(outputs, args, h5_path)
+        run = _resolve_run(args)
+        sim = _start(run, device, args)
+        stop = _StopRequests()
+        outputs.callback(stop.restore)
+        writer = _Outputs(outputs, sim, run, args, h5_path, usd_path, lock, stop)
+        blowup = None
+        try:
+            summary = sim.run(
+                run.seconds,
+                on_frame=writer.on_frame if writer.any else None,
+                on_progress=_progress(sim) if not args.quiet and sys.stderr.isatty() else None,
+                realtime=args.realtime,
+                stop=stop,
+            )
+        except BlowUpError as err:
+            blowup, summary = err, err.summary
+        writer.close()
+    return _report(args, run, summary, blowup, writer.failures, h5_path, usd_path)
+
+
+def _check_run_options(args) -> tuple[Path | None, Path | None]:
+    """The checked ``--usd`` and ``--h5`` paths; a contradictory or bad option is a usage error."""
     from .io import check_stage_path
-    from .io.hdf5 import RecordingError, check_recording_path, claim
+    from .io.hdf5 import check_recording_path
 
     if args.resume and args.scene:
         raise UsageError("give either SCENE or --resume REC.h5, not both (a recording holds its scene)")
@@ -397,123 +429,162 @@ def cmd_run(args) -> int:
         raise UsageError("missing SCENE (a built-in object, a scene name or a .toml path), or --resume REC.h5")
     if args.resume and args.h5:
         raise UsageError("--resume appends to its recording; --h5 is not needed")
-    usd_path = _checked_output(check_stage_path, args.usd, "--usd")
-    h5_path = _checked_output(check_recording_path, args.h5, "--h5")
-    if args.scene:
-        _same_file_check(args.scene, {"--h5": h5_path, "--usd": usd_path})
-    device = _check_device(args.device)
-    lock = None
-    try:
-        # refuse a recording another run writes before anything else happens
-        if h5_path:
-            try:
-                lock = claim(h5_path, create=True)
-            except RecordingError as err:
-                raise UsageError(f"--h5 {err}") from None
-        elif args.resume:
-            if not Path(args.resume).is_file():
-                raise UsageError(f"--resume {args.resume}: no such file")
-            _checked_output(check_recording_path, args.resume, "--resume")
-            try:
-                lock = claim(args.resume, create=False)  # held to the end: nobody else writes it meanwhile
-            except RecordingError as err:
-                raise UsageError(f"--resume {err}") from None
-        return _run(args, device, usd_path, h5_path, lock)
-    finally:
-        if lock is not None:
-            lock.release(remove_created=True)  # no-op once the recorder has taken and released it
-
-
-def _run(args, device: str, usd_path: Path | None, h5_path: Path | None, lock) -> int:
-    """``cmd_run`` once the outputs are checked (``lock``: the --h5 recording's writer lock, or None)."""
-    from .descriptor import load_text, to_toml
-    from .io import OutputWriteError
-    from .io.hdf5 import H5Recorder, Recording, RecordingError
-    from .runner import BlowUpError, Simulation
-
-    checkpoint = None
     if args.resume:
         for name in ("set", "dt", "iterations", "fps", "worlds", "vary"):
             if getattr(args, name):
                 raise UsageError(f"--{name} cannot change a resumed run; it continues with the recording's settings")
-        try:
-            with Recording(args.resume, owner=True) as recording:
-                checkpoint, frame = recording.checkpoint(), recording.checkpoint_frame
-                text, where = recording.descriptor_text, f"{args.resume} (resumed)"
-        except RecordingError as err:
-            raise UsageError(f"--resume {err}") from None
-        descriptor = load_text(text, where)
-        seconds = args.seconds if args.seconds is not None else descriptor["scene"]["seconds"]
-    else:
+    usd_path = _checked_output(check_stage_path, args.usd, "--usd")
+    h5_path = _checked_output(check_recording_path, args.h5, "--h5")
+    if args.scene:
+        _same_file_check(args.scene, {"--h5": h5_path, "--usd": usd_path})
+    return usd_path, h5_path
+
+
+def _claim_recording(outputs, args, h5_path: Path | None):
+    """Take the writer's lock of the ``--h5`` or ``--resume`` recording before anything else happens (another
+    run writing it is a usage error); released when ``outputs`` closes. Returns the lock or None."""
+    from .io.hdf5 import RecordingError, check_recording_path, claim
+
+    if not (h5_path or args.resume):
+        return None
+    if args.resume:
+        if not Path(args.resume).is_file():
+            raise UsageError(f"--resume {args.resume}: no such file")
+        _checked_output(check_recording_path, args.resume, "--resume")
+    flag, path = ("--h5", h5_path) if h5_path else ("--resume", args.resume)
+    try:
+        lock = claim(path, create=bool(h5_path))  # held to the end: nobody else writes it meanwhile
+    except RecordingError as err:
+        raise UsageError(f"{flag} {err}") from None
+    outputs.callback(lock.release, remove_created=True)  # a no-op once the recorder has released it
+    return lock
+
+
+@dataclass
+class _RunInputs:
+    """What ``warpsim run`` runs: the descriptor, where it came from, how long, and the checkpoint it continues
+    (with that checkpoint's frame) when resuming."""
+
+    descriptor: dict
+    where: str
+    seconds: float
+    checkpoint: object = None
+    frame: int = -1
+
+
+def _resolve_run(args) -> _RunInputs:
+    """The scene of the command line, or the one a ``--resume`` recording holds with its checkpoint."""
+    from .descriptor import load_text
+    from .io.hdf5 import Recording, RecordingError
+
+    if not args.resume:
         descriptor, _, where = _load(args)
-        seconds = descriptor["scene"]["seconds"]
-    show_progress = not args.quiet and sys.stderr.isatty()
-    sim = Simulation(descriptor, device=device, where=where)
-    if checkpoint is not None:
+        return _RunInputs(descriptor, where, descriptor["scene"]["seconds"])
+    try:
+        with Recording(args.resume, owner=True) as recording:
+            checkpoint, frame = recording.checkpoint(), recording.checkpoint_frame
+            text, where = recording.descriptor_text, f"{args.resume} (resumed)"
+    except RecordingError as err:
+        raise UsageError(f"--resume {err}") from None
+    descriptor = load_text(text, where)
+    seconds = args.seconds if args.seconds is not None else descriptor["scene"]["seconds"]
+    return _RunInputs(descriptor, where, seconds, checkpoint, frame)
+
+
+def _start(run: _RunInputs, device: str, args):
+    """The :class:`~warpsim.runner.Simulation` of ``run`` (restored from its checkpoint), announced unless
+    ``--quiet``."""
+    from .runner import Simulation
+
+    sim = Simulation(run.descriptor, device=device, where=run.where)
+    if run.checkpoint is not None:
         try:
-            sim.restore(checkpoint)
+            sim.restore(run.checkpoint)
         except ValueError as err:
             raise UsageError(f"--resume {args.resume}: its checkpoint does not fit its scene ({err})") from None
     if not args.quiet:
         m = sim.model
         print(
-            f"{where}: {m.particle_count} particles, {m.stick_count} sticks, {m.tri_count} triangles; "
-            f"dt {sim.dt:g} s, {descriptor['solver']['method']}, device {device}"
-            + (f"; from t = {sim.state.time:.3f} s, frame {frame}" if checkpoint is not None else "")
+            f"{run.where}: {m.particle_count} particles, {m.stick_count} sticks, {m.tri_count} triangles; "
+            f"dt {sim.dt:g} s, {run.descriptor['solver']['method']}, device {device}"
+            + (f"; from t = {sim.state.time:.3f} s, frame {run.frame}" if run.checkpoint is not None else "")
         )
+    return sim
+
+
+def _progress(sim):
+    """A progress line on stderr, rewritten in place."""
 
     def progress(t, total, steps, wall):
         rate = steps / wall if wall > 0 else 0.0
         sys.stderr.write(f"\r  t = {t:8.2f} s  ({100 * steps * sim.dt / total:5.1f}%)  {rate:10,.0f} steps/s")
         sys.stderr.flush()
 
-    stop = _StopRequests()
-    recorder = usd = None
-    blowup = None
-    failures: list[OutputWriteError] = []
-    try:
+    return progress
+
+
+class _Outputs:
+    """The recording and the stage of a run, opened now and closed (always) by :meth:`close`; a write that fails
+    stops the run at that frame, and its error is kept in ``failures``."""
+
+    def __init__(self, stack, sim, run: _RunInputs, args, h5_path, usd_path, lock, stop):
+        from .descriptor import to_toml
+        from .io.hdf5 import H5Recorder, RecordingError
+
+        self.stop, self.failures = stop, []
+        self.recorder = self.usd = None
+        stack.callback(self.close)
         try:
-            if args.resume:
-                recorder = H5Recorder(args.resume, sim, resume=True, lock=lock)
-            elif h5_path:
-                recorder = H5Recorder(h5_path, sim, to_toml(descriptor), where, lock=lock)
+            if args.resume or h5_path:
+                self.recorder = H5Recorder(
+                    args.resume or h5_path,
+                    sim.model,
+                    run.descriptor,
+                    sim.checkpoint,
+                    "" if args.resume else to_toml(run.descriptor),
+                    "" if args.resume else run.where,
+                    resume=bool(args.resume),
+                    lock=lock,
+                )
         except RecordingError as err:
             raise UsageError(str(err)) from None
         if usd_path:
             from .io.usd import UsdWriter  # USD loads here, after Ctrl-C no longer raises (see _StopRequests)
 
-            usd = UsdWriter(usd_path, sim.model, sim.steps_per_frame * sim.dt)
+            self.usd = UsdWriter(usd_path, sim.model, sim.steps_per_frame * sim.dt)
+        self.any = bool(self.recorder or self.usd)
 
-        def on_frame(frame):
-            if recorder and not failures:
-                try:
-                    recorder.write(frame)
-                except OutputWriteError as err:  # stop at this frame; the outputs keep what they have
-                    failures.append(err)
-                    stop.requested = True
-            if usd:
-                usd.write(frame.time, frame.positions)
+    def on_frame(self, frame) -> None:
+        """Write ``frame`` to every output."""
+        from .io import OutputWriteError
 
-        try:
-            summary = sim.run(
-                seconds,
-                on_frame=on_frame if (recorder or usd) else None,
-                on_progress=progress if show_progress else None,
-                realtime=args.realtime,
-                stop=stop,
-            )
-        except BlowUpError as err:
-            blowup, summary = err, err.summary
-    finally:
-        for output in (recorder, usd):
+        if self.recorder and not self.failures:
+            try:
+                self.recorder.write(frame)
+            except OutputWriteError as err:  # stop at this frame; the outputs keep what they have
+                self.failures.append(err)
+                self.stop.requested = True
+        if self.usd:
+            self.usd.write(frame.time, frame.positions)
+
+    def close(self) -> None:
+        """Finish every output (safe to call twice); a failure joins ``failures``."""
+        from .io import OutputWriteError
+
+        for name in ("recorder", "usd"):
+            output = getattr(self, name)
+            setattr(self, name, None)
             if output is not None:
                 try:
                     output.close()
                 except OutputWriteError as err:
-                    if err not in failures:
-                        failures.append(err)
-        stop.restore()
-    if show_progress:
+                    if err not in self.failures:
+                        self.failures.append(err)
+
+
+def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path) -> int:
+    """Print the summary, the outputs and any error line; return the exit code."""
+    if not args.quiet and sys.stderr.isatty():
         sys.stderr.write("\r" + " " * 70 + "\r")
     if not args.quiet:
         print(summary.text())
@@ -528,7 +599,7 @@ def _run(args, device: str, usd_path: Path | None, h5_path: Path | None, lock) -
         hint = (
             "try a smaller --dt (explicit Euler springs need dt well below sqrt(mass / solver.spring_stiffness)), "
             "or solver.method=verlet"
-            if descriptor["solver"]["method"] == "euler"
+            if run.descriptor["solver"]["method"] == "euler"
             else "try a smaller --dt or more --iterations"
         )
         sys.stderr.write(f"warpsim run: error: {one_line(str(blowup))}\n  ({hint}; see README: Blow-ups)\n")

@@ -25,7 +25,6 @@ so a descriptor only lists what it changes. Sections and keys (``warpsim info SC
 from __future__ import annotations
 
 import copy
-import dataclasses
 import difflib
 import sys
 from pathlib import Path
@@ -36,6 +35,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
+from .config import SECTIONS, Bounds, as_section, field_bounds, field_choices
 from .controls import ControlError, ControlSchedule
 from .objects import registry
 
@@ -44,86 +44,41 @@ class DescriptorError(ValueError):
     """A scene descriptor or override a user wrote is invalid; the message says where and what is allowed."""
 
 
-CHOICES = {
-    ("scene", "object"): tuple(registry.OBJECTS),
-    ("solver", "method"): ("verlet", "euler"),
-    ("air", "model"): ("paper", "plate"),
-    ("terrain", "kind"): ("flat", "procedural", "file"),
-    ("ground", "collision"): ("normal", "clamp"),
-}
+def section_class(section: str):
+    """The config dataclass of a descriptor section (shared sections and object sections), or None."""
+    return SECTIONS.get(section) or registry.config_of_section(section)
 
-# (low, high, low inclusive?) bounds on numbers
-BOUNDS = {
-    ("scene", "seconds"): (0.0, None, False),
-    ("scene", "fps"): (1e-6, 1e6, True),
-    ("terrain", "amplitude"): (-1e4, 1e4, True),
-    ("terrain", "height"): (-1e5, 1e5, True),
-    ("solver", "dt"): (1e-7, 1.0, True),
-    ("solver", "iterations"): (1, 10000, True),
-    ("solver", "relaxation"): (0.0, 2.0, False),
-    ("solver", "chebyshev"): (0.0, 0.999, True),
-    ("solver", "damping"): (0.0, 1.0, True),
-    ("solver", "max_stretch"): (0.0, None, True),
-    ("solver", "spring_stiffness"): (0.0, None, False),
-    ("solver", "spring_damping"): (0.0, None, True),
-    ("air", "scale"): (0.0, None, True),
-    ("air", "density"): (0.0, None, True),
-    ("terrain", "size"): (0.0, 1e7, False),
-    ("ground", "friction"): (0.0, None, True),
-    ("wind", "gust_intensity"): (0.0, None, True),
-    ("wind", "gust_period"): (0.0, None, False),
-    ("wind", "gust_seed"): (0, None, True),
-    ("terrain", "seed"): (0, None, True),
-    ("wind", "reference_height"): (0.0, None, False),
-}
+
+def choices(section: str, key: str) -> tuple[str, ...] | None:
+    """The values ``section.key`` may take, when it is a choice (derived from the config classes and enums)."""
+    if (section, key) == ("scene", "object"):
+        return tuple(registry.OBJECTS)
+    cls = section_class(section)
+    return field_choices(cls, key) if cls is not None else None
+
+
+def bounds(section: str, key: str) -> Bounds | None:
+    """The :class:`~warpsim.config.Bounds` of ``section.key`` (from its config class), or None."""
+    cls = section_class(section)
+    return field_bounds(cls, key) if cls is not None else None
+
 
 BASE_DEFAULTS: dict[str, dict[str, Any]] = {
-    "scene": {"object": "flag", "seconds": 10.0, "fps": 30.0},
-    "solver": {
-        "method": "verlet",
-        "dt": 0.01,
-        "iterations": 55,
-        "relaxation": 1.0,
-        "chebyshev": 0.95,
-        "mass_splitting": False,
-        "damping": 0.0,
-        "max_stretch": 1.0,
-        "spring_stiffness": 5000.0,
-        "spring_damping": 5.0,
-    },
-    "air": {"model": "paper", "scale": 1.0, "density": 1.294217666},
-    "wind": {
-        "velocity": [4.0, 0.5, 0.0],
-        "shear_exponent": 0.0,
-        "reference_height": 10.0,
-        "gust_intensity": 0.0,
-        "gust_period": 2.0,
-        "gust_seed": 0,
-    },
-    "terrain": {"kind": "flat", "size": 1000.0, "height": 0.0, "amplitude": 40.0, "seed": 0, "file": ""},
-    "ground": {"collision": "normal", "friction": 0.5},
+    **{name: as_section(cls()) for name, cls in SECTIONS.items()},
     "worlds": {"count": 1},
 }
+"""Every shared section's defaults, as :mod:`warpsim.config` gives them."""
 
 MAX_WORLDS = 65536
 FLOAT_LIMIT = 1e30  # [any unit] the simulation is float32 (max 3.4e38): larger numbers are refused outright
 VARIABLE_SECTIONS = ("wind",)  # besides the object's own section
 
 
-def _object_defaults(kind: str) -> dict[str, Any]:
-    cfg = registry.OBJECTS[kind].config()
-    return {f.name: _plain(getattr(cfg, f.name)) for f in dataclasses.fields(cfg)}
-
-
-def _plain(value):
-    return list(value) if isinstance(value, tuple) else value
-
-
 def defaults(kind: str = "flag") -> dict[str, dict[str, Any]]:
     """The full default descriptor for an object ``kind``, including the object's own scene defaults."""
     d = copy.deepcopy(BASE_DEFAULTS)
     d["scene"]["object"] = kind
-    d[registry.section(kind)] = _object_defaults(kind)
+    d[registry.section(kind)] = as_section(registry.OBJECTS[kind].config())
     for section, values in registry.OBJECTS[kind].scene_defaults.items():
         d[section].update(copy.deepcopy(values))
     d["controls"] = []
@@ -165,18 +120,17 @@ def _check_value(where: str, section: str, key: str, default, value):
             raise DescriptorError(
                 f"{where}: {name} must hold finite numbers at most {FLOAT_LIMIT:g} in size, got {value!r}"
             )
-    choices = CHOICES.get((section, key))
-    if choices is not None and value not in choices:
+    options = choices(section, key)
+    if options is not None and value not in options:
         raise DescriptorError(
-            f"{where}: {name} = {value!r} is not one of {', '.join(choices)}{_suggest(str(value), choices)}"
+            f"{where}: {name} = {value!r} is not one of {', '.join(options)}{_suggest(str(value), options)}"
         )
-    bounds = BOUNDS.get((section, key)) or registry.bounds(section, key)
-    if bounds is not None:
-        low, high, inclusive = bounds
-        if low is not None and (value < low or (value == low and not inclusive)):
-            raise DescriptorError(f"{where}: {name} = {value!r} must be {'>=' if inclusive else '>'} {low}")
-        if high is not None and value > high:
-            raise DescriptorError(f"{where}: {name} = {value!r} must be <= {high}")
+    limits = bounds(section, key)
+    if limits is not None:
+        for v in value if isinstance(value, list) else (value,):
+            problem = limits.violation(v)
+            if problem:
+                raise DescriptorError(f"{where}: {name} = {value!r} {problem}")
     return value
 
 

@@ -12,21 +12,19 @@ import numpy as np
 import warp as wp
 
 from . import _warp
+from .config import AIR_DENSITY, GRAVITY
 from .kernels.collision import HeightfieldData
 from .terrain import Heightfield
 
 _warp.init()  # every warpsim object needs Warp; start it without its CPU-machine chatter
 
-GRAVITY = 9.80665
-"""Standard gravity [m/s^2] (slide 14; the paper's text misprints 9.80655)."""
-
-AIR_DENSITY = 1.294217666
-"""Air density [kg/m^3] used by the paper (slide 14)."""
+__all__ = ["AIR_DENSITY", "GRAVITY", "Control", "Model", "ObjectRecord", "State"]
 
 
-@dataclass
+@dataclass(kw_only=True)
 class ObjectRecord:
     """What a builder of a flying object added to a model: names and index ranges for diagnostics and output.
+    Objects with more to tell (reference particles, control sticks) extend it with typed fields.
 
     Attributes:
         name: instance name, e.g. ``"hang_glider"``.
@@ -36,8 +34,8 @@ class ObjectRecord:
         parts: part name -> particle indices (e.g. ``"sail"``, ``"pilot"``, ``"virtual"``).
         tri_parts: part name -> triangle indices.
         stick_groups: group name -> stick indices (e.g. ``"frame"``, ``"control"``).
-        meta: object-specific values (paper counts, control-stick tables, reference points); ``curves``:
-            part name -> list of particle chains drawn as curves in outputs (ropes, lines).
+        curves: part name -> chains of particle indices drawn as curves by outputs (ropes, lines).
+        paper_counts: the paper's particle, stick and triangle counts of this object, when it gives them.
     """
 
     name: str
@@ -47,57 +45,107 @@ class ObjectRecord:
     parts: dict[str, np.ndarray] = field(default_factory=dict)
     tri_parts: dict[str, np.ndarray] = field(default_factory=dict)
     stick_groups: dict[str, np.ndarray] = field(default_factory=dict)
-    meta: dict = field(default_factory=dict)
+    curves: dict[str, list[list[int]]] = field(default_factory=dict)
+    paper_counts: dict[str, int] | None = None
 
 
 class Model:
-    """Everything static about a simulation, built once by :class:`warpsim.ModelBuilder.finalize`.
+    """Everything static about a simulation, built once by :meth:`warpsim.ModelBuilder.finalize`.
 
-    Attributes:
-        device: Warp device the arrays live on.
-        particle_count, stick_count, tri_count, nail_count, world_count: sizes.
-        particle_mass: host ``[particle_count]`` masses [kg] (``inf`` for nailed particles).
-        particle_free_mass: host ``[particle_count]`` masses [kg] with nailed particles 0 (for momentum,
-            energy and mass centres of what moves freely).
-        particle_inv_mass: ``[particle_count]`` inverse masses [1/kg]; 0 = nailed or kinematic.
-        particle_world: ``[particle_count]`` world index of each particle.
-        particle_nail: ``[particle_count]`` index into ``Control.nail_target``, -1 when free.
-        particle_q0, particle_qd0: host ``[particle_count, 3]`` build positions [m] and velocities [m/s].
-        stick_particles: ``[stick_count]`` vec2i, the two particle indices of each stick.
-        stick_rest: ``[stick_count]`` rest lengths [m] as built (``Control.stick_rest`` starts from them).
-        stick_weight: ``[stick_count]`` weight of each stick in the per-particle average (1 = the paper).
-        particle_stick_weight: host ``[particle_count]`` summed weight of each particle's sticks.
-        tri_indices: ``[tri_count]`` vec3i triangle vertices.
-        tri_loading: ``[tri_count]`` chordwise loading factor of each triangle (``plate`` air model; 1 = uniform).
-        particle_stick_start, particle_stick_refs: CSR adjacency particle -> ``2*stick + end``.
-        particle_tri_start, particle_tri_ids: CSR adjacency particle -> triangle.
-        nail_particles: host ``[nail_count]`` particle index of each nail.
-        nail_target0: host ``[nail_count, 3]`` nail positions [m] as built.
-        terrain: the :class:`Heightfield`; ``terrain_data`` its device view.
-        gravity: gravity vector [m/s^2]. air_density: [kg/m^3].
-        objects: :class:`ObjectRecord` of every object built into the model.
+    Device arrays (``wp.array``) live on :attr:`device`; host arrays (NumPy) are named ``*_np`` when they copy a
+    device array, for diagnostics and outputs that must not read device memory every frame. Shapes use
+    ``P`` particles, ``S`` sticks, ``T`` triangles, ``N`` nails, ``W`` worlds.
     """
+
+    device: wp.context.Device
+    """Warp device the arrays live on."""
+    particle_count: int
+    """``P``, particles in every world together."""
+    stick_count: int
+    """``S``, distance constraints."""
+    tri_count: int
+    """``T``, air-force triangles."""
+    nail_count: int
+    """``N``, nailed particles."""
+    world_count: int
+    """``W``, independent copies of the scene stepped together."""
+    particle_mass: np.ndarray
+    """Host ``[P]`` masses [kg], ``inf`` for nailed particles."""
+    particle_free_mass: np.ndarray
+    """Host ``[P]`` masses [kg] with nailed particles 0 (momentum, energy and mass centres of what moves)."""
+    particle_inv_mass: wp.array
+    """``[P]`` float32 inverse masses [1/kg]; 0 = nailed."""
+    particle_world: wp.array
+    """``[P]`` int32 world index of each particle; ``particle_world_np`` is its host copy."""
+    particle_world_np: np.ndarray
+    particle_nail: wp.array
+    """``[P]`` int32 index into ``Control.nail_target``, -1 for a free particle."""
+    particle_q0: np.ndarray
+    """Host ``[P, 3]`` float64 build positions [m]."""
+    particle_qd0: np.ndarray
+    """Host ``[P, 3]`` float64 build velocities [m/s]."""
+    particle_stick_weight: np.ndarray
+    """Host ``[P]`` float64 summed weight of each particle's sticks."""
+    particle_stick_start: wp.array
+    """``[P + 1]`` int32 CSR offsets into ``particle_stick_refs``."""
+    particle_stick_refs: wp.array
+    """int32 ``2 * stick + end`` (end 0 = a, 1 = b) of each particle's sticks, in stick order."""
+    particle_tri_start: wp.array
+    """``[P + 1]`` int32 CSR offsets into ``particle_tri_ids``."""
+    particle_tri_ids: wp.array
+    """int32 triangles of each particle, in triangle order."""
+    stick_particles: wp.array
+    """``[S]`` vec2i, the two particles of each stick; ``stick_particles_np`` is its host ``[S, 2]`` copy."""
+    stick_particles_np: np.ndarray
+    stick_rest: wp.array
+    """``[S]`` float32 rest lengths [m] as built (``Control.stick_rest`` starts from them)."""
+    stick_weight: wp.array
+    """``[S]`` float32 weight of each stick in the per-particle average (1 = the paper)."""
+    tri_indices: wp.array
+    """``[T]`` vec3i triangle vertices; ``tri_indices_np`` is its host ``[T, 3]`` copy."""
+    tri_indices_np: np.ndarray
+    tri_loading: wp.array
+    """``[T]`` float32 chordwise loading factor (``plate`` air model; 1 = uniform)."""
+    nail_particles: np.ndarray
+    """Host ``[N]`` int32 particle of each nail."""
+    nail_target0: np.ndarray
+    """Host ``[N, 3]`` float64 nail positions [m] as built."""
+    terrain: Heightfield
+    """The ground every world shares."""
+    terrain_data: HeightfieldData
+    """Device view of :attr:`terrain` for the kernels."""
+    gravity: wp.vec3
+    """Gravity vector [m/s^2] (Z up)."""
+    air_density: float
+    """[kg/m^3]."""
+    objects: list[ObjectRecord]
+    """The :class:`ObjectRecord` of every object built into the model, world by world."""
 
     def __init__(self):
         self.device = None
-        self.particle_count = 0
-        self.stick_count = 0
-        self.tri_count = 0
-        self.nail_count = 0
+        self.particle_count = self.stick_count = self.tri_count = self.nail_count = 0
         self.world_count = 1
-        self.objects: list[ObjectRecord] = []
+        self.gravity = wp.vec3(0.0, 0.0, -GRAVITY)
+        self.air_density = AIR_DENSITY
+        self.objects = []
 
     # ------------------------------------------------------------------ construction of runtime data
-    def state(self) -> State:
-        """A new :class:`State` at the build positions; the previous position encodes the build velocity
-        for the default time step ``dt = 0.01`` s (call :meth:`State.set_velocity` for another dt)."""
+    def state(self, dt: float | None = None) -> State:
+        """A new :class:`State` at the build positions, moving at the build velocities for steps of ``dt`` [s]
+        (Verlet keeps ``x_prev = x - v dt``). ``dt`` may be left out when nothing moves at the start.
+
+        Raises ``ValueError`` when some particle has a build velocity and no ``dt`` is given.
+        """
         with np.errstate(over="ignore"):  # an absurd size overflows float32: Simulation reports it
             q = self.particle_q0.astype(np.float32)
         s = State(
             particle_q=wp.array(q, dtype=wp.vec3, device=self.device),
             particle_q_prev=wp.array(q, dtype=wp.vec3, device=self.device),
         )
-        s.set_velocity(self.particle_qd0, 0.01)
+        if np.any(self.particle_qd0):
+            if dt is None:
+                raise ValueError("the model's particles move at the start: give the time step, model.state(dt)")
+            s.set_velocity(self.particle_qd0, dt)
         return s
 
     def control(self) -> Control:
@@ -170,12 +218,6 @@ class State:
         q = self.particle_q.numpy()
         self.particle_q_prev.assign((q - np.asarray(velocity, dtype=np.float64) * dt).astype(np.float32))
 
-    def assign(self, other: State) -> None:
-        """Copy ``other`` into this state (same model)."""
-        wp.copy(self.particle_q, other.particle_q)
-        wp.copy(self.particle_q_prev, other.particle_q_prev)
-        self.time = other.time
-
 
 @dataclass
 class Control:
@@ -198,12 +240,3 @@ class Control:
         if w.shape == (3,):
             w = np.tile(w, (self.wind.shape[0], 1))
         self.wind.assign(w)
-
-
-def heightfield_data(terrain: Heightfield, device) -> HeightfieldData:
-    """Device view of a heightfield for the kernels."""
-    data = HeightfieldData()
-    data.heights = wp.array(terrain.heights, dtype=wp.float32, device=device)
-    data.origin = wp.vec2(*terrain.origin)
-    data.cell = wp.vec2(*terrain.cell)
-    return data

@@ -10,47 +10,18 @@ four (air force, Verlet, constraints, terrain); on CUDA it is one launch per ite
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
 
 import warp as wp
 
+from .config import AirConfig, GroundConfig, SolverConfig, WindConfig
 from .kernels import MODULES
-from .kernels.aero import AeroModel, triangle_air_force
-from .kernels.collision import CollisionMode, collide_heightfield
-from .kernels.constraints import StickProjector
+from .kernels.aero import triangle_air_force
+from .kernels.collision import collide_heightfield
+from .kernels.constraints import make_projector
 from .kernels.springs import integrate_euler_springs
 from .kernels.verlet import integrate_verlet
 from .model import Control, Model, State
-
-
-@dataclass
-class AirSettings:
-    """How the air acts on the triangles.
-
-    Attributes:
-        model: air-force law, :class:`AeroModel` (``PAPER`` default, ``PLATE`` lift-capable).
-        scale: multiplier on the air force (1 = the model as written).
-        shear_exponent: power-law wind shear exponent (0 = same wind at every height; ~0.14 over open land).
-        shear_reference_height: height above the terrain [m] where the wind equals ``Control.wind``.
-    """
-
-    model: AeroModel = AeroModel.PAPER
-    scale: float = 1.0
-    shear_exponent: float = 0.0
-    shear_reference_height: float = 10.0
-
-
-@dataclass
-class GroundSettings:
-    """How particles meet the terrain.
-
-    Attributes:
-        mode: :class:`CollisionMode` (``NORMAL`` default, ``CLAMP`` = the paper's vertical clamp).
-        friction: Coulomb-like friction coefficient (dimensionless, >= 0).
-    """
-
-    mode: CollisionMode = CollisionMode.NORMAL
-    friction: float = 0.5
 
 
 def _check_dt(dt: float) -> float:
@@ -61,16 +32,35 @@ def _check_dt(dt: float) -> float:
 
 
 class _Solver:
-    """Shared machinery: scratch buffers, graph capture and replay."""
+    """Shared machinery: settings, scratch buffers, graph capture and replay.
+
+    Args:
+        model: the model to simulate.
+        config: :class:`~warpsim.config.SolverConfig` (default: its defaults, those of a scene descriptor);
+            ``settings`` given by keyword replace its fields, e.g. ``SolverVerlet(model, iterations=40)``.
+        air, wind, ground: :class:`~warpsim.config.AirConfig`, :class:`~warpsim.config.WindConfig` (its shear
+            profile; the wind itself is ``Control.wind``), :class:`~warpsim.config.GroundConfig`.
+        use_graph: capture the step as a graph and replay it (default); False launches kernel by kernel.
+    """
 
     max_cached_graphs = 8
 
-    def __init__(self, model: Model, air: AirSettings | None, ground: GroundSettings | None, use_graph: bool):
+    def __init__(
+        self,
+        model: Model,
+        config: SolverConfig | None = None,
+        *,
+        air: AirConfig | None = None,
+        wind: WindConfig | None = None,
+        ground: GroundConfig | None = None,
+        use_graph: bool = True,
+        **settings,
+    ):
         self.model = model
-        self.air = air or AirSettings()
-        self.ground = ground or GroundSettings()
-        if self.ground.friction < 0.0:
-            raise ValueError(f"ground friction must be >= 0, got {self.ground.friction}")
+        self.config = dataclasses.replace(config or SolverConfig(), **settings)
+        self.air = air or AirConfig()
+        self.wind = wind or WindConfig()
+        self.ground = ground or GroundConfig()
         self.use_graph = bool(use_graph)
         self.tri_force = wp.zeros(max(model.tri_count, 1), dtype=wp.vec3, device=model.device)
         self._graphs: dict = {}
@@ -116,90 +106,48 @@ class _Solver:
 class SolverVerlet(_Solver):
     """The paper's solver: Verlet integration + Jacobi-averaged distance constraints + terrain collision.
 
-    Args:
-        model: the model to simulate.
-        iterations: constraint iterations per step (paper: 40-55; default 55).
-        relaxation: over-relaxation factor on the averaged correction (1.0 = the paper; < 2).
-        chebyshev: estimated spectral radius ``rho`` in [0, 1) of one Jacobi iteration for Chebyshev
-            semi-iterative acceleration (Wang 2015); 0 = plain Jacobi, the paper. Same cost per iteration.
-        mass_splitting: split each particle's mass over its sticks so that constraints conserve momentum
-            between particles of different mass or stick count (see :mod:`warpsim.kernels.constraints`);
-            False = the paper's plain average.
-        damping: fraction of the velocity removed per step (0 = none, the paper).
-        air: :class:`AirSettings`. ground: :class:`GroundSettings`.
-        use_graph: capture the step as a graph and replay it (default); False launches kernel by kernel.
-        constraint_scheme: ``"fused"``, ``"scatter"`` or ``"gather"``
-            (:class:`~warpsim.kernels.constraints.StickProjector`); None = fused on the CPU, gather on CUDA.
+    Uses ``iterations``, ``relaxation``, ``chebyshev``, ``mass_splitting`` and ``damping`` of its
+    :class:`~warpsim.config.SolverConfig` (arguments as for the shared base, see ``_Solver``), plus
+    ``constraint_scheme``: ``"fused"``, ``"scatter"`` or ``"gather"`` (:mod:`warpsim.kernels.constraints`);
+    None = fused on the CPU, gather on CUDA.
     """
 
-    def __init__(
-        self,
-        model: Model,
-        iterations: int = 55,
-        relaxation: float = 1.0,
-        damping: float = 0.0,
-        air: AirSettings | None = None,
-        ground: GroundSettings | None = None,
-        use_graph: bool = True,
-        chebyshev: float = 0.95,
-        mass_splitting: bool = False,
-        constraint_scheme: str | None = None,
-    ):
-        super().__init__(model, air, ground, use_graph)
-        if not 0.0 <= chebyshev < 1.0:
-            raise ValueError(f"chebyshev (spectral radius estimate) must be in [0, 1), got {chebyshev}")
-        if int(iterations) != iterations or iterations < 1:
-            raise ValueError(f"iterations must be a whole number >= 1, got {iterations}")
-        if not 0.0 < relaxation < 2.0:
-            raise ValueError(f"relaxation must be in (0, 2), got {relaxation}")
-        if not 0.0 <= damping < 1.0:
-            raise ValueError(f"damping must be in [0, 1), got {damping}")
-        self.iterations = int(iterations)
-        self.relaxation = float(relaxation)
-        self.damping = float(damping)
-        self.chebyshev = float(chebyshev)
-        self.mass_splitting = bool(mass_splitting)
-        self.projector = StickProjector(model, self.relaxation, self.mass_splitting, self.chebyshev, constraint_scheme)
-        self.projector.prepare(self.iterations)  # before any graph capture
+    def __init__(self, model: Model, config: SolverConfig | None = None, *, constraint_scheme=None, **kwargs):
+        super().__init__(model, config, **kwargs)
+        self.projector = make_projector(model, self.config, constraint_scheme)
+        self.projector.prepare(self.config.iterations)  # before any graph capture
 
     def _launch(self, state: State, control: Control, dt: float) -> None:
-        m = self.model
-        triangle_air_force(m, state, control, dt, self.air, self.tri_force)
-        integrate_verlet(m, state, control, self.tri_force, dt, self.damping)
-        self.projector.project(state, control, self.iterations)
-        collide_heightfield(m, state, self.ground.mode, self.ground.friction)
+        m, cfg = self.model, self.config
+        triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
+        integrate_verlet(m, state, control, self.tri_force, dt, cfg.damping)
+        self.projector.project(state, control, cfg.iterations)
+        collide_heightfield(m, state, self.ground.collision, self.ground.friction)
 
 
 class SolverEuler(_Solver):
-    """The paper's comparison: explicit Euler on a mass-spring network (every stick is a spring).
+    """The paper's comparison: explicit Euler on a mass-spring network (every stick is a spring of
+    ``spring_stiffness`` [N/m] and ``spring_damping`` [N s/m] from its :class:`~warpsim.config.SolverConfig`;
+    arguments as for :class:`SolverVerlet`, without a constraint scheme)."""
 
-    Args:
-        model: the model to simulate.
-        stiffness: spring constant ``k`` [N/m] of every stick.
-        damping: spring damping ``c`` [N s/m].
-        air, ground, use_graph: as for :class:`SolverVerlet`.
-    """
-
-    def __init__(
-        self,
-        model: Model,
-        stiffness: float = 2000.0,
-        damping: float = 1.0,
-        air: AirSettings | None = None,
-        ground: GroundSettings | None = None,
-        use_graph: bool = True,
-    ):
-        super().__init__(model, air, ground, use_graph)
-        if not stiffness > 0.0:
-            raise ValueError(f"spring stiffness must be positive, got {stiffness}")
-        if not damping >= 0.0:
-            raise ValueError(f"spring damping must be >= 0, got {damping}")
-        self.stiffness = float(stiffness)
-        self.damping = float(damping)
+    def __init__(self, model: Model, config: SolverConfig | None = None, **kwargs):
+        super().__init__(model, config, **kwargs)
         self.spring_force = wp.zeros(max(model.stick_count, 1), dtype=wp.vec3, device=model.device)
 
     def _launch(self, state: State, control: Control, dt: float) -> None:
-        m = self.model
-        triangle_air_force(m, state, control, dt, self.air, self.tri_force)
-        integrate_euler_springs(m, state, control, self.tri_force, self.spring_force, dt, self.stiffness, self.damping)
-        collide_heightfield(m, state, self.ground.mode, self.ground.friction)
+        m, cfg = self.model, self.config
+        triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
+        integrate_euler_springs(
+            m, state, control, self.tri_force, self.spring_force, dt, cfg.spring_stiffness, cfg.spring_damping
+        )
+        collide_heightfield(m, state, self.ground.collision, self.ground.friction)
+
+
+SOLVERS = {"verlet": SolverVerlet, "euler": SolverEuler}
+"""``SolverConfig.method`` -> solver class."""
+
+
+def make_solver(model: Model, config: SolverConfig | None = None, **kwargs) -> _Solver:
+    """The solver of ``config.method`` for ``model`` (keyword arguments as for :class:`SolverVerlet`)."""
+    config = config or SolverConfig()
+    return SOLVERS[config.method](model, config, **kwargs)

@@ -2,7 +2,8 @@
 
 The paper uses a 256x256 heightfield (Section 6.3). Heights are in metres, Z up; the grid covers
 ``[origin_x, origin_x + size_x] x [origin_y, origin_y + size_y]`` and is sampled bilinearly. Outside
-the grid the edge heights are extended.
+the grid the edge heights are extended. Host queries run the kernels' own lookup
+(:mod:`warpsim.kernels.collision`), so a builder, a diagnostic and a kernel see one terrain.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ class Heightfield:
         self.origin = (-0.5 * size_x, -0.5 * size_y) if origin is None else (float(origin[0]), float(origin[1]))
         ny, nx = heights.shape
         self.cell = (size_x / (nx - 1), size_y / (ny - 1))
+        self._device_data: dict = {}  # device alias -> HeightfieldData, made on first use
 
     # ------------------------------------------------------------------ constructors
     @classmethod
@@ -119,30 +121,43 @@ class Heightfield:
             raise ValueError(f"{path}: heights must be finite and within +-{MAX_HEIGHT:g} m")
         return cls(heights, (size, size))
 
-    # ------------------------------------------------------------------ queries (host, NumPy)
-    def _cell_coords(self, x, y):
-        ny, nx = self.heights.shape
-        fx = np.clip((np.asarray(x, dtype=np.float64) - self.origin[0]) / self.cell[0], 0.0, nx - 1.000001)
-        fy = np.clip((np.asarray(y, dtype=np.float64) - self.origin[1]) / self.cell[1], 0.0, ny - 1.000001)
-        ix, iy = np.floor(fx).astype(int), np.floor(fy).astype(int)
-        return ix, iy, fx - ix, fy - iy
+    # ------------------------------------------------------------------ queries
+    def device_data(self, device=None):
+        """The kernels' view of this terrain (:class:`warpsim.kernels.collision.HeightfieldData`) on ``device``
+        (default Warp's ``cpu``), made once per device."""
+        import warp as wp
+
+        from .kernels.collision import HeightfieldData
+
+        device = wp.get_device(device or "cpu")
+        data = self._device_data.get(device.alias)
+        if data is None:
+            data = HeightfieldData()
+            data.heights = wp.array(self.heights, dtype=wp.float32, device=device)
+            data.origin = wp.vec2(*self.origin)
+            data.cell = wp.vec2(*self.cell)
+            self._device_data[device.alias] = data
+        return data
+
+    def sample(self, x, y) -> tuple[np.ndarray, np.ndarray]:
+        """Heights [m] and unit upward normals (shape ``[..., 3]``) at world ``(x, y)`` [m] (arrays of one shape
+        or scalars), computed on the CPU by the same Warp functions the kernels use."""
+        from .kernels.collision import sample_terrain
+
+        x, y = np.broadcast_arrays(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
+        points = np.stack([x.reshape(-1), y.reshape(-1)], axis=1)
+        heights, normals = sample_terrain(self.device_data("cpu"), points, "cpu")
+        return heights.astype(np.float64).reshape(x.shape), normals.astype(np.float64).reshape(*x.shape, 3)
 
     def height(self, x, y):
-        """Bilinear terrain height [m] at world ``(x, y)`` [m] (scalars or arrays)."""
-        ix, iy, tx, ty = self._cell_coords(x, y)
-        h = self.heights
-        h00, h10, h01, h11 = h[iy, ix], h[iy, ix + 1], h[iy + 1, ix], h[iy + 1, ix + 1]
-        return (1 - ty) * ((1 - tx) * h00 + tx * h10) + ty * ((1 - tx) * h01 + tx * h11)
+        """Bilinear terrain height [m] at world ``(x, y)`` [m]: a float for scalars, an array for arrays. Outside
+        the grid the nearest edge's height."""
+        h = self.sample(x, y)[0]
+        return float(h) if h.ndim == 0 else h
 
-    def normal(self, x, y):
-        """Unit upward normal of the bilinear surface at ``(x, y)``, shape ``[..., 3]``."""
-        ix, iy, tx, ty = self._cell_coords(x, y)
-        h = self.heights
-        h00, h10, h01, h11 = h[iy, ix], h[iy, ix + 1], h[iy + 1, ix], h[iy + 1, ix + 1]
-        dhdx = ((1 - ty) * (h10 - h00) + ty * (h11 - h01)) / self.cell[0]
-        dhdy = ((1 - tx) * (h01 - h00) + tx * (h11 - h10)) / self.cell[1]
-        n = np.stack([-dhdx, -dhdy, np.ones_like(dhdx)], axis=-1)
-        return n / np.linalg.norm(n, axis=-1, keepdims=True)
+    def normal(self, x, y) -> np.ndarray:
+        """Unit upward normal of the bilinear surface at ``(x, y)`` [m], shape ``[..., 3]``."""
+        return self.sample(x, y)[1]
 
     def __repr__(self) -> str:
         ny, nx = self.heights.shape

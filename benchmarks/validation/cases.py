@@ -16,11 +16,12 @@ import numpy as np
 from benchmarks.numpy_step import NumpyVerlet
 from warpsim import descriptor
 from warpsim.builder import ModelBuilder
-from warpsim.io.hdf5 import object_diagnostics
+from warpsim.config import AirConfig
+from warpsim.diagnostics import object_metrics
 from warpsim.kernels.aero import AeroModel
 from warpsim.model import AIR_DENSITY, GRAVITY
 from warpsim.runner import BlowUpError, Simulation
-from warpsim.solver import AirSettings, SolverVerlet
+from warpsim.solver import SolverVerlet
 from warpsim.terrain import Heightfield
 
 
@@ -78,11 +79,8 @@ class _Bench:
         build(b)
         self.model = b.finalize("cpu")
         self.dt = dt
-        self.solver = SolverVerlet(
-            self.model, iterations=iterations, damping=damping, air=air or AirSettings(scale=0.0)
-        )
-        self.state = self.model.state()
-        self.state.set_velocity(self.model.particle_qd0, dt)
+        self.solver = SolverVerlet(self.model, iterations=iterations, damping=damping, air=air or AirConfig(scale=0.0))
+        self.state = self.model.state(dt)
         self.control = self.model.control()
 
     def step(self, n=1):
@@ -236,7 +234,7 @@ def _falling_plate(model_name: str) -> tuple[float, float, float]:
             b.add_stick(ids[i], ids[(i + 1) % 3])
         b.add_triangle(*ids)
 
-    air = AirSettings(model=AeroModel[model_name.upper()])
+    air = AirConfig(model=AeroModel[model_name.upper()])
     bench = _Bench(build, dt=0.01, air=air)
     bench.step(500)  # 5 s: many time constants v_t / g
     before = bench.state.positions()[:, 2].mean()
@@ -388,11 +386,11 @@ def hang_glider() -> list[Row]:
     for model in ("paper", "plate"):
         d = descriptor.merge("validation", descriptor.defaults("hang-glider"), {"air": {"model": model}})
         sim = Simulation(d)
-        track = []  # (time [s], centre [m], airspeed [m/s]) of the glider, from the recorder's own diagnostics
+        track = []  # (time [s], centre [m], airspeed [m/s]) of the glider, from the recorder's own metrics
 
         def sample(frame, sim=sim, track=track):
-            diag = object_diagnostics(sim, frame.positions, frame.velocities)
-            track.append((frame.time, diag["centre"][0], diag["airspeed"][0]))
+            metrics = object_metrics(sim.model, frame)
+            track.append((frame.time, metrics.centre[0], metrics.airspeed[0]))
 
         crashed = ""
         try:

@@ -48,11 +48,13 @@ import os
 import signal
 import stat
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from ..checkpoint import DIGEST_BYTES, Checkpoint
+from ..diagnostics import object_metrics
 from . import OutputWriteError, check_output_path, reason, with_disk_state
 from .h5safe import (
     LockedError,
@@ -137,9 +139,8 @@ def claim(path, create: bool) -> WriterLock:
         raise RecordingError(f"{path}: cannot be opened for writing ({reason(err)})") from None
 
 
-def _names(sim) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray]:
+def _names(model) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray]:
     """Object names, part names (``object/part``), part of each particle, of each triangle, object of each particle."""
-    model = sim.model
     objects, parts = [], []
     particle_part = np.full(model.particle_count, -1, dtype=np.int32)
     particle_object = np.full(model.particle_count, -1, dtype=np.int32)
@@ -158,30 +159,15 @@ def _names(sim) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarra
     return objects, parts, particle_part, triangle_part, particle_object
 
 
-def object_diagnostics(sim, positions: np.ndarray, velocities: np.ndarray) -> dict:
-    """Per-object mass centre [m], altitude above the terrain [m] and airspeed [m/s] of one frame."""
-    model = sim.model
-    mass = model.particle_free_mass
-    wind = sim.control.wind.numpy()
-    centre, altitude, airspeed = [], [], []
-    for record in model.objects:
-        ids = record.particles
-        m = mass[ids]
-        total = m.sum() if m.sum() > 0 else 1.0
-        c = (m[:, None] * positions[ids]).sum(axis=0) / total
-        v = (m[:, None] * velocities[ids]).sum(axis=0) / total
-        centre.append(c)
-        altitude.append(c[2] - float(model.terrain.height(c[0], c[1])))
-        airspeed.append(np.linalg.norm(v - wind[record.world]))
-    return {"centre": np.array(centre), "altitude": np.array(altitude), "airspeed": np.array(airspeed)}
-
-
 class H5Recorder:
-    """Append the frames of a :class:`warpsim.runner.Simulation` to an HDF5 recording.
+    """Append the frames of a run to an HDF5 recording.
 
     Args:
         path: the ``.h5`` file to create (``resume=False``) or to continue (``resume=True``).
-        sim: the simulation being recorded (restored from the recording's checkpoint when resuming).
+        model: the :class:`warpsim.Model` whose frames are recorded.
+        descriptor: the scene's validated descriptor (its time step and frame rate are stored).
+        checkpoint: returns the run's :class:`warpsim.checkpoint.Checkpoint` now (e.g.
+            :meth:`warpsim.runner.Simulation.checkpoint`); asked when a frame is made durable.
         descriptor_text: the full descriptor as TOML (see :func:`warpsim.descriptor.to_toml`).
         scene: where the scene came from (a path or ``built-in NAME``), stored as an attribute.
         resume: open an existing recording and append after its checkpoint's frame.
@@ -195,9 +181,21 @@ class H5Recorder:
 
     sync_interval = 0.5  # [s] of wall time between checkpoints/flushes
 
-    def __init__(self, path, sim, descriptor_text: str = "", scene: str = "", resume: bool = False, lock=None):
+    def __init__(
+        self,
+        path,
+        model,
+        descriptor: dict,
+        checkpoint: Callable[[], Checkpoint],
+        descriptor_text: str = "",
+        scene: str = "",
+        resume: bool = False,
+        lock=None,
+    ):
         self.path = Path(path)
-        self.sim = sim
+        self.model = model
+        self.descriptor = descriptor
+        self.checkpoint = checkpoint
         self.lock = lock if lock is not None else claim(self.path, create=not resume)
         self.file = None
         self.failed: OutputWriteError | None = None
@@ -243,7 +241,7 @@ class H5Recorder:
     def _check_layout(self) -> None:
         """Raise :class:`RecordingError` unless every dataset a resume writes has the shape, type and growth this
         simulation writes (a recording edited or damaged since could not take its frames)."""
-        model, f = self.sim.model, self.file
+        model, f = self.model, self.file
         for name, (frame_shape, dtype, _) in _frame_layout(model.particle_count, len(model.objects)).items():
             d = f[name]
             if (
@@ -253,7 +251,7 @@ class H5Recorder:
                 or d.maxshape[0] is not None
             ):
                 raise RecordingError(f"{self.path}: dataset {name} is {d.dtype}{list(d.shape)}; cannot append to it")
-        arrays = self.sim.checkpoint().arrays()
+        arrays = self.checkpoint().arrays()
         for slot in SLOTS:
             group = f[f"checkpoint/{slot}"]
             for name, data in arrays.items():
@@ -268,24 +266,26 @@ class H5Recorder:
         import warp as wp
 
         from .. import __version__
+        from ..config import SceneConfig, from_section
 
-        sim = self.sim
-        model = sim.model
+        model, descriptor = self.model, self.descriptor
+        dt = float(descriptor["solver"]["dt"])
+        steps_per_frame = from_section(SceneConfig, descriptor["scene"]).steps_per_frame(dt)
         n, objects = model.particle_count, len(model.objects)
         self.file = f = open_for_writing(self.path, create=True)
-        object_names, parts, particle_part, triangle_part, particle_object = _names(sim)
+        object_names, parts, particle_part, triangle_part, particle_object = _names(model)
         f.attrs.update(
             {
                 "format": FORMAT,
                 "format_version": FORMAT_VERSION,
                 "descriptor": descriptor_text,
                 "scene": scene,
-                "solver": json.dumps(sim.descriptor["solver"]),
+                "solver": json.dumps(descriptor["solver"]),
                 "warpsim_version": __version__,
                 "warp_version": wp.config.version,
-                "dt": sim.dt,
-                "steps_per_frame": sim.steps_per_frame,
-                "frame_interval": sim.steps_per_frame * sim.dt,
+                "dt": dt,
+                "steps_per_frame": steps_per_frame,
+                "frame_interval": steps_per_frame * dt,
             }
         )
         top = f.create_group("topology")
@@ -317,7 +317,7 @@ class H5Recorder:
                 **_CHECKSUM,
             )
         c = f.create_group("checkpoint")
-        cp = sim.checkpoint()  # shapes and types of what later checkpoints write
+        cp = self.checkpoint()  # shapes and types of what later checkpoints write
         c.attrs["control_names"] = list(cp.control_names)
         for slot in SLOTS:
             g = c.create_group(slot)
@@ -332,7 +332,7 @@ class H5Recorder:
         self._next_slot = 0
 
     def write(self, frame) -> None:
-        """Store one :class:`warpsim.runner.Frame` as row ``frame.index`` (the next row, or the last one again
+        """Store one :class:`warpsim.diagnostics.Frame` as row ``frame.index`` (the next row, or the last one again
         when a resumed run completes a shorter last frame).
 
         The frame is flushed, and the simulation's state saved as the checkpoint, at most every
@@ -345,7 +345,7 @@ class H5Recorder:
         k = int(frame.index)
         if not self.frames - 1 <= k <= self.frames:
             raise ValueError(f"frame {k} does not follow the recording's last frame {self.frames - 1}")
-        diag = object_diagnostics(self.sim, frame.positions, frame.velocities)
+        metrics = object_metrics(self.model, frame)
         with signals_held(), self._guard():
             d = self._datasets
             if k == self.frames:
@@ -355,11 +355,11 @@ class H5Recorder:
             d["positions"][k] = frame.positions
             d["diagnostics/worst_stretch"][k] = frame.worst_stretch
             d["diagnostics/kinetic_energy"][k] = frame.kinetic_energy
-            d["diagnostics/centre"][k] = diag["centre"]
-            d["diagnostics/altitude"][k] = diag["altitude"]
-            d["diagnostics/airspeed"][k] = diag["airspeed"]
+            d["diagnostics/centre"][k] = metrics.centre
+            d["diagnostics/altitude"][k] = metrics.altitude
+            d["diagnostics/airspeed"][k] = metrics.airspeed
             self.frames = k + 1
-            self._unsaved = (k, self.sim.steps_taken, float(frame.time))
+            self._unsaved = (k, frame.steps, float(frame.time))
             now = time.monotonic()
             if now - self._last_sync >= self.sync_interval:
                 self._save_checkpoint()
@@ -382,16 +382,16 @@ class H5Recorder:
             raise self.failed from None
 
     def _save_checkpoint(self) -> None:
-        """Flush the frames, then write the simulation's state as the checkpoint of the last written frame into
-        the older slot (with its digest), and flush again: a kill at any moment leaves one whole checkpoint."""
+        """Flush the frames, then write the run's state as the checkpoint of the last written frame into the
+        older slot (with its digest), and flush again: a kill at any moment leaves one whole checkpoint."""
         if self._unsaved is None:
             return
         k, steps, t = self._unsaved
         self._unsaved = None
         self.file.flush()
-        if steps != self.sim.steps_taken:  # the simulation has moved on since that frame
+        cp = self.checkpoint()
+        if int(cp.steps[0]) != steps:  # the run has moved on since that frame
             return
-        cp = self.sim.checkpoint()
         slot = self._slots[self._next_slot]
         for name, data in cp.arrays().items():
             slot[name][...] = data
@@ -566,7 +566,7 @@ class Recording:
     def build_model(self, device: str = "cpu"):
         """The recorded scene's :class:`warpsim.Model`, checked against the recorded particle count."""
         from ..descriptor import load_text
-        from ..runner import build_model
+        from ..scene import build_model
 
         descriptor = load_text(self.descriptor_text, f"{self.path}: descriptor")
         model = build_model(descriptor, device, str(self.path))

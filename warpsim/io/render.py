@@ -79,7 +79,7 @@ class Scene:
             for part, ids in record.tri_parts.items():
                 self.triangles.append((tris[np.asarray(ids, dtype=np.int64)], COLOURS.get(part, (0.7, 0.7, 0.7))))
                 drawn.append(tris[np.asarray(ids, dtype=np.int64)].ravel())
-            for part, chains in record.meta.get("curves", {}).items():
+            for part, chains in record.curves.items():
                 for chain in chains:
                     self.curves.append((np.asarray(chain, dtype=np.int64), COLOURS.get(part, (0.2, 0.2, 0.2))))
                     drawn.append(np.asarray(chain, dtype=np.int64))

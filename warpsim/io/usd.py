@@ -129,7 +129,7 @@ class UsdWriter:
             mesh.CreateExtentAttr()
             _colour(mesh.GetPrim(), part)
             self.meshes.append((mesh, ids))
-        for part, chains in record.meta.get("curves", {}).items():
+        for part, chains in record.curves.items():
             chains = [np.asarray(c, dtype=np.int64) for c in chains]
             curves = UsdGeom.BasisCurves.Define(stage, f"{root}/{_prim_name(part)}")
             curves.CreateTypeAttr(UsdGeom.Tokens.linear)

@@ -52,7 +52,7 @@ def normal_force(
     """Air force [N] on a flat triangle of unit normal ``n`` and ``area`` [m^2] in relative wind ``w_rel`` [m/s];
     ``loading`` is its chordwise loading factor (``plate`` only, 1 = uniform)."""
     wn = wp.dot(n, w_rel)
-    if aero_model == 0:
+    if aero_model == AeroModel.PAPER:
         return n * (air_density * wn * wp.abs(wn) * area)
     speed = wp.length(w_rel)
     if speed == 0.0:
@@ -127,10 +127,12 @@ def gather_air_force(
     return f
 
 
-def triangle_air_force(model, state, control, dt: float, params, tri_force_out: wp.array) -> None:
-    """Compute each triangle's per-vertex air force [N] into ``tri_force_out`` (shape ``[tri_count]``).
+def triangle_air_force(model, state, control, dt: float, air, wind, tri_force_out: wp.array) -> None:
+    """Compute each triangle's per-vertex air force [N] into ``tri_force_out`` (shape ``[tri_count]``) for steps
+    of ``dt`` [s].
 
-    ``params`` is an :class:`warpsim.solver.AirSettings`.
+    ``air`` is a :class:`warpsim.config.AirConfig` (law and scale), ``wind`` a :class:`warpsim.config.WindConfig`
+    (its shear profile; the wind itself is ``control.wind``).
     """
     if model.tri_count == 0:
         return
@@ -147,10 +149,10 @@ def triangle_air_force(model, state, control, dt: float, params, tri_force_out: 
             control.wind,
             float(dt),
             float(model.air_density),
-            int(params.model),
-            float(params.scale),
-            float(params.shear_exponent),
-            float(params.shear_reference_height),
+            int(air.model),
+            float(air.scale),
+            float(wind.shear_exponent),
+            float(wind.reference_height),
         ],
         outputs=[tri_force_out],
         device=model.device,

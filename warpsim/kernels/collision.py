@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import enum
 
+import numpy as np
 import warp as wp
 
 wp.set_module_options({"enable_backward": False})  # forward-only: halves compile time
@@ -38,12 +39,15 @@ class HeightfieldData:
 
 @wp.func
 def _cell(hf: HeightfieldData, x: float, y: float):
+    """The grid cell ``(ix, iy)`` under ``(x, y)`` [m] and the fractions ``(tx, ty)`` in [0, 1] across it. Points
+    outside the grid take the nearest edge's height: the coordinate is clamped onto the grid, and the last cell
+    is used up to and including the far edge (so no sample past the array is ever read)."""
     ny = hf.heights.shape[0]
     nx = hf.heights.shape[1]
-    fx = wp.clamp((x - hf.origin[0]) / hf.cell[0], 0.0, float(nx) - 1.000001)
-    fy = wp.clamp((y - hf.origin[1]) / hf.cell[1], 0.0, float(ny) - 1.000001)
-    ix = int(wp.floor(fx))
-    iy = int(wp.floor(fy))
+    fx = wp.clamp((x - hf.origin[0]) / hf.cell[0], 0.0, float(nx - 1))
+    fy = wp.clamp((y - hf.origin[1]) / hf.cell[1], 0.0, float(ny - 1))
+    ix = wp.min(int(wp.floor(fx)), nx - 2)
+    iy = wp.min(int(wp.floor(fy)), ny - 2)
     return ix, iy, fx - float(ix), fy - float(iy)
 
 
@@ -78,16 +82,16 @@ def _collide_heightfield(
     particle_q_prev: wp.array(dtype=wp.vec3),
     mode: int,
     friction: float,
-    particle_q: wp.array(dtype=wp.vec3),
+    particle_q_out: wp.array(dtype=wp.vec3),
 ):
     i = wp.tid()
     if particle_inv_mass[i] == 0.0:
         return
-    x = particle_q[i]
+    x = particle_q_out[i]
     h = terrain_height(hf, x[0], x[1])
     if x[2] >= h:
         return
-    if mode == 1:
+    if mode == CollisionMode.NORMAL:
         n = terrain_normal(hf, x[0], x[1])
         depth = (h - x[2]) * n[2]
         x = x + n * depth
@@ -98,7 +102,32 @@ def _collide_heightfield(
         if slide_len > 0.0:
             x = x - slide * wp.min(1.0, friction * depth / slide_len)
         h = terrain_height(hf, x[0], x[1])
-    particle_q[i] = wp.vec3(x[0], x[1], wp.max(x[2], h))
+    particle_q_out[i] = wp.vec3(x[0], x[1], wp.max(x[2], h))
+
+
+@wp.kernel
+def _sample_terrain(
+    hf: HeightfieldData,
+    points: wp.array(dtype=wp.vec2),
+    height_out: wp.array(dtype=wp.float32),
+    normal_out: wp.array(dtype=wp.vec3),
+):
+    i = wp.tid()
+    p = points[i]
+    height_out[i] = terrain_height(hf, p[0], p[1])
+    normal_out[i] = terrain_normal(hf, p[0], p[1])
+
+
+def sample_terrain(hf: HeightfieldData, points: np.ndarray, device) -> tuple[np.ndarray, np.ndarray]:
+    """Terrain heights [m] ``[n]`` and unit normals ``[n, 3]`` at host ``points`` ``[n, 2]`` [m], computed by the
+    kernels' own :func:`terrain_height` and :func:`terrain_normal` (one launch)."""
+    n = len(points)
+    height = wp.empty(max(n, 1), dtype=wp.float32, device=device)
+    normal = wp.empty(max(n, 1), dtype=wp.vec3, device=device)
+    if n:
+        pts = wp.array(np.asarray(points, dtype=np.float32).reshape(n, 2), dtype=wp.vec2, device=device)
+        wp.launch(_sample_terrain, n, [hf, pts], [height, normal], device=device)
+    return height.numpy()[:n], normal.numpy()[:n]
 
 
 def collide_heightfield(model, state, mode: CollisionMode, friction: float) -> None:

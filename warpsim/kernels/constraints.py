@@ -25,7 +25,8 @@ Section 7.2) without the cost of a second stick.
 Both ends share one per-stick factor ``c_s = k / (n_a w_a + n_b w_b)`` (computed once; 0 for a stick
 between two immovable particles), so a stick's correction is ``c_s (|d| - r) d / |d|``.
 
-Three schemes compute the same iteration:
+Three schemes, one class each (:class:`FusedProjector`, :class:`ScatterProjector`, :class:`GatherProjector`;
+:func:`make_projector` picks one), compute the same iteration:
 
 - ``fused`` (the default on the CPU): one thread runs the whole projection, every iteration's stick pass
   (each stick computes its correction once and adds it to its two particles' accumulators, in
@@ -44,26 +45,29 @@ Three schemes compute the same iteration:
 
 Positions are float32, and an iterate's small corrections can be smaller than half a float32 step of
 the coordinate (1.5e-5 m at 300 m): rounded away every iteration, always in the same direction, they
-broke momentum for heavy particles far from the origin (a 65 kg pilot at 300 m, an 80 kg parachutist at
-400 m, whose descent speed changed from 4.3 to 11.7 m/s with the terrain's height). So each particle
-keeps, across the iterations of one projection, its *origin* (its position when the projection began)
-and its *offset* from it, the sum of its increments: small, so float32 holds it to ~1e-9 m. Every
-iterate is ``origin + offset``, rounded afresh, so the rounding to a float32 position never accumulates,
-and Chebyshev extrapolation works on the last *increment* instead of the older position. (An earlier
-version summed ``x + residual + increment`` in float64: the same accuracy, but the conversions made the
-particle pass 2.8 instead of 1.7 ns per particle.)
+would break momentum for heavy particles far from the origin (a pilot or a parachutist hundreds of
+metres up). So each particle keeps, across the iterations of one projection, its *origin* (its position
+when the projection began) and its *offset* from it, the sum of its increments: small, so float32 holds
+it to ~1e-9 m. Every iterate is ``origin + offset``, rounded afresh, so the rounding to a float32
+position never accumulates, and Chebyshev extrapolation works on the last *increment* instead of the
+older position.
 
-Measured on the 2-core CPU (hang glider, 180 sticks, 49 particles, per iteration): ``gather`` about
-1.75 us, ``scatter`` about 1.2 us, ``fused`` about 0.65 us. ``fused`` wins by dropping 110 launches
-per step (small objects), by its packed records (large flags: 14.4 against 12.8 steps/s at 256²) and
-by its plain ``while`` loops. On CUDA ``fused`` would run on a single GPU thread: it is correct there,
-but slow.
+``fused`` is the fastest on the CPU: it drops two launches per iteration, reads packed records and runs
+plain ``while`` loops (the per-scheme costs are in ``benchmarks/results.md``). On CUDA it would run on a
+single GPU thread: correct, but slow, hence ``gather`` there.
 """
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import warp as wp
+
+from .nails import pin_to_nail
+
+if TYPE_CHECKING:
+    from ..config import SolverConfig
 
 wp.set_module_options({"enable_backward": False})  # forward-only: halves compile time
 
@@ -126,29 +130,30 @@ def next_position(
     step: float,
     omega: float,
     first: int,
-    last_inc: wp.array(dtype=wp.vec3),
-    offset: wp.array(dtype=wp.vec3),
-    origin: wp.array(dtype=wp.vec3),
+    last_inc_out: wp.array(dtype=wp.vec3),
+    offset_out: wp.array(dtype=wp.vec3),
+    origin_out: wp.array(dtype=wp.vec3),
 ) -> wp.vec3:
     """Particle ``i``'s next float32 position [m] from ``x`` and its summed corrections ``total``.
 
-    The iterate is ``origin[i] + offset[i]``: the position when the projection began (stored on the
-    ``first`` iteration, which also reads the last increment and the offset as zero) plus the sum of the
-    increments so far; the increment is kept in ``last_inc[i]`` for Chebyshev extrapolation.
+    The iterate is
+    ``origin_out[i] + offset_out[i]``: the position when the projection began (stored on the
+    ``first`` iteration, which also reads the last increment and the offset_out as zero) plus the sum of the
+    increments so far; the increment is kept in ``last_inc_out[i]`` for Chebyshev extrapolation.
     """
     last = wp.vec3(0.0)
     off = wp.vec3(0.0)
     x0 = x
     if first == 0:
-        last = last_inc[i]
-        off = offset[i]
-        x0 = origin[i]
+        last = last_inc_out[i]
+        off = offset_out[i]
+        x0 = origin_out[i]
     else:
-        origin[i] = x
+        origin_out[i] = x
     inc = iterate_increment(total, step, omega, last)
     moved, q = advance_offset(x0, off, inc)
-    offset[i] = moved
-    last_inc[i] = inc
+    offset_out[i] = moved
+    last_inc_out[i] = inc
     return q
 
 
@@ -158,13 +163,13 @@ def _scatter_corrections(
     stick_rest: wp.array(dtype=wp.float32),
     stick_coef: wp.array(dtype=wp.float32),
     particle_q: wp.array(dtype=wp.vec3),
-    accum: wp.array(dtype=wp.vec3),
+    accum_out: wp.array(dtype=wp.vec3),
 ):
     s = wp.tid()
     ends = stick_particles[s]
     c = stick_correction(particle_q[ends[1]] - particle_q[ends[0]], stick_rest[s], stick_coef[s])
-    wp.atomic_add(accum, ends[0], c)
-    wp.atomic_sub(accum, ends[1], c)
+    wp.atomic_add(accum_out, ends[0], c)
+    wp.atomic_sub(accum_out, ends[1], c)
 
 
 @wp.kernel
@@ -175,23 +180,23 @@ def _apply_accumulated(
     relaxation: float,
     omega: float,
     first: int,
-    accum: wp.array(dtype=wp.vec3),
-    particle_q: wp.array(dtype=wp.vec3),
-    last_inc: wp.array(dtype=wp.vec3),
-    offset: wp.array(dtype=wp.vec3),
-    origin: wp.array(dtype=wp.vec3),
+    accum_out: wp.array(dtype=wp.vec3),
+    particle_q_out: wp.array(dtype=wp.vec3),
+    last_inc_out: wp.array(dtype=wp.vec3),
+    offset_out: wp.array(dtype=wp.vec3),
+    origin_out: wp.array(dtype=wp.vec3),
 ):
     i = wp.tid()
-    total = accum[i]
-    accum[i] = wp.vec3(0.0)
-    nail = particle_nail[i]
-    if nail >= 0:
-        particle_q[i] = nail_target[nail]
+    total = accum_out[i]
+    accum_out[i] = wp.vec3(0.0)
+    if pin_to_nail(i, particle_nail, nail_target, particle_q_out):
         return
     scale = particle_scale[i]
     if scale == 0.0:
         return
-    particle_q[i] = next_position(i, particle_q[i], total, relaxation * scale, omega, first, last_inc, offset, origin)
+    particle_q_out[i] = next_position(
+        i, particle_q_out[i], total, relaxation * scale, omega, first, last_inc_out, offset_out, origin_out
+    )
 
 
 @wp.kernel
@@ -209,14 +214,12 @@ def _gather_iteration(
     first: int,
     q_in: wp.array(dtype=wp.vec3),
     q_out: wp.array(dtype=wp.vec3),
-    last_inc: wp.array(dtype=wp.vec3),
-    offset: wp.array(dtype=wp.vec3),
-    origin: wp.array(dtype=wp.vec3),
+    last_inc_out: wp.array(dtype=wp.vec3),
+    offset_out: wp.array(dtype=wp.vec3),
+    origin_out: wp.array(dtype=wp.vec3),
 ):
     i = wp.tid()
-    nail = particle_nail[i]
-    if nail >= 0:
-        q_out[i] = nail_target[nail]
+    if pin_to_nail(i, particle_nail, nail_target, q_out):
         return
     x = q_in[i]
     scale = particle_scale[i]
@@ -232,8 +235,8 @@ def _gather_iteration(
         if (ref & 1) == 1:
             other = ends[0]
         total += stick_correction(q_in[other] - x, stick_rest[s], stick_coef[s])
-    # only this thread reads and writes its own increment, offset and origin
-    q_out[i] = next_position(i, x, total, relaxation * scale, omega, first, last_inc, offset, origin)
+    # only this thread reads and writes its own increment, offset_out and origin_out
+    q_out[i] = next_position(i, x, total, relaxation * scale, omega, first, last_inc_out, offset_out, origin_out)
 
 
 @wp.struct
@@ -262,7 +265,7 @@ class ParticleIterate:
 def _pack_sticks(
     stick_particles: wp.array(dtype=wp.vec2i),
     stick_coef: wp.array(dtype=wp.float32),
-    packed: wp.array(dtype=PackedStick),
+    packed_out: wp.array(dtype=PackedStick),
 ):
     s = wp.tid()
     ends = stick_particles[s]
@@ -270,17 +273,17 @@ def _pack_sticks(
     p.a = ends[0]
     p.b = ends[1]
     p.coef = stick_coef[s]
-    packed[s] = p
+    packed_out[s] = p
 
 
 @wp.kernel
 def _pack_steps(
-    particle_scale: wp.array(dtype=wp.float32), relaxation: float, iterate: wp.array(dtype=ParticleIterate)
+    particle_scale: wp.array(dtype=wp.float32), relaxation: float, iterate_out: wp.array(dtype=ParticleIterate)
 ):
     i = wp.tid()
     it = ParticleIterate()
     it.step = relaxation * particle_scale[i]
-    iterate[i] = it
+    iterate_out[i] = it
 
 
 @wp.kernel
@@ -289,71 +292,66 @@ def _fused_projection(
     particle_nail: wp.array(dtype=wp.int32),
     nail_target: wp.array(dtype=wp.vec3),
     omegas: wp.array(dtype=wp.float32),
-    accum: wp.array(dtype=wp.vec3),
-    particle_q: wp.array(dtype=wp.vec3),
-    packed: wp.array(dtype=PackedStick),
-    iterate: wp.array(dtype=ParticleIterate),
+    accum_out: wp.array(dtype=wp.vec3),
+    particle_q_out: wp.array(dtype=wp.vec3),
+    packed_out: wp.array(dtype=PackedStick),
+    iterate_out: wp.array(dtype=ParticleIterate),
 ):
     if wp.tid() != 0:  # one thread; reading tid also lets Warp compile constant array strides on the CPU
         return
-    # ends, factors and step sizes were packed once (_pack_sticks, _pack_steps); per step only the rest
+    # ends, factors and step sizes were packed_out once (_pack_sticks, _pack_steps); per step only the rest
     # lengths (a control) come in, and every particle starts at its origin with a zero increment.
     # The loops are `while` loops on purpose: Warp's `range` handles a step of either sign at run time,
     # which costs ~20 % of the stick pass on the CPU (3.8 against 3.0 ns per stick on a 256^2 flag).
-    particle_count = particle_q.shape[0]
+    particle_count = particle_q_out.shape[0]
     i = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
     while i < particle_count:
-        it = iterate[i]
+        it = iterate_out[i]
         it.last = wp.vec3(0.0)
         it.offset = wp.vec3(0.0)
-        it.origin = particle_q[i]
-        iterate[i] = it
+        it.origin = particle_q_out[i]
+        iterate_out[i] = it
         i += 1
-    stick_count = packed.shape[0]
+    stick_count = packed_out.shape[0]
     s = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
     while s < stick_count:
-        p = packed[s]
+        p = packed_out[s]
         p.rest = stick_rest[s]
-        packed[s] = p
+        packed_out[s] = p
         s += 1
     # the scatter scheme's two passes per iteration, with the same float operations in the same order
     k = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
     while k < omegas.shape[0]:
         s = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
         while s < stick_count:
-            p = packed[s]
-            c = stick_correction(particle_q[p.b] - particle_q[p.a], p.rest, p.coef)
-            accum[p.a] = accum[p.a] + c
-            accum[p.b] = accum[p.b] - c
+            p = packed_out[s]
+            c = stick_correction(particle_q_out[p.b] - particle_q_out[p.a], p.rest, p.coef)
+            accum_out[p.a] = accum_out[p.a] + c
+            accum_out[p.b] = accum_out[p.b] - c
             s += 1
         omega = omegas[k]
         i = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
         while i < particle_count:
-            total = accum[i]
-            accum[i] = wp.vec3(0.0)
-            it = iterate[i]
+            total = accum_out[i]
+            accum_out[i] = wp.vec3(0.0)
+            it = iterate_out[i]
             if it.step != 0.0:
                 inc = iterate_increment(total, it.step, omega, it.last)
                 moved, q = advance_offset(it.origin, it.offset, inc)
                 it.offset = moved
                 it.last = inc
-                iterate[i] = it
-                particle_q[i] = q
+                iterate_out[i] = it
+                particle_q_out[i] = q
             else:
-                nail = particle_nail[i]  # nailed particles have step 0
-                if nail >= 0:
-                    particle_q[i] = nail_target[nail]
+                pin_to_nail(i, particle_nail, nail_target, particle_q_out)  # nailed particles have step 0
             i += 1
         k += 1
 
 
 @wp.kernel
-def _copy_positions(src: wp.array(dtype=wp.vec3), dst: wp.array(dtype=wp.vec3)):
+def _copy_positions(src: wp.array(dtype=wp.vec3), dst_out: wp.array(dtype=wp.vec3)):
     i = wp.tid()
-    dst[i] = src[i]
-
-
-SCHEMES = ("scatter", "gather", "fused")
+    dst_out[i] = src[i]
 
 
 def chebyshev_weights(iterations: int, rho: float, delay: int = 10) -> list[float]:
@@ -376,77 +374,33 @@ def chebyshev_weights(iterations: int, rho: float, delay: int = 10) -> list[floa
 
 
 class StickProjector:
-    """Jacobi projection of a model's sticks, with its per-stick factors and scratch buffers made once.
+    """Jacobi projection of a model's sticks: the per-stick factors and per-particle scales every scheme shares,
+    made once. Use a scheme's subclass, or :func:`make_projector` to pick one.
 
     Args:
         model: the :class:`~warpsim.model.Model`.
-        relaxation: over-relaxation factor on the averaged correction (1.0 = the paper; in (0, 2)).
-        mass_splitting: split masses (momentum-conserving) instead of the paper's plain average.
-        chebyshev: spectral-radius estimate ``rho`` in [0, 1) for :func:`chebyshev_weights` (0 = plain Jacobi).
-        scheme: ``"fused"``, ``"scatter"`` or ``"gather"`` (see the module text); ``None`` picks fused on the
-            CPU and gather on CUDA.
+        config: the :class:`~warpsim.config.SolverConfig` whose ``relaxation`` (over-relaxation factor, 1 = the
+            paper), ``mass_splitting`` (split masses instead of the paper's plain average) and ``chebyshev``
+            (spectral-radius estimate for :func:`chebyshev_weights`, 0 = plain Jacobi) it uses.
     """
 
-    def __init__(
-        self,
-        model,
-        relaxation: float = 1.0,
-        mass_splitting: bool = False,
-        chebyshev: float = 0.0,
-        scheme: str | None = None,
-    ):
-        if scheme is None:
-            scheme = "fused" if wp.get_device(model.device).is_cpu else "gather"
-        if scheme not in SCHEMES:
-            raise ValueError(f"constraint scheme must be one of {', '.join(SCHEMES)}, got {scheme!r}")
+    scheme = ""
+
+    def __init__(self, model, config: SolverConfig):
         self.model = model
-        self.scheme = scheme
-        self.relaxation = float(relaxation)
-        self.chebyshev = float(chebyshev)
-        share, scale = model.constraint_weights(mass_splitting)
-        self.particle_scale = wp.array(scale.astype(np.float32), dtype=wp.float32, device=model.device)
+        self.relaxation = float(config.relaxation)
+        self.chebyshev = float(config.chebyshev)
+        share, scale = model.constraint_weights(config.mass_splitting)
+        device = model.device
+        self.particle_scale = wp.array(scale.astype(np.float32), dtype=wp.float32, device=device)
         ends = model.stick_particles_np
         total = share[ends[:, 0]] + share[ends[:, 1]] if len(ends) else np.zeros(0)
         coef = np.divide(model.stick_weight.numpy(), total, out=np.zeros(len(ends)), where=total > 0)
-        self.stick_coef = wp.array(coef if len(coef) else np.zeros(1), dtype=wp.float32, device=model.device)
-        n = model.particle_count
-        device = model.device
-        self.accum = wp.zeros(n, dtype=wp.vec3, device=device) if scheme != "gather" else None
-        if scheme == "fused":
-            self.packed = wp.zeros(model.stick_count, dtype=PackedStick, device=device)
-            self.iterate = wp.zeros(n, dtype=ParticleIterate, device=device)
-            if model.stick_count:
-                wp.launch(
-                    _pack_sticks,
-                    model.stick_count,
-                    [model.stick_particles, self.stick_coef],
-                    [self.packed],
-                    device=device,
-                )
-            wp.launch(_pack_steps, n, [self.particle_scale, self.relaxation], [self.iterate], device=device)
-            self._omegas: dict[int, wp.array] = {}  # each iteration count's Chebyshev weights, made once
-        else:
-            # the last iterate's increment, the sum of the increments, and the position they are added to
-            self.last_inc = wp.zeros(n, dtype=wp.vec3, device=device)
-            self.offset = wp.zeros(n, dtype=wp.vec3, device=device)
-            self.origin = wp.zeros(n, dtype=wp.vec3, device=device)
-            self.scratch = wp.zeros(n, dtype=wp.vec3, device=device) if scheme == "gather" else None  # ping-pong
+        self.stick_coef = wp.array(coef if len(coef) else np.zeros(1), dtype=wp.float32, device=device)
 
     def prepare(self, iterations: int):
-        """Make the device array of ``iterations``' Chebyshev weights the fused scheme reads (once per count).
-
-        Call it before a graph capture that projects with that count: with the array made during the capture,
-        the replayed CPU graph read wrong weights for 256 iterations and more (every position NaN at step 3);
-        made beforehand, every count gives the scatter scheme's positions bit for bit. Returns the array
-        (None for the other schemes).
-        """
-        if self.scheme != "fused":
-            return None
-        weights = self._omegas.get(iterations)
-        if weights is None:
-            omegas = np.array(chebyshev_weights(iterations, self.chebyshev), dtype=np.float32)
-            weights = self._omegas[iterations] = wp.array(omegas, dtype=wp.float32, device=self.model.device)
-        return weights
+        """Make what a projection of ``iterations`` needs before a graph capture (see :class:`FusedProjector`)."""
+        return None
 
     def project(self, state, control, iterations: int) -> None:
         """Run ``iterations`` Jacobi iterations on ``state.particle_q`` in place.
@@ -454,38 +408,109 @@ class StickProjector:
         Rest lengths come from ``control.stick_rest`` and nail targets from ``control.nail_target``, so both
         can change between steps (and a captured graph sees the new values).
         """
-        m = self.model
-        if m.stick_count == 0:
-            return
-        omegas = chebyshev_weights(iterations, self.chebyshev)
-        if self.scheme == "fused":
-            weights = self.prepare(iterations)
+        if self.model.stick_count:
+            self._project(state, control, iterations)
+
+    def _project(self, state, control, iterations: int) -> None:
+        raise NotImplementedError
+
+    def _apply_inputs(self, control) -> tuple:
+        """The per-particle inputs the scatter and gather schemes pass to every iteration."""
+        return (self.particle_scale, self.model.particle_nail, control.nail_target, self.relaxation)
+
+    def _make_iterate_buffers(self) -> None:
+        """Per-particle last increment, offset and origin of the scatter and gather schemes (see the module text)."""
+        n, device = self.model.particle_count, self.model.device
+        self.last_inc = wp.zeros(n, dtype=wp.vec3, device=device)
+        self.offset = wp.zeros(n, dtype=wp.vec3, device=device)
+        self.origin = wp.zeros(n, dtype=wp.vec3, device=device)
+
+
+class FusedProjector(StickProjector):
+    """The whole projection in one single-thread launch over packed records (the CPU default)."""
+
+    scheme = "fused"
+
+    def __init__(self, model, config: SolverConfig):
+        super().__init__(model, config)
+        device, n = model.device, model.particle_count
+        self.accum = wp.zeros(n, dtype=wp.vec3, device=device)
+        self.packed = wp.zeros(model.stick_count, dtype=PackedStick, device=device)
+        self.iterate = wp.zeros(n, dtype=ParticleIterate, device=device)
+        if model.stick_count:
             wp.launch(
-                _fused_projection,
-                dim=1,
-                inputs=[control.stick_rest, m.particle_nail, control.nail_target, weights],
-                outputs=[self.accum, state.particle_q, self.packed, self.iterate],
+                _pack_sticks, model.stick_count, [model.stick_particles, self.stick_coef], [self.packed], device=device
+            )
+        wp.launch(_pack_steps, n, [self.particle_scale, self.relaxation], [self.iterate], device=device)
+        self._omegas: dict[int, wp.array] = {}  # each iteration count's Chebyshev weights, made once
+
+    def prepare(self, iterations: int):
+        """Make the device array of ``iterations``' Chebyshev weights the kernel reads (once per count) and return
+        it. Call it before a graph capture that projects with that count: an array made during a CPU capture
+        was read wrong by the replayed graph (every position NaN for 256 iterations and more)."""
+        weights = self._omegas.get(iterations)
+        if weights is None:
+            omegas = np.array(chebyshev_weights(iterations, self.chebyshev), dtype=np.float32)
+            weights = self._omegas[iterations] = wp.array(omegas, dtype=wp.float32, device=self.model.device)
+        return weights
+
+    def _project(self, state, control, iterations: int) -> None:
+        m = self.model
+        wp.launch(
+            _fused_projection,
+            dim=1,
+            inputs=[control.stick_rest, m.particle_nail, control.nail_target, self.prepare(iterations)],
+            outputs=[self.accum, state.particle_q, self.packed, self.iterate],
+            device=m.device,
+        )
+
+
+class ScatterProjector(StickProjector):
+    """Two launches per iteration: one thread per stick adds its correction to its ends (atomics), then one
+    thread per particle applies its sum. Bit-identical to :class:`FusedProjector` on the CPU."""
+
+    scheme = "scatter"
+
+    def __init__(self, model, config: SolverConfig):
+        super().__init__(model, config)
+        self.accum = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)
+        self._make_iterate_buffers()
+
+    def _project(self, state, control, iterations: int) -> None:
+        m = self.model
+        apply = self._apply_inputs(control)
+        for k, omega in enumerate(chebyshev_weights(iterations, self.chebyshev)):
+            wp.launch(
+                _scatter_corrections,
+                dim=m.stick_count,
+                inputs=[m.stick_particles, control.stick_rest, self.stick_coef, state.particle_q],
+                outputs=[self.accum],
                 device=m.device,
             )
-            return
-        apply = (self.particle_scale, m.particle_nail, control.nail_target, self.relaxation)  # both schemes
-        if self.scheme == "scatter":
-            for k, omega in enumerate(omegas):
-                wp.launch(
-                    _scatter_corrections,
-                    dim=m.stick_count,
-                    inputs=[m.stick_particles, control.stick_rest, self.stick_coef, state.particle_q],
-                    outputs=[self.accum],
-                    device=m.device,
-                )
-                wp.launch(
-                    _apply_accumulated,
-                    dim=m.particle_count,
-                    inputs=[*apply, float(omega), int(k == 0)],
-                    outputs=[self.accum, state.particle_q, self.last_inc, self.offset, self.origin],
-                    device=m.device,
-                )
-            return
+            wp.launch(
+                _apply_accumulated,
+                dim=m.particle_count,
+                inputs=[*apply, float(omega), int(k == 0)],
+                outputs=[self.accum, state.particle_q, self.last_inc, self.offset, self.origin],
+                device=m.device,
+            )
+
+
+class GatherProjector(StickProjector):
+    """One launch per iteration, one thread per particle walking its sticks (no atomics; the CUDA default),
+    ping-ponging the positions through a second buffer."""
+
+    scheme = "gather"
+
+    def __init__(self, model, config: SolverConfig):
+        super().__init__(model, config)
+        self._make_iterate_buffers()
+        self.scratch = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)
+
+    def _project(self, state, control, iterations: int) -> None:
+        m = self.model
+        apply = self._apply_inputs(control)
+        omegas = chebyshev_weights(iterations, self.chebyshev)
         buffers = (state.particle_q, self.scratch)
         for k, omega in enumerate(omegas):
             wp.launch(
@@ -515,15 +540,17 @@ class StickProjector:
             )
 
 
-def project_sticks(
-    model,
-    state,
-    control,
-    iterations: int,
-    relaxation: float = 1.0,
-    mass_splitting: bool = False,
-    chebyshev: float = 0.0,
-    scheme: str | None = None,
-) -> None:
-    """One-off :meth:`StickProjector.project` (allocates its buffers: not for use inside a captured step)."""
-    StickProjector(model, relaxation, mass_splitting, chebyshev, scheme).project(state, control, iterations)
+SCHEMES: dict[str, type[StickProjector]] = {
+    cls.scheme: cls for cls in (ScatterProjector, GatherProjector, FusedProjector)
+}
+"""Scheme name -> projector class."""
+
+
+def make_projector(model, config: SolverConfig, scheme: str | None = None) -> StickProjector:
+    """The projector of ``scheme`` (``"fused"``, ``"scatter"``, ``"gather"``) for ``model``; None picks fused on
+    the CPU and gather on CUDA. Raises ``ValueError`` for an unknown scheme."""
+    if scheme is None:
+        scheme = "fused" if wp.get_device(model.device).is_cpu else "gather"
+    if scheme not in SCHEMES:
+        raise ValueError(f"constraint scheme must be one of {', '.join(SCHEMES)}, got {scheme!r}")
+    return SCHEMES[scheme](model, config)

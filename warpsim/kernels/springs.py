@@ -15,6 +15,7 @@ import warp as wp
 
 from .aero import gather_air_force
 from .constraints import gather_stick_values
+from .nails import pin_to_nail
 
 wp.set_module_options({"enable_backward": False})  # forward-only: halves compile time
 
@@ -55,27 +56,25 @@ def _integrate_euler(
     spring_force: wp.array(dtype=wp.vec3),
     gravity: wp.vec3,
     dt: float,
-    particle_q: wp.array(dtype=wp.vec3),
-    particle_q_prev: wp.array(dtype=wp.vec3),
+    particle_q_out: wp.array(dtype=wp.vec3),
+    particle_q_prev_out: wp.array(dtype=wp.vec3),
 ):
     i = wp.tid()
-    x = particle_q[i]
-    nail = particle_nail[i]
-    if nail >= 0:
-        particle_q_prev[i] = x
-        particle_q[i] = nail_target[nail]
+    x = particle_q_out[i]
+    if pin_to_nail(i, particle_nail, nail_target, particle_q_out):
+        particle_q_prev_out[i] = x
         return
     inv_mass = particle_inv_mass[i]
     if inv_mass == 0.0:
-        particle_q_prev[i] = x
+        particle_q_prev_out[i] = x
         return
     force = gather_air_force(i, particle_tri_start, particle_tri_ids, tri_force)
     force += gather_stick_values(i, particle_stick_start, particle_stick_refs, spring_force)
-    velocity = (x - particle_q_prev[i]) / dt
+    velocity = (x - particle_q_prev_out[i]) / dt
     x_new = x + velocity * dt
     velocity_new = velocity + (gravity + force * inv_mass) * dt
-    particle_q[i] = x_new
-    particle_q_prev[i] = x_new - velocity_new * dt
+    particle_q_out[i] = x_new
+    particle_q_prev_out[i] = x_new - velocity_new * dt
 
 
 def integrate_euler_springs(

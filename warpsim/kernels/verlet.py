@@ -11,6 +11,7 @@ from __future__ import annotations
 import warp as wp
 
 from .aero import gather_air_force
+from .nails import pin_to_nail
 
 wp.set_module_options({"enable_backward": False})  # forward-only: halves compile time
 
@@ -26,23 +27,21 @@ def _integrate_verlet(
     gravity: wp.vec3,
     dt: float,
     damping: float,
-    particle_q: wp.array(dtype=wp.vec3),
-    particle_q_prev: wp.array(dtype=wp.vec3),
+    particle_q_out: wp.array(dtype=wp.vec3),
+    particle_q_prev_out: wp.array(dtype=wp.vec3),
 ):
     i = wp.tid()
-    x = particle_q[i]
-    x_prev = particle_q_prev[i]
-    particle_q_prev[i] = x
-    nail = particle_nail[i]
-    if nail >= 0:
-        particle_q[i] = nail_target[nail]
+    x = particle_q_out[i]
+    x_prev = particle_q_prev_out[i]
+    particle_q_prev_out[i] = x
+    if pin_to_nail(i, particle_nail, nail_target, particle_q_out):
         return
     inv_mass = particle_inv_mass[i]
     if inv_mass == 0.0:
         return
     force = gather_air_force(i, particle_tri_start, particle_tri_ids, tri_force)
     acceleration = gravity + force * inv_mass
-    particle_q[i] = x + (x - x_prev) * (1.0 - damping) + acceleration * (dt * dt)
+    particle_q_out[i] = x + (x - x_prev) * (1.0 - damping) + acceleration * (dt * dt)
 
 
 def integrate_verlet(model, state, control, tri_force: wp.array, dt: float, damping: float) -> None:

@@ -7,12 +7,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..builder import ModelBuilder, check_memory
+from ..config import POSITIVE, Bounds, Checked, number
 from ..model import ObjectRecord
 from ..terrain import Heightfield
 
 
-@dataclass
-class FlagConfig:
+@dataclass(kw_only=True)
+class FlagConfig(Checked):
     """Parameters of the flag.
 
     Attributes:
@@ -26,11 +27,11 @@ class FlagConfig:
         position: (x, y) of the pole [m].
     """
 
-    width: float = 2.0
-    height: float = 1.2
-    resolution: int = 5
-    mass_per_area: float = 0.15
-    pole_height: float = 5.0
+    width: float = number(2.0, POSITIVE)
+    height: float = number(1.2, POSITIVE)
+    resolution: int = number(5, Bounds(2, 4096))
+    mass_per_area: float = number(0.15, POSITIVE)
+    pole_height: float = number(5.0, POSITIVE)
     position: tuple[float, float] = (0.0, 0.0)
 
 
@@ -73,6 +74,5 @@ def build_flag(builder: ModelBuilder, cfg: FlagConfig, terrain: Heightfield) -> 
             parts={"cloth": particles, "pole": ids[:, 0].copy()},
             tri_parts={"cloth": tris},
             stick_groups={"cloth": sticks},
-            meta={"grid": ids},
         )
     )

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..builder import ModelBuilder
+from ..config import NON_NEGATIVE, POSITIVE, Bounds, Checked, number
 from ..model import ObjectRecord
 from ..terrain import Heightfield
 from .delta import add_rigid_frame, body_axes, chordwise_loading
@@ -25,8 +26,8 @@ from .delta import add_rigid_frame, body_axes, chordwise_loading
 PAPER_COUNTS = {"particles": 49, "sticks": 198, "triangles": 64}
 
 
-@dataclass
-class HangGliderConfig:
+@dataclass(kw_only=True)
+class HangGliderConfig(Checked):
     """Parameters of the hang glider (defaults: the paper's model, a 10 m, ~14 m^2 glider).
 
     Attributes:
@@ -63,29 +64,55 @@ class HangGliderConfig:
             stiffness.
     """
 
-    divisions: int = 8
-    span: float = 10.0
-    chord: float = 2.8
-    glider_mass: float = 25.0
-    pilot_mass: float = 65.0
-    hang_depth: float = 1.2
-    pilot_station: float = 0.55
-    frame_height: float = 1.5
-    pitch_travel: float = 0.2
-    roll_travel: float = 0.4
-    altitude: float = 300.0
+    divisions: int = number(8, Bounds(2, 256))
+    span: float = number(10.0, POSITIVE)
+    chord: float = number(2.8, POSITIVE)
+    glider_mass: float = number(25.0, POSITIVE)
+    pilot_mass: float = number(65.0, POSITIVE)
+    hang_depth: float = number(1.2, POSITIVE)
+    pilot_station: float = number(0.55, Bounds(0.0, 1.0))
+    frame_height: float = number(1.5, POSITIVE)
+    pitch_travel: float = number(0.2, NON_NEGATIVE)
+    roll_travel: float = number(0.4, NON_NEGATIVE)
+    altitude: float = number(300.0, POSITIVE)
     position: tuple[float, float] = (-300.0, 0.0)
     heading: float = 0.0
-    speed: float = 12.0
+    speed: float = number(12.0, NON_NEGATIVE)
     nose_up: float = 8.0
-    washout: float = 10.0
-    frame_mass_fraction: float = 0.6
-    virtual_mass_fraction: float = 0.3
-    frame_weight: float = 6.0
+    washout: float = number(10.0, Bounds(-45.0, 45.0))
+    frame_mass_fraction: float = number(0.6, Bounds(0.0, 0.85, low_open=True))
+    virtual_mass_fraction: float = number(0.3, Bounds(0.0, 0.85, low_open=True))
+    frame_weight: float = number(6.0, POSITIVE)
     chord_loading: bool = True
 
 
-def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Heightfield) -> ObjectRecord:
+@dataclass(kw_only=True)
+class HangGliderRecord(ObjectRecord):
+    """A hang glider's :class:`~warpsim.model.ObjectRecord` with its reference particles and control sticks.
+
+    Attributes:
+        nose: the nose particle. keel: keel particles, nose to tail. tips: (left, right) wing-tip particles.
+        pilot: the pilot particle. control_sticks: ``[7]`` stick indices, the forward ones first.
+        control_forward_count: how many of ``control_sticks`` go to forward frame points.
+        pilot_attach_frame: ``[7, 3]`` each control stick's frame point in the glider's build frame
+            (forward, left, up) [m] from the nose.
+        pilot_neutral_frame: ``[3]`` the pilot's neutral position in that frame [m].
+        pitch_travel, roll_travel: pilot travel at full pitch / roll [m].
+    """
+
+    nose: int
+    keel: np.ndarray
+    tips: tuple[int, int]
+    pilot: int
+    control_sticks: np.ndarray
+    control_forward_count: int
+    pilot_attach_frame: np.ndarray
+    pilot_neutral_frame: np.ndarray
+    pitch_travel: float
+    roll_travel: float
+
+
+def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Heightfield) -> HangGliderRecord:
     """Add the hang glider of ``cfg`` above ``terrain``; returns its record (parts, stick groups, controls)."""
     n = int(cfg.divisions)
     if n < 2:
@@ -147,7 +174,7 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
     attach = positions[forward_points + aft_points]
     particles = np.arange(p0, builder.particle_count)
     return builder.add_object(
-        ObjectRecord(
+        HangGliderRecord(
             name="hang_glider",
             kind="hang-glider",
             particles=particles,
@@ -158,19 +185,17 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
                 "frame": np.array(frame.sticks),
                 "control": np.array(control),
             },
-            meta={
-                "paper_counts": PAPER_COUNTS,
-                "nose": rows[0][0],
-                "keel": np.array(keel),
-                "tips": (rows[n][0], rows[n][n]),
-                "pilot": pilot,
-                "control_sticks": np.array(control),
-                "control_forward_count": len(forward_points),
-                "pilot_attach_frame": _to_frame(attach, nose, fwd, left, up),
-                "pilot_neutral_frame": _to_frame(neutral[None], nose, fwd, left, up)[0],
-                "pitch_travel": cfg.pitch_travel,
-                "roll_travel": cfg.roll_travel,
-            },
+            paper_counts=PAPER_COUNTS,
+            nose=rows[0][0],
+            keel=np.array(keel),
+            tips=(rows[n][0], rows[n][n]),
+            pilot=pilot,
+            control_sticks=np.array(control),
+            control_forward_count=len(forward_points),
+            pilot_attach_frame=_to_frame(attach, nose, fwd, left, up),
+            pilot_neutral_frame=_to_frame(neutral[None], nose, fwd, left, up)[0],
+            pitch_travel=cfg.pitch_travel,
+            roll_travel=cfg.roll_travel,
         )
     )
 
@@ -180,7 +205,7 @@ def _to_frame(points: np.ndarray, origin, fwd, left, up) -> np.ndarray:
     return np.stack([d @ fwd, d @ left, d @ up], axis=1)
 
 
-def control_rest_lengths(record: ObjectRecord, pitch: float, roll: float) -> np.ndarray:
+def control_rest_lengths(record: HangGliderRecord, pitch: float, roll: float) -> np.ndarray:
     """Rest lengths [m] of the control sticks for ``pitch`` and ``roll`` in [-1, 1].
 
     The pilot's target sits ``pitch * pitch_travel`` forward and ``roll * roll_travel`` to the right of
@@ -190,24 +215,22 @@ def control_rest_lengths(record: ObjectRecord, pitch: float, roll: float) -> np.
     for name, value in (("pitch", pitch), ("roll", roll)):
         if not -1.0 <= value <= 1.0:
             raise ValueError(f"{name} must be in [-1, 1], got {value}")
-    m = record.meta
-    target = m["pilot_neutral_frame"] + np.array([pitch * m["pitch_travel"], -roll * m["roll_travel"], 0.0])
-    return np.linalg.norm(m["pilot_attach_frame"] - target, axis=1)
+    target = record.pilot_neutral_frame + np.array([pitch * record.pitch_travel, -roll * record.roll_travel, 0.0])
+    return np.linalg.norm(record.pilot_attach_frame - target, axis=1)
 
 
-def apply_controls(record: ObjectRecord, targets: dict, values: dict) -> None:
+def apply_controls(record: HangGliderRecord, targets: dict, values: dict) -> None:
     """Write the control sticks' rest lengths for ``values['pitch']``/``values['roll']`` (every control in
     force; one never set is 0) into ``targets['stick_rest']`` (a host copy of ``Control.stick_rest``)."""
     pitch, roll = float(values.get("pitch", 0.0)), float(values.get("roll", 0.0))
-    targets["stick_rest"][record.meta["control_sticks"]] = control_rest_lengths(record, pitch, roll)
+    targets["stick_rest"][record.control_sticks] = control_rest_lengths(record, pitch, roll)
 
 
-def flight_state(record: ObjectRecord, q: np.ndarray, q_prev: np.ndarray, dt: float, wind) -> dict:
+def flight_state(record: HangGliderRecord, q: np.ndarray, q_prev: np.ndarray, dt: float, wind) -> dict:
     """Diagnostics: nose pitch angle [deg], bank [deg], airspeed [m/s], pilot offset [m] in the sail frame."""
-    m = record.meta
-    nose = q[m["nose"]]
-    keel_end = q[m["keel"][-1]]
-    tip_l, tip_r = q[m["tips"][0]], q[m["tips"][1]]
+    nose = q[record.nose]
+    keel_end = q[record.keel[-1]]
+    tip_l, tip_r = q[record.tips[0]], q[record.tips[1]]
     keel_dir = nose - keel_end
     pitch = np.degrees(np.arctan2(keel_dir[2], np.linalg.norm(keel_dir[:2])))
     span_dir = tip_l - tip_r
@@ -219,7 +242,7 @@ def flight_state(record: ObjectRecord, q: np.ndarray, q_prev: np.ndarray, dt: fl
     left = span_dir / np.linalg.norm(span_dir)
     up = np.cross(fwd, left)
     up /= np.linalg.norm(up)
-    pilot = q[m["pilot"]] - q[sail].mean(axis=0)
+    pilot = q[record.pilot] - q[sail].mean(axis=0)
     return {
         "pitch_deg": float(pitch),
         "bank_deg": float(bank),

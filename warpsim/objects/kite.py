@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..builder import ModelBuilder
+from ..config import POSITIVE, Bounds, Checked, number
 from ..model import ObjectRecord
 from ..terrain import Heightfield
 from .delta import add_rigid_frame, add_spar_braces, body_axes
@@ -26,8 +27,8 @@ from .delta import add_rigid_frame, add_spar_braces, body_axes
 PAPER_COUNTS = {"particles": 152, "sticks": 458, "triangles": 221}
 
 
-@dataclass
-class KiteConfig:
+@dataclass(kw_only=True)
+class KiteConfig(Checked):
     """Parameters of the delta kite (defaults: the paper's resolution, a 1.8 m, 0.8 m^2, 200 g kite).
 
     Attributes:
@@ -40,6 +41,8 @@ class KiteConfig:
         tow_point: position of the tow point along the keel's top edge (0 = front, 1 = back).
         mass: kite mass [kg] (sail, spars and keel).
         frame_height: distance of the virtual particles from the sail [m].
+        spar_mass_fraction: share of ``mass`` carried by the two virtual particles (the spars they stand for);
+            the rest is spread evenly over the sail and keel particles.
         frame_weight: weight of the spar and keel sticks in the constraint average (1 = the paper).
         straight_spars: tie every leading-edge particle to the one two rows back, so the leading edges stay
             straight rods (not in the paper; without them they bow and stretch ~1.7 % in steady flight).
@@ -55,28 +58,47 @@ class KiteConfig:
             side, as a delta kite's sail sets in the wind; it gives the kite its roll and yaw stability.
     """
 
-    divisions: int = 13
-    keel_divisions: int = 5
-    span: float = 1.8
-    spine: float = 0.9
-    keel_depth: float = 0.3
-    tow_point: float = 0.35
-    mass: float = 0.2
-    frame_height: float = 0.4
-    frame_weight: float = 4.0
+    divisions: int = number(13, Bounds(3, 256))
+    keel_divisions: int = number(5, Bounds(1, 128))
+    span: float = number(1.8, POSITIVE)
+    spine: float = number(0.9, POSITIVE)
+    keel_depth: float = number(0.3, POSITIVE)
+    tow_point: float = number(0.35, Bounds(0.0, 1.0))
+    mass: float = number(0.2, POSITIVE)
+    frame_height: float = number(0.4, POSITIVE)
+    spar_mass_fraction: float = number(0.1, Bounds(0.0, 1.0, low_open=True, high_open=True))
+    frame_weight: float = number(4.0, POSITIVE)
     straight_spars: bool = True
-    rope_length: float = 30.0
-    rope_particles: int = 14
-    rope_mass: float = 0.03
-    rope_doubled: int = 4
+    rope_length: float = number(30.0, POSITIVE)
+    rope_particles: int = number(14, Bounds(2, 4096))
+    rope_mass: float = number(0.03, POSITIVE)
+    rope_doubled: int = number(4, Bounds(0, 4096))
     anchor: tuple[float, float] = (0.0, 0.0)
     heading: float = 0.0
-    elevation: float = 10.0
-    attack: float = 40.0
-    dihedral: float = 20.0
+    elevation: float = number(10.0, Bounds(0.0, 90.0))
+    attack: float = number(40.0, Bounds(0.0, 90.0))
+    dihedral: float = number(20.0, Bounds(-45.0, 45.0))
 
 
-def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> ObjectRecord:
+@dataclass(kw_only=True)
+class KiteRecord(ObjectRecord):
+    """A kite's :class:`~warpsim.model.ObjectRecord` with its reference particles and its anchor.
+
+    Attributes:
+        nose: the nose particle. tow: the tow point (keel apex, the rope's top).
+        anchor_particle: the rope's nailed ground end. anchor_nail: its nail (index into ``Control.nail_target``).
+        spine: spine particles, nose to tail. tips: (left, right) wing-tip particles.
+    """
+
+    nose: int
+    tow: int
+    anchor_particle: int
+    anchor_nail: int
+    spine: np.ndarray
+    tips: tuple[int, int]
+
+
+def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> KiteRecord:
     """Add the kite of ``cfg`` and its rope; returns its record (parts, stick groups, anchor nail)."""
     n, kd = int(cfg.divisions), int(cfg.keel_divisions)
     if n < 3 or kd < 1:
@@ -99,7 +121,7 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
 
     sail_count = (n + 1) * (n + 2) // 2
     keel_count = (kd + 1) * (kd + 2) // 2 - (kd + 1)
-    per_particle = cfg.mass * 0.9 / (sail_count + keel_count)
+    per_particle = cfg.mass * (1.0 - cfg.spar_mass_fraction) / (sail_count + keel_count)
     p0 = builder.particle_count
     tan_dihedral = np.tan(np.radians(cfg.dihedral))
 
@@ -122,7 +144,14 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
 
     centre = (nose + tip_l + tip_r) / 3.0
     spars = add_rigid_frame(
-        builder, rows, sail_sticks, centre, cfg.frame_height * up, (1, -1), cfg.mass * 0.1 / 2.0, cfg.frame_weight
+        builder,
+        rows,
+        sail_sticks,
+        centre,
+        cfg.frame_height * up,
+        (1, -1),
+        cfg.mass * cfg.spar_mass_fraction / 2.0,
+        cfg.frame_weight,
     )
     if cfg.straight_spars:
         spars.sticks.extend(add_spar_braces(builder, rows, cfg.frame_weight))
@@ -135,7 +164,7 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     nail = builder.add_nail(rope[-1], anchor)
 
     return builder.add_object(
-        ObjectRecord(
+        KiteRecord(
             name="kite",
             kind="kite",
             particles=np.arange(p0, builder.particle_count),
@@ -152,37 +181,34 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
                 "keel": keel_sticks,
                 "rope": rope_sticks,
             },
-            meta={
-                "paper_counts": PAPER_COUNTS,
-                "nose": rows[0][0],
-                "tow": tow_particle,
-                "anchor_particle": int(rope[-1]),
-                "anchor_nail": nail,
-                "spine": np.array(spars.keel),
-                "tips": (rows[n][0], rows[n][n]),
-                "curves": {"rope": [[int(i) for i in rope]]},
-            },
+            paper_counts=PAPER_COUNTS,
+            curves={"rope": [[int(i) for i in rope]]},
+            nose=rows[0][0],
+            tow=tow_particle,
+            anchor_particle=int(rope[-1]),
+            anchor_nail=nail,
+            spine=np.array(spars.keel),
+            tips=(rows[n][0], rows[n][n]),
         )
     )
 
 
-def apply_controls(record: ObjectRecord, targets: dict, values: dict) -> None:
+def apply_controls(record: KiteRecord, targets: dict, values: dict) -> None:
     """Move the rope's ground end to ``values['anchor']`` = (x, y) [m], on the terrain.
 
     ``targets`` holds host copies of ``stick_rest``, ``nail_target`` and the ``terrain``.
     """
     if "anchor" in values:
         x, y = values["anchor"]
-        targets["nail_target"][record.meta["anchor_nail"]] = (x, y, float(targets["terrain"].height(x, y)))
+        targets["nail_target"][record.anchor_nail] = (x, y, float(targets["terrain"].height(x, y)))
 
 
-def line_state(record: ObjectRecord, q: np.ndarray) -> dict:
+def line_state(record: KiteRecord, q: np.ndarray) -> dict:
     """Diagnostics: line elevation angle [deg] (anchor to tow point), kite height [m], tow-anchor distance [m]."""
-    m = record.meta
-    d = q[m["tow"]] - q[m["anchor_particle"]]
+    d = q[record.tow] - q[record.anchor_particle]
     return {
         "elevation_deg": float(np.degrees(np.arctan2(d[2], np.linalg.norm(d[:2])))),
         "height": float(q[record.parts["sail"]][:, 2].mean()),
         "distance": float(np.linalg.norm(d)),
-        "tow": q[m["tow"]].copy(),
+        "tow": q[record.tow].copy(),
     }

@@ -15,12 +15,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..builder import ModelBuilder
+from ..config import NON_NEGATIVE, POSITIVE, Bounds, Checked, number
 from ..model import ObjectRecord
 from ..terrain import Heightfield
 
 
-@dataclass
-class ParachuteConfig:
+@dataclass(kw_only=True)
+class ParachuteConfig(Checked):
     """Parameters of the round parachute.
 
     Attributes:
@@ -34,6 +35,8 @@ class ParachuteConfig:
         line_length: rim-to-person distance [m].
         line_mass: mass of all lines together [kg].
         hoop: add the rim hoop of Section 8.3.
+        hub_mass_fraction: mass of the hoop's virtual centre particle, as a share of ``canopy_mass`` (it adds to
+            the canopy's mass).
         hoop_weight: weight of the hoop's sticks in the constraint average (1 = the paper; the paper's
             own way to stiffen a part is to double its sticks, weight 2).
         line_weight: weight of the line sticks (the paper doubles the kite rope's sticks for the same
@@ -43,21 +46,22 @@ class ParachuteConfig:
         speed: start descent speed [m/s].
     """
 
-    rings: int = 6
-    radius: float = 3.5
-    dome_angle: float = 60.0
-    canopy_mass: float = 8.0
-    person_mass: float = 80.0
-    line_count: int = 12
-    line_particles: int = 3
-    line_length: float = 7.0
-    line_mass: float = 1.0
+    rings: int = number(6, Bounds(1, 64))
+    radius: float = number(3.5, POSITIVE)
+    dome_angle: float = number(60.0, Bounds(0.0, 90.0, low_open=True))
+    canopy_mass: float = number(8.0, POSITIVE)
+    person_mass: float = number(80.0, POSITIVE)
+    line_count: int = number(12, Bounds(3, 1024))
+    line_particles: int = number(3, Bounds(0, 64))
+    line_length: float = number(7.0, POSITIVE)
+    line_mass: float = number(1.0, POSITIVE)
     hoop: bool = True
-    hoop_weight: float = 6.0
-    line_weight: float = 1.0
-    altitude: float = 400.0
+    hub_mass_fraction: float = number(0.05, POSITIVE)
+    hoop_weight: float = number(6.0, POSITIVE)
+    line_weight: float = number(1.0, POSITIVE)
+    altitude: float = number(400.0, POSITIVE)
     position: tuple[float, float] = (0.0, 0.0)
-    speed: float = 5.0
+    speed: float = number(5.0, NON_NEGATIVE)
 
 
 def _zip_rings(inner: list[int], inner_angles: np.ndarray, outer: list[int], outer_angles: np.ndarray):
@@ -79,6 +83,18 @@ def _zip_rings(inner: list[int], inner_angles: np.ndarray, outer: list[int], out
             tris.append((inner[i % ni], outer[j % no], inner[(i + 1) % ni]))
             i += 1
     return tris
+
+
+@dataclass(kw_only=True)
+class ParachuteRecord(ObjectRecord):
+    """A parachute's :class:`~warpsim.model.ObjectRecord` with its rim and person.
+
+    Attributes:
+        rim: the canopy's rim particles, in order around it. person: the person particle.
+    """
+
+    rim: np.ndarray
+    person: int
 
 
 def build_parachute(builder: ModelBuilder, cfg: ParachuteConfig, terrain: Heightfield) -> ObjectRecord:
@@ -142,14 +158,14 @@ def build_parachute(builder: ModelBuilder, cfg: ParachuteConfig, terrain: Height
 
     virtual, hoop_sticks = [], []
     if cfg.hoop:
-        hub = builder.add_particle(rim_centre, 0.05 * cfg.canopy_mass, vel)
+        hub = builder.add_particle(rim_centre, cfg.hub_mass_fraction * cfg.canopy_mass, vel)
         virtual.append(hub)
         n = len(rim)
         hoop_sticks = [builder.add_stick(hub, r, weight=cfg.hoop_weight) for r in rim]
         hoop_sticks += [builder.add_stick(rim[k], rim[(k + 2) % n], weight=cfg.hoop_weight) for k in range(n)]
 
     return builder.add_object(
-        ObjectRecord(
+        ParachuteRecord(
             name="parachute",
             kind="parachute",
             particles=np.arange(p0, builder.particle_count),
@@ -165,13 +181,15 @@ def build_parachute(builder: ModelBuilder, cfg: ParachuteConfig, terrain: Height
                 "lines": np.array(line_sticks),
                 "hoop": np.array(hoop_sticks, dtype=int),
             },
-            meta={"rim": np.array(rim), "built_radius": cfg.radius, "person": person, "curves": {"lines": chains}},
+            curves={"lines": chains},
+            rim=np.array(rim),
+            person=person,
         )
     )
 
 
-def projected_radius(record: ObjectRecord, q: np.ndarray) -> float:
+def projected_radius(record: ParachuteRecord, q: np.ndarray) -> float:
     """Mean horizontal distance [m] of the rim particles from their centroid."""
-    rim = q[record.meta["rim"]]
+    rim = q[record.rim]
     d = rim[:, :2] - rim[:, :2].mean(axis=0)
     return float(np.linalg.norm(d, axis=1).mean())

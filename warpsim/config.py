@@ -1,0 +1,273 @@
+"""Typed settings of a scene: the one place where every default, unit and bound is written.
+
+Each section of a scene descriptor (``[scene]``, ``[solver]``, ``[air]``, ``[wind]``, ``[terrain]``,
+``[ground]``, and one per object) is a keyword-only dataclass here or beside its object's builder. A field's
+bounds and choices sit in its metadata (:func:`number`, :func:`choice`), so that the descriptor's defaults,
+its checks and the Python API (``SolverVerlet(model, SolverConfig(iterations=40))``) cannot drift apart:
+:mod:`warpsim.descriptor` derives its tables from these classes, and each class checks its values when made.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from .kernels.aero import AeroModel
+from .kernels.collision import CollisionMode
+
+GRAVITY = 9.80665
+"""Standard gravity [m/s^2] (slide 14; the paper's text misprints 9.80655)."""
+
+AIR_DENSITY = 1.294217666
+"""Air density [kg/m^3] used by the paper (slide 14)."""
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """Allowed range of a number: ``low`` and ``high`` (None = unbounded), each end open or closed."""
+
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    high_open: bool = False
+
+    def violation(self, value) -> str | None:
+        """What ``value`` breaks (``"must be > 0"``), or None when it is inside."""
+        if self.low is not None and (value < self.low or (self.low_open and value == self.low)):
+            return f"must be {'>' if self.low_open else '>='} {self.low}"
+        if self.high is not None and (value > self.high or (self.high_open and value == self.high)):
+            return f"must be {'<' if self.high_open else '<='} {self.high}"
+        return None
+
+
+POSITIVE = Bounds(0.0, low_open=True)
+NON_NEGATIVE = Bounds(0.0)
+
+
+def number(default, bounds: Bounds | None = None, **kwargs):
+    """A dataclass field holding a number (or a tuple of numbers) with its ``bounds``."""
+    return field(default=default, metadata={"bounds": bounds}, **kwargs)
+
+
+def choice(default: enum.Enum | str, options: type[enum.Enum] | tuple[str, ...]):
+    """A dataclass field holding one of ``options``: an enum's members (written lower-case in a descriptor)
+    or plain strings."""
+    return field(default=default, metadata={"choices": options})
+
+
+def field_bounds(cls, name: str) -> Bounds | None:
+    """The :class:`Bounds` of field ``name`` of config class ``cls``, or None."""
+    for f in dataclasses.fields(cls):
+        if f.name == name:
+            return f.metadata.get("bounds")
+    return None
+
+
+def field_choices(cls, name: str) -> tuple[str, ...] | None:
+    """The names a descriptor may give field ``name`` of ``cls`` (an enum's members lower-case), or None."""
+    for f in dataclasses.fields(cls):
+        if f.name == name:
+            options = f.metadata.get("choices")
+            if isinstance(options, type) and issubclass(options, enum.Enum):
+                return tuple(m.name.lower() for m in options)
+            return options
+    return None
+
+
+def plain(value):
+    """A config value as a descriptor holds it: enums as lower-case names, tuples as lists."""
+    if isinstance(value, enum.Enum):
+        return value.name.lower()
+    if isinstance(value, tuple):
+        return [plain(v) for v in value]
+    return value
+
+
+def as_section(config) -> dict[str, Any]:
+    """A config dataclass as a descriptor section (a dict of TOML-ready values)."""
+    return {f.name: plain(getattr(config, f.name)) for f in dataclasses.fields(config)}
+
+
+def from_section(cls, values: dict[str, Any]):
+    """Make config class ``cls`` from a validated descriptor section (lists become tuples, names enums)."""
+    kwargs = {}
+    for f in dataclasses.fields(cls):
+        if f.name in values:
+            v = values[f.name]
+            kwargs[f.name] = tuple(v) if isinstance(v, list) else v
+    return cls(**kwargs)
+
+
+class Checked:
+    """Mixin of the config dataclasses: on creation, names become enum members and every bounded field and
+    choice is checked (``ValueError`` naming the field)."""
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            options = f.metadata.get("choices")
+            if options is not None:
+                value = _choose(type(self).__name__, f.name, value, options)
+                object.__setattr__(self, f.name, value)
+            bounds = f.metadata.get("bounds")
+            if bounds is not None:
+                for v in value if isinstance(value, tuple) else (value,):
+                    if isinstance(v, float) and not math.isfinite(v):
+                        raise ValueError(f"{f.name} must be finite, got {v}")
+                    problem = bounds.violation(v)
+                    if problem:
+                        raise ValueError(f"{f.name} {problem}, got {v!r}")
+
+
+def _choose(owner: str, name: str, value, options):
+    if isinstance(options, type) and issubclass(options, enum.Enum):
+        if isinstance(value, options):
+            return value
+        if isinstance(value, str) and value.upper() in options.__members__:
+            return options[value.upper()]
+        names = ", ".join(m.name.lower() for m in options)
+    else:
+        if value in options:
+            return value
+        names = ", ".join(options)
+    raise ValueError(f"{name} must be one of {names}, got {value!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class SceneConfig(Checked):
+    """``[scene]``: which object, for how long, how often a frame.
+
+    Attributes:
+        object: the object kind (a name of :data:`warpsim.objects.registry.OBJECTS`).
+        seconds: simulated time a run lasts [s] (> 0).
+        fps: output frames per simulated second [1/s].
+    """
+
+    object: str = "flag"
+    seconds: float = number(10.0, POSITIVE)
+    fps: float = number(30.0, Bounds(1e-6, 1e6))
+
+    def steps_per_frame(self, dt: float) -> int:
+        """Solver steps of ``dt`` [s] in one frame (at least 1)."""
+        return max(1, int(round(1.0 / (self.fps * dt))))
+
+
+@dataclass(frozen=True, kw_only=True)
+class SolverConfig(Checked):
+    """``[solver]``: the integrator and its constraint iterations.
+
+    Attributes:
+        method: ``verlet`` (the paper's: Verlet + Jacobi-averaged sticks) or ``euler`` (mass-spring comparison).
+        dt: time step [s].
+        iterations: Jacobi constraint iterations per step (paper: 40-55).
+        relaxation: over-relaxation factor on the averaged correction (1.0 = the paper), in (0, 2).
+        chebyshev: estimated spectral radius ``rho`` in [0, 1) of one Jacobi iteration for Chebyshev
+            semi-iterative acceleration (Wang 2015); 0 = plain Jacobi, the paper. Same cost per iteration.
+        mass_splitting: split each particle's mass over its sticks so that constraints conserve momentum
+            (see :mod:`warpsim.kernels.constraints`); False = the paper's plain average.
+        damping: fraction of the velocity removed per step, in [0, 1) (0 = none, the paper).
+        max_stretch: blow-up limit on a stick's relative stretch ``|l - r|/r`` (0 = no limit).
+        spring_stiffness: spring constant of every stick [N/m] (``euler`` only).
+        spring_damping: spring damping [N s/m] (``euler`` only).
+    """
+
+    method: str = choice("verlet", ("verlet", "euler"))
+    dt: float = number(0.01, Bounds(1e-7, 1.0))
+    iterations: int = number(55, Bounds(1, 10000))
+    relaxation: float = number(1.0, Bounds(0.0, 2.0, low_open=True, high_open=True))
+    chebyshev: float = number(0.95, Bounds(0.0, 1.0, high_open=True))
+    mass_splitting: bool = False
+    damping: float = number(0.0, Bounds(0.0, 1.0, high_open=True))
+    max_stretch: float = number(1.0, NON_NEGATIVE)
+    spring_stiffness: float = number(5000.0, POSITIVE)
+    spring_damping: float = number(5.0, NON_NEGATIVE)
+
+    def __post_init__(self):
+        super().__post_init__()
+        if isinstance(self.iterations, bool) or int(self.iterations) != self.iterations:
+            raise ValueError(f"iterations must be a whole number >= 1, got {self.iterations}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class AirConfig(Checked):
+    """``[air]``: how the air pushes on the triangles (see :mod:`warpsim.kernels.aero`).
+
+    Attributes:
+        model: the air-force law, :class:`~warpsim.kernels.aero.AeroModel` (``paper``, ``plate``).
+        scale: multiplier on the air force (1 = the model as written; 0 = no air).
+        density: air density [kg/m^3] (the paper's 1.294217666).
+    """
+
+    model: AeroModel = choice(AeroModel.PAPER, AeroModel)
+    scale: float = number(1.0, NON_NEGATIVE)
+    density: float = number(AIR_DENSITY, NON_NEGATIVE)
+
+
+@dataclass(frozen=True, kw_only=True)
+class WindConfig(Checked):
+    """``[wind]``: the wind at the start, its growth with height and its gusts (see :mod:`warpsim.controls`).
+
+    Attributes:
+        velocity: wind [m/s] at ``reference_height`` (3 numbers).
+        shear_exponent: power-law shear exponent (0 = the same wind at every height; ~0.14 over open land).
+        reference_height: height above the terrain [m] where the wind equals ``velocity``.
+        gust_intensity: gusts' standard deviation as a fraction of the mean speed (0 = steady).
+        gust_period: gusts' correlation time [s].
+        gust_seed: seed of the gusts' random numbers.
+    """
+
+    velocity: tuple[float, float, float] = number((4.0, 0.5, 0.0), Bounds(-200.0, 200.0))
+    shear_exponent: float = 0.0
+    reference_height: float = number(10.0, POSITIVE)
+    gust_intensity: float = number(0.0, NON_NEGATIVE)
+    gust_period: float = number(2.0, POSITIVE)
+    gust_seed: int = number(0, NON_NEGATIVE)
+
+
+@dataclass(frozen=True, kw_only=True)
+class TerrainConfig(Checked):
+    """``[terrain]``: the heightfield under everything (see :class:`warpsim.terrain.Heightfield`).
+
+    Attributes:
+        kind: ``flat``, ``procedural`` (seeded hills) or ``file`` (heights from a .npy array).
+        size: side of the square terrain [m].
+        height: base height [m].
+        amplitude: peak height of procedural hills above or below the base [m].
+        seed: seed of procedural hills.
+        file: path of the .npy array of heights [m] (``kind = "file"``).
+    """
+
+    kind: str = choice("flat", ("flat", "procedural", "file"))
+    size: float = number(1000.0, Bounds(0.0, 1e7, low_open=True))
+    height: float = number(0.0, Bounds(-1e5, 1e5))
+    amplitude: float = number(40.0, Bounds(-1e4, 1e4))
+    seed: int = number(0, NON_NEGATIVE)
+    file: str = ""
+
+
+@dataclass(frozen=True, kw_only=True)
+class GroundConfig(Checked):
+    """``[ground]``: how particles meet the terrain (see :mod:`warpsim.kernels.collision`).
+
+    Attributes:
+        collision: :class:`~warpsim.kernels.collision.CollisionMode`: ``normal`` (push out along the terrain
+            normal, with friction) or ``clamp`` (the paper's vertical clamp).
+        friction: Coulomb-like friction coefficient (dimensionless, >= 0).
+    """
+
+    collision: CollisionMode = choice(CollisionMode.NORMAL, CollisionMode)
+    friction: float = number(0.5, NON_NEGATIVE)
+
+
+SECTIONS: dict[str, type] = {
+    "scene": SceneConfig,
+    "solver": SolverConfig,
+    "air": AirConfig,
+    "wind": WindConfig,
+    "terrain": TerrainConfig,
+    "ground": GroundConfig,
+}
+"""Descriptor section -> its config class (the object's own section comes from the registry)."""

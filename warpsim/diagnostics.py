@@ -1,0 +1,153 @@
+"""What a frame shows: positions, stretch, energy, per-object metrics, blow-ups and terrain contacts.
+
+One module for every reader of a running or recorded scene (the runner's blow-up check, the HDF5 recorder's
+diagnostics, the command line's summary), so that a metric is computed one way only. Host-side NumPy, once
+per output frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .model import Control, Model, State
+
+
+@dataclass
+class Frame:
+    """One output frame of a run.
+
+    Attributes:
+        index: frame number (0 = the initial state). time: simulated time [s].
+        steps: solver steps taken since the scene started.
+        positions: host ``[P, 3]`` positions [m].
+        velocities: host ``[P, 3]`` velocities ``(x - x_prev)/dt`` [m/s].
+        wind: host ``[W, 3]`` wind of each world at the reference height [m/s].
+        worst_stretch: largest ``|l - r|/r`` over all sticks (dimensionless).
+        worst_stick: index of that stick (-1 when there are no sticks).
+        kinetic_energy: total kinetic energy [J] of the free particles.
+    """
+
+    index: int
+    time: float
+    steps: int
+    positions: np.ndarray
+    velocities: np.ndarray
+    wind: np.ndarray
+    worst_stretch: float
+    worst_stick: int
+    kinetic_energy: float
+
+
+def measure(model: Model, state: State, control: Control, dt: float, index: int, steps: int) -> Frame:
+    """The :class:`Frame` ``index`` of ``state`` after ``steps`` steps of ``dt`` [s] (rest lengths and wind from
+    ``control``). A blown-up state gives NaN or Inf values, which :func:`find_blowup` reports."""
+    q = state.positions()
+    with np.errstate(invalid="ignore", over="ignore"):
+        stretches = np.abs(model.stick_stretch(q, control.stick_rest.numpy()))
+        worst_stick = int(np.argmax(stretches)) if len(stretches) else -1  # argmax finds a NaN first
+        stretch = float(stretches[worst_stick]) if len(stretches) else 0.0
+        v = state.velocities(dt)
+        energy = float(0.5 * np.sum(model.particle_free_mass * np.einsum("ij,ij->i", v, v)))
+    return Frame(index, state.time, steps, q, v, control.wind.numpy().copy(), stretch, worst_stick, energy)
+
+
+def object_of(model: Model, particle: int) -> str:
+    """The name of the object particle ``particle`` belongs to (``"no object"`` for none)."""
+    for record in model.objects:
+        if particle in record.particles:
+            return record.name
+    return "no object"
+
+
+def find_blowup(model: Model, frame: Frame, max_stretch: float) -> tuple[str, str] | None:
+    """``(object name, what is wrong)`` when ``frame`` shows a blow-up, else None: a non-finite position or
+    velocity, or a worst stick stretch above ``max_stretch`` (dimensionless; 0 = no limit)."""
+    bad = ~(np.isfinite(frame.positions).all(axis=1) & np.isfinite(frame.velocities).all(axis=1))
+    if bad.any():
+        p = int(np.flatnonzero(bad)[0])
+        return object_of(model, p), f"particle {p} has a non-finite position or velocity ({bad.sum()} particles)"
+    if max_stretch > 0.0 and not frame.worst_stretch <= max_stretch:  # NaN stretch counts as too much
+        k = frame.worst_stick
+        a, b = (int(i) for i in model.stick_particles_np[k])
+        return (
+            object_of(model, a),
+            f"stick {k} (particles {a}-{b}) is stretched {100 * frame.worst_stretch:.1f}% "
+            f"(limit solver.max_stretch = {100 * max_stretch:g}%)",
+        )
+    return None
+
+
+@dataclass
+class ObjectMetrics:
+    """Per-object metrics of one frame, one row per object of the model (``K`` objects).
+
+    Attributes:
+        centre: ``[K, 3]`` mass centre of the free particles [m].
+        altitude: ``[K]`` height of the mass centre above the terrain under it [m].
+        airspeed: ``[K]`` speed of the mass centre relative to its world's wind [m/s].
+    """
+
+    centre: np.ndarray
+    altitude: np.ndarray
+    airspeed: np.ndarray
+
+
+def object_metrics(model: Model, frame: Frame) -> ObjectMetrics:
+    """The :class:`ObjectMetrics` of ``frame``."""
+    mass = model.particle_free_mass
+    count = len(model.objects)
+    centre, velocity = np.zeros((count, 3)), np.zeros((count, 3))
+    for k, record in enumerate(model.objects):
+        m = mass[record.particles]
+        total = m.sum() if m.sum() > 0 else 1.0
+        centre[k] = (m[:, None] * frame.positions[record.particles]).sum(axis=0) / total
+        velocity[k] = (m[:, None] * frame.velocities[record.particles]).sum(axis=0) / total
+    worlds = np.array([record.world for record in model.objects], dtype=np.int64)
+    altitude = centre[:, 2] - model.terrain.height(centre[:, 0], centre[:, 1]) if count else np.zeros(0)
+    airspeed = np.linalg.norm(velocity - frame.wind[worlds], axis=1) if count else np.zeros(0)
+    return ObjectMetrics(centre, np.asarray(altitude), airspeed)
+
+
+class GroundContacts:
+    """The first time each object touches the terrain, for the run summary.
+
+    Parts that lie on the ground or hold an object to it by design (``GROUNDED_PARTS``) and nailed particles
+    are left out: their contact is not news. A particle within ``CONTACT_DISTANCE`` of the surface touches it.
+    """
+
+    GROUNDED_PARTS = ("rope", "pole", "lines", "virtual")
+    CONTACT_DISTANCE = 0.02  # [m]
+
+    def __init__(self, model: Model):
+        self.model = model
+        free = np.isfinite(model.particle_mass)
+        ids, owner = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
+        for k, record in enumerate(model.objects):
+            particles = np.asarray(record.particles, dtype=np.int64)
+            grounded = [np.asarray(record.parts[p], dtype=np.int64) for p in self.GROUNDED_PARTS if p in record.parts]
+            keep = free[particles] & ~np.isin(particles, np.concatenate([np.zeros(0, np.int64), *grounded]))
+            ids.append(particles[keep])
+            owner.append(np.full(int(keep.sum()), k, dtype=np.int64))
+        self._ids = np.concatenate(ids)
+        self._owner = np.concatenate(owner)
+        self._top = float(model.terrain.heights.max()) + self.CONTACT_DISTANCE
+        self.first: dict[str, float] = {}  # object name -> first time [s] it touched the terrain
+
+    def note(self, frame: Frame) -> None:
+        """Record the objects that touch the terrain in ``frame`` for the first time."""
+        if len(self.first) == len(self.model.objects) or not len(self._ids):
+            return
+        z = frame.positions[self._ids, 2]
+        low = np.flatnonzero(z < self._top)  # only those can touch: a cheap test first
+        if not len(low):
+            return
+        p = frame.positions[self._ids[low]]
+        touching = low[p[:, 2] - self.model.terrain.height(p[:, 0], p[:, 1]) < self.CONTACT_DISTANCE]
+        for k in np.unique(self._owner[touching]):
+            self.first.setdefault(self.model.objects[int(k)].name, float(frame.time))
+
+    def by_time(self) -> tuple[tuple[str, float], ...]:
+        """``(object name, time [s])`` of each first contact, earliest first."""
+        return tuple(sorted(self.first.items(), key=lambda item: item[1]))

@@ -10,15 +10,9 @@ import importlib
 import pytest
 import warp as wp
 
-import warpsim.solver  # noqa: F401  (imports every kernel module)
+from warpsim.kernels import MODULES
 
-KERNEL_MODULES = (
-    "warpsim.kernels.aero",
-    "warpsim.kernels.collision",
-    "warpsim.kernels.constraints",
-    "warpsim.kernels.springs",
-    "warpsim.kernels.verlet",
-)
+KERNEL_MODULES = tuple(module.__name__ for module in MODULES)
 
 
 def _nvrtc_archs() -> set[int]:

@@ -1,6 +1,7 @@
 """Same input, same output: repeated runs and graph replay versus kernel-by-kernel launches."""
 
 import numpy as np
+import pytest
 
 import warpsim as ws
 from warpsim.descriptor import defaults
@@ -52,13 +53,17 @@ def test_solver_rejects_bad_settings():
     b = ws.ModelBuilder()
     b.add_particle((0, 0, 1), 1.0)
     m = b.finalize("cpu")
-    for kwargs in ({"iterations": 0}, {"relaxation": 2.5}, {"damping": -0.1}):
-        try:
+    refused = {
+        "iterations must be >= 1, got 0": {"iterations": 0},
+        "relaxation must be < 2.0, got 2.5": {"relaxation": 2.5},
+        "damping must be >= 0.0, got -0.1": {"damping": -0.1},
+        "damping must be < 1.0, got 1.0": {"damping": 1.0},
+        "iterations must be a whole number": {"iterations": 2.5},
+        "method must be one of verlet, euler": {"method": "rk4"},
+    }
+    for message, kwargs in refused.items():
+        with pytest.raises(ValueError, match=message):
             ws.SolverVerlet(m, **kwargs)
-        except ValueError as err:
-            assert str(err)
-        else:
-            raise AssertionError(f"{kwargs} accepted")
 
 
 def test_separate_processes_record_the_same_frames(tmp_path):

@@ -16,8 +16,12 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from warpsim.cli import main
+from warpsim.config import SECTIONS as SHARED_SECTIONS
 from warpsim.descriptor import DescriptorError, defaults, load_text
+from warpsim.objects import registry
 from warpsim.runner import BlowUpError, Simulation
+
+KINDS = list(registry.OBJECTS)
 
 # WARPSIM_FUZZ_EXAMPLES=5000 for a long hunt; CI runs a fixed (derandomized) sample, see conftest.py
 FUZZ = settings(
@@ -36,13 +40,13 @@ SCALARS = st.one_of(
 )
 VALUES = st.one_of(SCALARS, st.lists(SCALARS, max_size=4), st.dictionaries(st.text(max_size=6), SCALARS, max_size=2))
 
-SECTIONS = ["scene", "solver", "air", "wind", "terrain", "ground", "worlds", "flag", "kite", "hang_glider", "parachute"]
+SECTIONS = [*SHARED_SECTIONS, "worlds", *(registry.section(kind) for kind in KINDS)]
 
 
 def _keys(section: str) -> list[str]:
     """Known keys of a section (any object's), so that the fuzz reaches value checks, not only key checks."""
     keys = set()
-    for kind in ("flag", "kite", "hang-glider", "parachute"):
+    for kind in KINDS:
         keys |= set(defaults(kind).get(section, {}))
     return sorted(keys) or ["count"]
 
@@ -66,7 +70,7 @@ def _toml(value) -> str:
 def descriptors(draw) -> str:
     """TOML text: a few sections with known or random keys holding any value, sometimes [[controls]]."""
     lines = []
-    kind = draw(st.one_of(st.sampled_from(["flag", "kite", "hang-glider", "parachute", "glider", 3]), VALUES))
+    kind = draw(st.one_of(st.sampled_from([*KINDS, "glider", 3]), VALUES))
     lines += ["[scene]", f"object = {_toml(kind)}", f"seconds = {draw(st.sampled_from([0.02, 0.05, -1, 0]))}"]
     if draw(st.integers(0, 9)) == 0:  # deep nesting, a byte-order mark
         depth = draw(st.integers(5, 600))
@@ -93,7 +97,7 @@ def test_descriptor_loader_accepts_or_explains(text):
         message = str(err)
         assert message.startswith("fuzz.toml: ") and "\n" not in message
         return
-    assert d["scene"]["object"] in ("flag", "kite", "hang-glider", "parachute")
+    assert d["scene"]["object"] in KINDS
     assert 0 < d["solver"]["dt"] <= 1.0 and d["worlds"]["count"] >= 1
     # a valid descriptor builds (or is refused with a clear message) and runs (or reports a blow-up)
     d["scene"]["fps"] = 100.0
@@ -238,7 +242,7 @@ EDGY = st.sampled_from([0, 1, 2, 3, 4, -1, 0.0, 1e-6, 0.001, 0.5, 1.0, 2.0, 89.9
 @st.composite
 def edgy_objects(draw) -> dict:
     """An object's defaults with up to 3 of its own keys set to edge values (tiny, huge, zero, negative)."""
-    kind = draw(st.sampled_from(["flag", "kite", "hang-glider", "parachute"]))
+    kind = draw(st.sampled_from(KINDS))
     section = kind.replace("-", "_")
     keys = draw(st.lists(st.sampled_from(sorted(defaults(kind)[section])), min_size=1, max_size=3, unique=True))
     return {"scene": {"object": kind}, section: {key: draw(EDGY) for key in keys}}

@@ -23,6 +23,7 @@ from warpsim.descriptor import defaults, load_text, to_toml
 from warpsim.io import remove_stale_temporaries, temporary_path
 from warpsim.io.h5safe import writer_active
 from warpsim.io.hdf5 import H5Recorder, Recording
+from warpsim.objects import registry
 from warpsim.runner import Simulation
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -356,7 +357,7 @@ def test_descriptor_strings_round_trip_through_the_recording(tmp_path):
     assert main(["convert", str(rec), str(tmp_path / "odd.usda")]) == 0
 
 
-@pytest.mark.parametrize("kind", ["flag", "kite", "hang-glider", "parachute"])
+@pytest.mark.parametrize("kind", list(registry.OBJECTS))
 def test_every_descriptor_value_type_round_trips(kind):
     d = defaults(kind)
     d["terrain"]["file"] = "a \"b\" \\c\\ \t\n\u00e9\u2603 'd'"

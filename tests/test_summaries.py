@@ -8,6 +8,7 @@ import time
 
 from warpsim.cli import EXIT_BLOWUP, build_parser, main
 from warpsim.descriptor import defaults
+from warpsim.objects import registry
 from warpsim.runner import Simulation
 
 
@@ -70,7 +71,7 @@ def test_help_examples_name_keys_that_exist():
     examples = [word.rstrip(",") for word in text.replace("\n", " ").split() if "=" in word and "." in word]
     assert len(examples) >= 4, text
     known = {}
-    for kind in ("flag", "kite", "hang-glider", "parachute"):
+    for kind in registry.OBJECTS:
         for section, values in defaults(kind).items():
             if isinstance(values, dict):
                 known.setdefault(section, set()).update(values)

@@ -75,3 +75,29 @@ def test_more_friction_slides_less(device):
     assert slick > rough > sticky
     assert slick > 2.0  # on a 20 degree slope a nearly frictionless particle runs away
     assert abs(sticky) < 0.3  # friction 1.0 > tan(20 deg) holds it (it only settles)
+
+
+def test_outside_the_grid_the_edge_height_holds_and_host_equals_kernel(device):
+    """Beyond the far edges the lookup uses the last cell up to its edge (no sample past the array is read): the
+    height is the edge's, the normal the edge cell's, and the host query gives the kernel's float32 numbers."""
+    n = 64
+    heights = np.zeros((n, n), dtype=np.float32)
+    heights[:, -1] = 5.0  # a ramp up to 5 m along the +x edge; the -x edge at -3 m
+    heights[:, 0] = -3.0
+    hf = ws.Heightfield(heights, (100.0, 100.0))
+    cell = 100.0 / (n - 1)
+    x = np.array([50.0, 60.0, 1e4, -1e4, 50.0 - 0.5 * cell])
+    y = np.array([0.0, 49.0, 1e4, -1e4, 0.0])
+    h, normal = hf.sample(x, y)
+    np.testing.assert_array_equal(h[:4], [5.0, 5.0, 5.0, -3.0])
+    assert h[4] == pytest.approx(2.5, abs=1e-4)  # halfway up the last cell
+    slope = 5.0 / cell  # the last cell's rise: the normal beyond the edge keeps it
+    np.testing.assert_allclose(normal[1], np.array([-slope, 0.0, 1.0]) / np.hypot(slope, 1.0), rtol=1e-5)
+    # a particle beyond the +x edge, below the edge height, ends on it (the kernels see the same terrain)
+    b = ws.ModelBuilder(gravity=0.0)
+    b.set_terrain(hf)
+    b.add_particle((70.0, 10.0, 1.0), 1.0)
+    m = b.finalize(device)
+    s, c = m.state(), m.control()
+    ws.SolverVerlet(m, ground=ws.GroundConfig(collision="clamp")).step(s, c, 0.01)
+    assert s.positions()[0, 2] == np.float32(5.0)

@@ -15,20 +15,22 @@ from benchmarks.validation.svg import loglog_panels
 
 
 def _rows(case):
-    return {r.case: r for r in cases.CASES[case]()}
+    """The rows of a validation case, each checked: inside its band, or outside it when marked a model limit."""
+    rows = {r.case: r for r in cases.CASES[case]()}
+    for row in rows.values():
+        assert row.ok != row.model_limit, row
+    return rows
 
 
 @pytest.mark.parametrize("case", ["free-fall", "catenary", "plate"])
 def test_analytic_cases_pass(case):
-    rows = _rows(case)
-    for row in rows.values():
-        assert row.ok or row.model_limit, row
-    assert all(r.ok for r in rows.values() if not r.model_limit)
+    assert _rows(case)
 
 
 def test_pendulum_period_and_the_damping_of_projection():
     rows = _rows("pendulum")
     assert rows["pendulum 5°"].ok  # small swing: period within 1 %
+    assert not rows["pendulum 60°"].ok  # the large swing loses energy within its first period
     for degrees in (5, 60):
         swing = float(rows[f"pendulum {degrees}° energy"].measured.rstrip(" %")) / 100
         assert 0.2 < swing < 0.95  # the method damps (stated in the README), and by this much at dt 0.01 s
@@ -46,9 +48,8 @@ def test_mass_splitting_restores_the_force_balance():
 
 
 def test_glider_rows_report_the_model_limit():
-    rows = _rows("hang-glider")
+    rows = _rows("hang-glider")  # each outside its band: a flat sail cannot glide like a real glider
     assert len(rows) == 4 and all(r.model_limit for r in rows.values())
-    assert not rows["glider glide (paper)"].ok  # a flat sail under sin² α cannot glide like a real glider
 
 
 def test_elliptic_integral():

@@ -42,8 +42,8 @@ def available_memory() -> int | None:
 
 
 MAX_MODEL_PARTICLES = 1024 * 1024
-"""Most particles one model may hold: building takes about 55 us per particle on one core (about a minute for
-this many on the 2-core test machine), and a 256 x 256 flag already steps at under 20 per second on the CPU."""
+"""Most particles one model may hold: building is done particle by particle in Python (about a minute for this many;
+the ``build-scaling`` benchmark), and a 256 x 256 flag already steps at only a few steps per second on the CPU."""
 
 
 def check_memory(particles: float, what: str) -> None:

@@ -178,13 +178,3 @@ class Gusts:
     def wind(self) -> np.ndarray:
         """The current wind [m/s]."""
         return self.mean + self.intensity * np.linalg.norm(self.mean) * self.g * np.array([1.0, 1.0, 0.5])
-
-    def state(self) -> dict:
-        """Everything that decides the coming gusts, as JSON-ready values (for checkpoints)."""
-        return {"g": self.g.tolist(), "mean": self.mean.tolist(), "rng": self.rng.bit_generator.state}
-
-    def set_state(self, state: dict) -> None:
-        """Continue from a :meth:`state` exactly."""
-        self.g = np.asarray(state["g"], dtype=np.float64)
-        self.mean = np.asarray(state["mean"], dtype=np.float64)
-        self.rng.bit_generator.state = state["rng"]

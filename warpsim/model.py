@@ -57,7 +57,7 @@ class Model:
     ``P`` particles, ``S`` sticks, ``T`` triangles, ``N`` nails, ``W`` worlds.
     """
 
-    device: wp.context.Device
+    device: wp.Device
     """Warp device the arrays live on."""
     particle_count: int
     """``P``, particles in every world together."""

@@ -235,7 +235,7 @@ def _gather_iteration(
         if (ref & 1) == 1:
             other = ends[0]
         total += stick_correction(q_in[other] - x, stick_rest[s], stick_coef[s])
-    # only this thread reads and writes its own increment, offset_out and origin_out
+    # only this thread reads and writes its own increment, offset and origin
     q_out[i] = next_position(i, x, total, relaxation * scale, omega, first, last_inc_out, offset_out, origin_out)
 
 
@@ -299,10 +299,10 @@ def _fused_projection(
 ):
     if wp.tid() != 0:  # one thread; reading tid also lets Warp compile constant array strides on the CPU
         return
-    # ends, factors and step sizes were packed_out once (_pack_sticks, _pack_steps); per step only the rest
+    # ends, factors and step sizes were packed once (_pack_sticks, _pack_steps); per step only the rest
     # lengths (a control) come in, and every particle starts at its origin with a zero increment.
     # The loops are `while` loops on purpose: Warp's `range` handles a step of either sign at run time,
-    # which costs ~20 % of the stick pass on the CPU (3.8 against 3.0 ns per stick on a 256^2 flag).
+    # which costs a measurable share of the stick pass on the CPU.
     particle_count = particle_q_out.shape[0]
     i = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
     while i < particle_count:

@@ -55,9 +55,8 @@ class HangGliderConfig(Checked):
             control frame and crossbar they stand for), above 0; ``frame_mass_fraction +
             virtual_mass_fraction`` must stay below 0.95 so the cloth keeps some mass.
         frame_weight: weight of the frame's sticks (leading edges, keel, virtual ties) in the constraint
-            average (1 = the paper; 6 counts each as six sticks). With mass splitting the frame stays within
-            1 % under the pilot's load only with heavy virtual particles: with 10 % of the mass on them it
-            reached 1.1 %, with 30 % it stays under 0.5 % (README, hang glider).
+            average (1 = the paper; 6 counts each as six sticks). Under the pilot's load the frame also needs
+            heavy virtual particles (``virtual_mass_fraction``) to stay within 1 % (README, hang glider).
         chord_loading: load the sail most near its leading edge under the ``plate`` air model (thin-aerofoil
             loading, centre of pressure near the quarter chord; see :mod:`warpsim.kernels.aero`). Off:
             uniform load, centre of pressure at the area centroid, and the glider has almost no pitch

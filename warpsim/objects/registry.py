@@ -45,7 +45,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         config=hang_glider.HangGliderConfig,
         build=hang_glider.build_hang_glider,
         # mass splitting: the plain per-particle average does not conserve angular momentum between the
-        # 65 kg pilot and the light frame, and that spurious torque, not the air, decided the glider's pitch
+        # heavy pilot and the light frame, and that spurious torque, not the air, would decide the pitch
         scene_defaults={
             "wind": {"velocity": [0.0, 0.0, 0.0]},
             "terrain": {"kind": "procedural"},
@@ -58,8 +58,8 @@ OBJECTS: dict[str, ObjectSpec] = {
     "kite": ObjectSpec(
         config=kite.KiteConfig,
         build=kite.build_kite,
-        # mass splitting: with the paper's plain average the rope leans 19 degrees off the kite's force
-        # balance (benchmarks/validation); split masses match it within 0.1 degree
+        # mass splitting: the paper's plain average does not conserve momentum between the light rope and
+        # the kite, so the sticks themselves lean the rope off the kite's force balance (benchmarks/validation)
         scene_defaults={"wind": {"velocity": [6.0, 0.0, 0.0]}, "solver": {"mass_splitting": True}},
         summary="delta kite with keel on a particle rope; move the ground end with anchor (paper Section 7)",
         controls=("anchor",),

@@ -1,0 +1,141 @@
+"""How the code is organised, checked: one source of defaults, and the kernels' naming convention.
+
+The configuration is written once (:mod:`warpsim.config`); the descriptor, the solvers and the Python API read
+it, so a TOML user and a Python user get the same numbers. Every kernel names what it writes ``*_out`` and lists
+those arguments last (``warpsim/kernels/__init__.py``), so that a launch's ``inputs``/``outputs`` split is
+visible in the signature.
+"""
+
+import ast
+import dataclasses
+import inspect
+import textwrap
+
+import pytest
+import warp as wp
+
+import warpsim as ws
+from warpsim import config
+from warpsim.descriptor import DescriptorError, defaults, merge
+from warpsim.kernels import MODULES
+from warpsim.objects import registry
+from warpsim.runner import Simulation
+
+
+@pytest.mark.parametrize("kind", list(registry.OBJECTS))
+def test_python_api_and_descriptor_defaults_are_the_same(kind):
+    d = defaults(kind)
+    scene_defaults = registry.OBJECTS[kind].scene_defaults
+    for section, cls in config.SECTIONS.items():
+        expected = {**config.as_section(cls()), **scene_defaults.get(section, {})}
+        if section == "scene":
+            expected["object"] = kind
+        assert d[section] == expected, section
+    assert d[registry.section(kind)] == config.as_section(registry.OBJECTS[kind].config())
+    sim = Simulation(d)
+    solver_defaults = {**config.as_section(config.SolverConfig()), **scene_defaults.get("solver", {})}
+    assert config.as_section(sim.solver.config) == solver_defaults
+    assert sim.solver.air == config.AirConfig() and sim.solver.ground == config.GroundConfig()
+
+
+def test_python_solvers_default_to_the_descriptor_settings():
+    b = ws.ModelBuilder()
+    b.add_particle((0, 0, 1), 1.0)
+    m = b.finalize("cpu")
+    euler = ws.make_solver(m, ws.SolverConfig(method="euler"))
+    assert isinstance(euler, ws.SolverEuler)
+    solver = defaults("flag")["solver"]
+    assert (euler.config.spring_stiffness, euler.config.spring_damping) == (
+        solver["spring_stiffness"],
+        solver["spring_damping"],
+    )
+    assert ws.SolverVerlet(m).config.chebyshev == solver["chebyshev"] == 0.95
+
+
+@pytest.mark.parametrize(
+    "section, key, value",
+    [("solver", "damping", 1.0), ("solver", "chebyshev", 1.0), ("solver", "relaxation", 2.0), ("air", "scale", -1.0)],
+)
+def test_descriptor_and_config_refuse_the_same_values(section, key, value):
+    with pytest.raises(DescriptorError, match=f"{section}.{key} = {value!r} must be"):
+        merge("test", defaults("flag"), {section: {key: value}})
+    with pytest.raises(ValueError, match=f"{key} must be"):
+        config.SECTIONS[section](**{key: value})
+
+
+def test_choices_come_from_the_enums():
+    from warpsim.descriptor import choices
+
+    assert choices("air", "model") == tuple(m.name.lower() for m in ws.AeroModel)
+    assert choices("ground", "collision") == tuple(m.name.lower() for m in ws.CollisionMode)
+    assert config.AirConfig(model="plate").model is ws.AeroModel.PLATE
+    assert config.AirConfig(model=ws.AeroModel.PLATE) == config.AirConfig(model="plate")
+
+
+def _funcs() -> dict[str, list[str]]:
+    """Every ``@wp.func`` of the kernel modules: name -> its parameter names."""
+    out = {}
+    for module in MODULES:
+        for value in vars(module).values():
+            if isinstance(value, wp.Function) and value.func is not None:
+                out[value.key] = list(inspect.signature(value.func).parameters)
+    return out
+
+
+def _written(tree: ast.AST, params: list[str], funcs: dict[str, list[str]]) -> set[str]:
+    """The parameters a kernel or function body writes: subscript stores, atomics, and arguments passed to a
+    function's ``*_out`` parameters."""
+    written = set()
+    for node in ast.walk(tree):
+        targets = []
+        if isinstance(node, ast.Assign):
+            targets = node.targets
+        elif isinstance(node, ast.AugAssign):
+            targets = [node.target]
+        for t in targets:
+            if isinstance(t, ast.Subscript) and isinstance(t.value, ast.Name):
+                written.add(t.value.id)
+        if isinstance(node, ast.Call):
+            name = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", "")
+            if name.startswith("atomic_") and node.args and isinstance(node.args[0], ast.Name):
+                written.add(node.args[0].id)
+            for arg, param in zip(node.args, funcs.get(name, []), strict=False):
+                if param.endswith("_out") and isinstance(arg, ast.Name):
+                    written.add(arg.id)
+    return written & set(params)
+
+
+def _kernels():
+    for module in MODULES:
+        for value in vars(module).values():
+            if isinstance(value, wp.Kernel):
+                yield module.__name__, value
+
+
+@pytest.mark.parametrize("module, kernel", list(_kernels()), ids=lambda v: getattr(v, "key", v))
+def test_kernels_name_and_order_their_outputs(module, kernel):
+    params = list(inspect.signature(kernel.func).parameters)
+    tree = ast.parse(textwrap.dedent(inspect.getsource(kernel.func)))
+    written = _written(tree, params, _funcs())
+    outputs = [p for p in params if p.endswith("_out")]
+    assert written == set(outputs), f"{module}.{kernel.key} writes {sorted(written)}, names {outputs} as outputs"
+    assert params[len(params) - len(outputs) :] == outputs, f"{module}.{kernel.key}: outputs must come last"
+
+
+def test_functions_name_what_they_write():
+    funcs = _funcs()
+    for module in MODULES:
+        for value in vars(module).values():
+            if isinstance(value, wp.Function) and value.func is not None:
+                params = funcs[value.key]
+                tree = ast.parse(textwrap.dedent(inspect.getsource(value.func)))
+                arrays = {p for p in params if "array" in str(inspect.signature(value.func).parameters[p].annotation)}
+                written = _written(tree, params, funcs) & arrays
+                assert all(p.endswith("_out") for p in written), f"{value.key} writes {sorted(written)}"
+
+
+def test_every_config_field_is_documented_with_its_unit_or_meaning():
+    for cls in [*config.SECTIONS.values(), *(spec.config for spec in registry.OBJECTS.values())]:
+        doc = inspect.getdoc(cls)
+        for f in dataclasses.fields(cls):
+            assert f"{f.name}:" in doc or f"{f.name}," in doc, f"{cls.__name__}.{f.name} is not documented"

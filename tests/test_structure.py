@@ -139,3 +139,17 @@ def test_every_config_field_is_documented_with_its_unit_or_meaning():
         doc = inspect.getdoc(cls)
         for f in dataclasses.fields(cls):
             assert f"{f.name}:" in doc or f"{f.name}," in doc, f"{cls.__name__}.{f.name} is not documented"
+
+
+def test_kernels_compare_enums_by_member_not_by_number():
+    """A kernel argument holding an enum (``mode``, ``aero_model``) is compared with ``CollisionMode.NORMAL``,
+    ``AeroModel.PAPER``..., never with a bare number that would silently change meaning if the enum did."""
+    sources = [v.func for _, v in _kernels()]
+    sources += [v.func for m in MODULES for v in vars(m).values() if isinstance(v, wp.Function) and v.func]
+    for func in sources:
+        for node in ast.walk(ast.parse(textwrap.dedent(inspect.getsource(func)))):
+            if isinstance(node, ast.Compare):
+                names = [n.id for n in (node.left, *node.comparators) if isinstance(n, ast.Name)]
+                numbers = [n for n in (node.left, *node.comparators) if isinstance(n, ast.Constant)]
+                enum_like = [n for n in names if n.endswith(("mode", "model"))]
+                assert not (enum_like and numbers), f"{func.__name__} compares {enum_like} with a number"

@@ -43,6 +43,7 @@ class Heightfield:
         ny, nx = heights.shape
         self.cell = (size_x / (nx - 1), size_y / (ny - 1))
         self._device_data: dict = {}  # device alias -> HeightfieldData, made on first use
+        self._sampler = None  # the host queries' recorded launch, made on first use
 
     # ------------------------------------------------------------------ constructors
     @classmethod
@@ -142,11 +143,14 @@ class Heightfield:
     def sample(self, x, y) -> tuple[np.ndarray, np.ndarray]:
         """Heights [m] and unit upward normals (shape ``[..., 3]``) at world ``(x, y)`` [m] (arrays of one shape
         or scalars), computed on the CPU by the same Warp functions the kernels use."""
-        from .kernels.collision import sample_terrain
+        from .kernels.collision import TerrainSampler
 
-        x, y = np.broadcast_arrays(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
-        points = np.stack([x.reshape(-1), y.reshape(-1)], axis=1)
-        heights, normals = sample_terrain(self.device_data("cpu"), points, "cpu")
+        if self._sampler is None:
+            self._sampler = TerrainSampler(self.device_data("cpu"))
+        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        if x.shape != y.shape:
+            x, y = np.broadcast_arrays(x, y)
+        heights, normals = self._sampler(x.reshape(-1), y.reshape(-1))
         return heights.astype(np.float64).reshape(x.shape), normals.astype(np.float64).reshape(*x.shape, 3)
 
     def height(self, x, y):

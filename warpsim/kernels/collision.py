@@ -118,16 +118,48 @@ def _sample_terrain(
     normal_out[i] = terrain_normal(hf, p[0], p[1])
 
 
-def sample_terrain(hf: HeightfieldData, points: np.ndarray, device) -> tuple[np.ndarray, np.ndarray]:
-    """Terrain heights [m] ``[n]`` and unit normals ``[n, 3]`` at host ``points`` ``[n, 2]`` [m], computed by the
-    kernels' own :func:`terrain_height` and :func:`terrain_normal` (one launch)."""
-    n = len(points)
-    height = wp.empty(max(n, 1), dtype=wp.float32, device=device)
-    normal = wp.empty(max(n, 1), dtype=wp.vec3, device=device)
-    if n:
-        pts = wp.array(np.asarray(points, dtype=np.float32).reshape(n, 2), dtype=wp.vec2, device=device)
-        wp.launch(_sample_terrain, n, [hf, pts], [height, normal], device=device)
-    return height.numpy()[:n], normal.numpy()[:n]
+class TerrainSampler:
+    """Host queries of a terrain through the kernels' own :func:`terrain_height` and :func:`terrain_normal`, on
+    the CPU device. The launch is recorded once over NumPy-backed buffers (re-recorded when more points come), so
+    that a query of a few points costs a few microseconds, not a fresh launch's tens (diagnostics ask every frame).
+    """
+
+    def __init__(self, hf: HeightfieldData):
+        self.hf = hf
+        self.capacity = 0
+        self._launch = None
+
+    def _record(self, capacity: int) -> None:
+        self.points = np.zeros((capacity, 2), dtype=np.float32)
+        self.height = np.zeros(capacity, dtype=np.float32)
+        self.normal = np.zeros((capacity, 3), dtype=np.float32)
+        cpu = "cpu"
+        self._launch = wp.launch(
+            _sample_terrain,
+            capacity,
+            [self.hf, wp.array(self.points, dtype=wp.vec2, device=cpu, copy=False)],
+            [
+                wp.array(self.height, dtype=wp.float32, device=cpu, copy=False),
+                wp.array(self.normal, dtype=wp.vec3, device=cpu, copy=False),
+            ],
+            device=cpu,
+            record_cmd=True,
+        )
+        self.capacity = capacity
+
+    def __call__(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Heights [m] ``[n]`` and unit normals ``[n, 3]`` at the points ``(x, y)`` [m] (two ``[n]`` arrays), as
+        new float32 arrays."""
+        n = len(x)
+        if n == 0:
+            return np.zeros(0, dtype=np.float32), np.zeros((0, 3), dtype=np.float32)
+        if n > self.capacity:
+            self._record(max(n, 64))
+        self.points[:n, 0] = x
+        self.points[:n, 1] = y
+        self._launch.set_dim(n)
+        self._launch.launch()
+        return self.height[:n].copy(), self.normal[:n].copy()
 
 
 def collide_heightfield(model, state, mode: CollisionMode, friction: float) -> None:

@@ -47,9 +47,9 @@ POSITIVE = Bounds(0.0, low_open=True)
 NON_NEGATIVE = Bounds(0.0)
 
 
-def number(default, bounds: Bounds | None = None, **kwargs):
+def number(default, bounds: Bounds | None = None):
     """A dataclass field holding a number (or a tuple of numbers) with its ``bounds``."""
-    return field(default=default, metadata={"bounds": bounds}, **kwargs)
+    return field(default=default, metadata={"bounds": bounds})
 
 
 def choice(default: enum.Enum | str, options: type[enum.Enum] | tuple[str, ...]):
@@ -78,11 +78,16 @@ def field_choices(cls, name: str) -> tuple[str, ...] | None:
 
 
 def plain(value):
-    """A config value as a descriptor holds it: enums as lower-case names, tuples as lists."""
+    """A value as a descriptor (and a TOML writer) holds it: enums as lower-case names, tuples as lists, NumPy
+    scalars as Python numbers, through dicts and lists."""
     if isinstance(value, enum.Enum):
         return value.name.lower()
-    if isinstance(value, tuple):
+    if isinstance(value, dict):
+        return {k: plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
         return [plain(v) for v in value]
+    if hasattr(value, "item") and not isinstance(value, (str, bytes)):  # a NumPy scalar
+        return value.item()
     return value
 
 

@@ -35,7 +35,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-from .config import SECTIONS, Bounds, as_section, field_bounds, field_choices
+from .config import SECTIONS, Bounds, as_section, field_bounds, field_choices, plain
 from .controls import ControlError, ControlSchedule
 from .objects import registry
 
@@ -229,7 +229,7 @@ def _check_controls(where: str, entries, kind: str) -> list[dict]:
     """Validate ``[[controls]]`` entries for an object ``kind``; returns them as plain tables."""
     if not isinstance(entries, list):
         raise DescriptorError(f"{where}: controls must be [[controls]] entries (an array of tables), got {entries!r}")
-    allowed = (*registry.OBJECTS[kind].controls, "wind")
+    allowed = registry.control_names([kind])
     try:
         ControlSchedule(entries, allowed, where)
     except ControlError as err:
@@ -361,17 +361,6 @@ def _read_text(path: Path) -> str:
         raise DescriptorError(f"{path}: cannot be read: {err.strerror or err}") from None
 
 
-def _plain(value):
-    """``value`` as the types a TOML writer takes: tuples as lists, NumPy scalars as Python numbers."""
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if hasattr(value, "item") and not isinstance(value, (str, bytes)):  # numpy scalar
-        return value.item()
-    return value
-
-
 def _toml_value(value) -> str:
     """One value as inline TOML: scalars (strings escaped) by ``tomli_w``, arrays inline."""
     import tomli_w
@@ -386,7 +375,7 @@ def to_toml(descriptor: dict) -> str:
 
     Values are written by ``tomli_w`` (every string escaped), so ``load_text(to_toml(d))`` gives ``d`` back.
     """
-    descriptor = _plain(descriptor)
+    descriptor = plain(descriptor)
     lines = []
     for section, values in descriptor.items():
         if section == "controls":

@@ -105,9 +105,9 @@ def object_metrics(model: Model, frame: Frame) -> ObjectMetrics:
         centre[k] = (m[:, None] * frame.positions[record.particles]).sum(axis=0) / total
         velocity[k] = (m[:, None] * frame.velocities[record.particles]).sum(axis=0) / total
     worlds = np.array([record.world for record in model.objects], dtype=np.int64)
-    altitude = centre[:, 2] - model.terrain.height(centre[:, 0], centre[:, 1]) if count else np.zeros(0)
-    airspeed = np.linalg.norm(velocity - frame.wind[worlds], axis=1) if count else np.zeros(0)
-    return ObjectMetrics(centre, np.asarray(altitude), airspeed)
+    altitude = centre[:, 2] - model.terrain.height(centre[:, 0], centre[:, 1])
+    airspeed = np.linalg.norm(velocity - frame.wind[worlds], axis=1)
+    return ObjectMetrics(centre, altitude, airspeed)
 
 
 class GroundContacts:

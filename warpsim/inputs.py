@@ -18,10 +18,7 @@ from .objects import registry
 
 def control_names(model: Model) -> tuple[str, ...]:
     """Names of the controls a model's scene accepts (its objects' and ``wind``)."""
-    names: list[str] = []
-    for record in model.objects:
-        names += [c for c in registry.OBJECTS[record.kind].controls if c not in names]
-    return (*names, "wind")
+    return registry.control_names(record.kind for record in model.objects)
 
 
 class Inputs:

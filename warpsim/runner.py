@@ -145,7 +145,7 @@ class Simulation:
             raise DescriptorError(
                 f"{where}: the built {problem[0]} is not sound: {problem[1]}; check its sizes, masses, speed and dt"
             )
-        self.world_count = descriptor["worlds"]["count"]
+        self.world_count = self.model.world_count
         winds = [from_section(WindConfig, world_descriptor(descriptor, k)["wind"]) for k in range(self.world_count)]
         try:
             schedule = ControlSchedule(descriptor.get("controls", []), control_names(self.model), where)

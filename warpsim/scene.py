@@ -64,11 +64,6 @@ def make_terrain(cfg: TerrainConfig, where: str = "scene") -> Heightfield:
         raise DescriptorError(f"{where}: terrain.file: {err}") from None
 
 
-def object_config(kind: str, values: dict):
-    """The object's config dataclass made from its descriptor section."""
-    return from_section(registry.OBJECTS[kind].config, values)
-
-
 def world_name(name: str, world: int, world_count: int) -> str:
     """An object's name in a batch of ``world_count`` worlds: ``kite`` alone, ``kite_w007`` in world 7."""
     if world_count == 1:
@@ -90,7 +85,7 @@ def build_model(descriptor: dict, device: str | None = "cpu", where: str = "scen
         builder.current_world = world
         values = world_descriptor(descriptor, world)[registry.section(kind)]
         try:
-            record = spec.build(builder, object_config(kind, values), terrain)
+            record = spec.build(builder, from_section(spec.config, values), terrain)
             if world == 0 and count > 1:  # the first world tells the size of all: refuse what cannot fit
                 check_memory(
                     builder.particle_count * count, f"{count:,} worlds of {builder.particle_count:,} particles"

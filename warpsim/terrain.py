@@ -151,7 +151,7 @@ class Heightfield:
         if x.shape != y.shape:
             x, y = np.broadcast_arrays(x, y)
         heights, normals = self._sampler(x.reshape(-1), y.reshape(-1))
-        return heights.astype(np.float64).reshape(x.shape), normals.astype(np.float64).reshape(*x.shape, 3)
+        return heights.reshape(x.shape), normals.reshape(*x.shape, 3)
 
     def height(self, x, y):
         """Bilinear terrain height [m] at world ``(x, y)`` [m]: a float for scalars, an array for arrays. Outside

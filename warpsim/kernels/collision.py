@@ -148,18 +148,18 @@ class TerrainSampler:
         self.capacity = capacity
 
     def __call__(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Heights [m] ``[n]`` and unit normals ``[n, 3]`` at the points ``(x, y)`` [m] (two ``[n]`` arrays), as
-        new float32 arrays."""
+        """Heights [m] ``[n]`` and unit normals ``[n, 3]`` at the points ``(x, y)`` [m] (two ``[n]`` arrays): the
+        kernel's float32 values, in new float64 arrays."""
         n = len(x)
         if n == 0:
-            return np.zeros(0, dtype=np.float32), np.zeros((0, 3), dtype=np.float32)
+            return np.zeros(0), np.zeros((0, 3))
         if n > self.capacity:
             self._record(max(n, 64))
         self.points[:n, 0] = x
         self.points[:n, 1] = y
         self._launch.set_dim(n)
         self._launch.launch()
-        return self.height[:n].copy(), self.normal[:n].copy()
+        return self.height[:n].astype(np.float64), self.normal[:n].astype(np.float64)
 
 
 def collide_heightfield(model, state, mode: CollisionMode, friction: float) -> None:

@@ -85,3 +85,11 @@ def config_of_section(section_name: str):
         if section(kind) == section_name:
             return spec.config
     return None
+
+
+def control_names(kinds) -> tuple[str, ...]:
+    """The controls a scene of objects of ``kinds`` accepts: theirs, each once, then ``wind`` (every scene's)."""
+    names: list[str] = []
+    for kind in kinds:
+        names += [c for c in OBJECTS[kind].controls if c not in names]
+    return (*names, "wind")

@@ -124,7 +124,7 @@ def build_parser() -> argparse.ArgumentParser:
         "simulated time, steps, wall time, steps per second, real-time factor, worst stick "
         "stretch. Shows progress on a terminal; Ctrl-C stops cleanly.",
     )
-    run.add_argument("scene", metavar="SCENE", nargs="?", help="the scene (not with --resume)")
+    run.add_argument("scene", metavar="SCENE", nargs="?", help="the scene (not with --resume or --replay)")
     run.add_argument(
         "--seconds",
         type=_number("--seconds"),
@@ -160,6 +160,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--resume",
         metavar="REC.h5",
         help="continue a recording from its last frame, appending to it (scene and settings come from it)",
+    )
+    run.add_argument(
+        "--replay",
+        metavar="REC.h5",
+        help="run a recording's scene again from the start with the controls recorded in it (a flight flown in "
+        "`warpsim view`), for as long as it lasts (or --seconds); the frames come out bit for bit the same",
     )
 
     convert = sub.add_parser(
@@ -392,7 +398,7 @@ def cmd_run(args) -> int:
     the outputs, run, report."""
     import contextlib
 
-    from .runner import BlowUpError
+    from .runner import BlowUpError, RecordedControls
 
     usd_path, h5_path = _check_run_options(args)
     device = _check_device(args.device)
@@ -411,6 +417,7 @@ def cmd_run(args) -> int:
                 on_progress=_progress(sim) if not args.quiet and sys.stderr.isatty() else None,
                 realtime=args.realtime,
                 stop=stop,
+                before=RecordedControls(sim, run.controls) if run.controls is not None else None,
             )
         except BlowUpError as err:
             blowup, summary = err, err.summary
@@ -423,20 +430,28 @@ def _check_run_options(args) -> tuple[Path | None, Path | None]:
     from .io import check_stage_path
     from .io.hdf5 import check_recording_path
 
-    if args.resume and args.scene:
-        raise UsageError("give either SCENE or --resume REC.h5, not both (a recording holds its scene)")
-    if not args.resume and not args.scene:
-        raise UsageError("missing SCENE (a built-in object, a scene name or a .toml path), or --resume REC.h5")
+    given = [
+        flag for flag, value in (("SCENE", args.scene), ("--resume", args.resume), ("--replay", args.replay)) if value
+    ]
+    if len(given) > 1:
+        raise UsageError(f"give one of SCENE, --resume REC.h5 and --replay REC.h5, not both {' and '.join(given)}")
+    if not given:
+        raise UsageError("missing SCENE (a built-in object, a scene name or a .toml path), or --resume/--replay REC.h5")
     if args.resume and args.h5:
         raise UsageError("--resume appends to its recording; --h5 is not needed")
-    if args.resume:
-        for name in ("set", "dt", "iterations", "fps", "worlds", "vary"):
-            if getattr(args, name):
-                raise UsageError(f"--{name} cannot change a resumed run; it continues with the recording's settings")
+    for flag, source in (("--resume", args.resume), ("--replay", args.replay)):
+        if source:
+            for name in ("set", "dt", "iterations", "fps", "worlds", "vary"):
+                if getattr(args, name):
+                    raise UsageError(f"--{name} cannot change a {flag} run; it uses the recording's settings")
+            if not Path(source).is_file():
+                raise UsageError(f"{flag} {source}: no such file")
     usd_path = _checked_output(check_stage_path, args.usd, "--usd")
     h5_path = _checked_output(check_recording_path, args.h5, "--h5")
     if args.scene:
         _same_file_check(args.scene, {"--h5": h5_path, "--usd": usd_path})
+    if args.replay:
+        _same_file_check(args.replay, {"--h5": h5_path, "--usd": usd_path})
     return usd_path, h5_path
 
 
@@ -448,8 +463,6 @@ def _claim_recording(outputs, args, h5_path: Path | None):
     if not (h5_path or args.resume):
         return None
     if args.resume:
-        if not Path(args.resume).is_file():
-            raise UsageError(f"--resume {args.resume}: no such file")
         _checked_output(check_recording_path, args.resume, "--resume")
     flag, path = ("--h5", h5_path) if h5_path else ("--resume", args.resume)
     try:
@@ -470,6 +483,7 @@ class _RunInputs:
     seconds: float
     checkpoint: object = None
     frame: int = -1
+    controls: list | None = None  # --replay: the recorded controls of each frame
 
 
 def _resolve_run(args) -> _RunInputs:
@@ -477,6 +491,18 @@ def _resolve_run(args) -> _RunInputs:
     from .descriptor import load_text
     from .io.hdf5 import Recording, RecordingError
 
+    if args.replay:
+        try:
+            with Recording(args.replay) as recording:
+                if recording.frame_count == 0:
+                    raise RecordingError(f"{args.replay}: the recording has no frames")
+                controls = [recording.controls(k) for k in range(recording.frame_count)]
+                text, length = recording.descriptor_text, float(recording.time[-1])
+        except RecordingError as err:
+            raise UsageError(f"--replay {err}") from None
+        descriptor = load_text(text, f"{args.replay} (replayed)")
+        seconds = args.seconds if args.seconds is not None else length
+        return _RunInputs(descriptor, f"{args.replay} (replayed)", seconds, controls=controls)
     if not args.resume:
         descriptor, _, where = _load(args)
         return _RunInputs(descriptor, where, descriptor["scene"]["seconds"])

@@ -7,7 +7,7 @@ per output frame.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -27,6 +27,8 @@ class Frame:
         worst_stretch: largest ``|l - r|/r`` over all sticks (dimensionless).
         worst_stick: index of that stick (-1 when there are no sticks).
         kinetic_energy: total kinetic energy [J] of the free particles.
+        controls: the controls in force while the frame's last steps ran, by name (what
+            :meth:`warpsim.runner.Simulation.set_controls` takes; empty when none was set).
     """
 
     index: int
@@ -38,6 +40,7 @@ class Frame:
     worst_stretch: float
     worst_stick: int
     kinetic_energy: float
+    controls: dict = field(default_factory=dict)
 
 
 def measure(model: Model, state: State, control: Control, dt: float, index: int, steps: int) -> Frame:

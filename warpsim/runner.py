@@ -36,7 +36,8 @@ class BlowUpError(RuntimeError):
         step: the solver step count at the bad frame. time: its simulated time [s].
         object: the name of the object where it happened. reason: what was seen.
         last_good_frame: index of the last good frame; last_good_time: its time [s].
-        summary: the :class:`RunSummary` of the run up to the last good frame.
+        summary: the :class:`RunSummary` of the run up to the last good frame (None when raised by
+            :meth:`Simulation.advance`, which does not know where a run started).
     """
 
     def __init__(self, step, time, object, reason, last_good_frame, last_good_time, summary):
@@ -187,8 +188,13 @@ class Simulation:
         self.steps_taken += count
 
     def frame(self, index: int) -> Frame:
-        """The current state measured as frame ``index`` (see :func:`warpsim.diagnostics.measure`)."""
-        return measure(self.model, self.state, self.control, self.dt, index, self.steps_taken)
+        """The current state measured as frame ``index`` (see :func:`warpsim.diagnostics.measure`), with the
+        controls in force."""
+        frame = measure(self.model, self.state, self.control, self.dt, index, self.steps_taken)
+        inputs = getattr(self, "inputs", None)  # not yet made when __init__ checks the built state
+        if inputs is not None:
+            frame.controls = dict(inputs.in_force)
+        return frame
 
     def blowup(self, frame: Frame) -> tuple[str, str] | None:
         """``(object name, what is wrong)`` when ``frame`` shows a blow-up (non-finite values, or a stick past
@@ -225,6 +231,50 @@ class Simulation:
         self.control.wind.assign(checkpoint.wind)
         self.inputs.load(checkpoint)
 
+    def start_frames(self) -> Frame:
+        """Check the current state and make it the last good frame that :meth:`advance` goes back to on a
+        blow-up; returns it (its index is the frame the current step count belongs to).
+
+        Raises :class:`BlowUpError` (with an empty summary) when the current state is already bad.
+        """
+        first = self.frame(-(-self.steps_taken // self.steps_per_frame))  # ceil: the frame the state belongs to
+        problem = self.blowup(first)
+        if problem:
+            raise BlowUpError(
+                self.steps_taken, first.time, *problem, -1, first.time, RunSummary(0.0, 0, 0.0, 0.0, blew_up=True)
+            )
+        self._good = (self.checkpoint(), first)
+        return first
+
+    def advance(self, limit: int | None = None, before: Callable[[int], None] | None = None) -> Frame:
+        """Step to the end of the current frame (at most ``limit`` steps) and return that frame, checked.
+
+        At a frame start the schedule and gusts move (:meth:`apply_schedule`), then ``before(index)`` is called
+        with the index of the frame about to be stepped (a keyboard or a recorded flight sets its controls
+        there, through :meth:`set_controls`). A bad frame is not returned: the state goes back to the last good
+        frame (see :meth:`start_frames`, which must have been called once) and :class:`BlowUpError` is raised,
+        its ``summary`` None.
+        """
+        spf = self.steps_per_frame
+        into = self.steps_taken % spf
+        if into == 0:  # a frame starts: controls and gusts move
+            self.apply_schedule()
+            if before is not None:
+                before(self.steps_taken // spf + 1)
+        n = spf - into if limit is None else min(spf - into, limit)
+        self.step(n)
+        frame = self.frame(-(-self.steps_taken // spf))
+        problem = self.blowup(frame)
+        good, good_frame = self._good
+        if problem:
+            bad_step = self.steps_taken
+            self.restore(good)
+            wp.synchronize_device(self.model.device)
+            raise BlowUpError(bad_step, frame.time, *problem, good_frame.index, good_frame.time, None)
+        self.contacts.note(frame)
+        self._good = (self.checkpoint(), frame)
+        return frame
+
     def run(
         self,
         seconds: float,
@@ -232,14 +282,15 @@ class Simulation:
         on_progress: Callable[[float, float, int, float], None] | None = None,
         realtime: bool = False,
         stop: Callable[[], bool] | None = None,
+        before: Callable[[int], None] | None = None,
     ) -> RunSummary:
         """Run for ``seconds`` of simulated time, calling ``on_frame`` on the initial and every later frame.
 
         Frames lie on a fixed grid: frame ``k`` ends after ``k * steps_per_frame`` steps counted from the
-        start of the scene; controls and gusts change at frame starts. A run that ends between two grid
-        points emits a last, shorter frame with the next index; a run continued from there (after
-        :meth:`restore`) first completes that frame and emits it again under the same index, so a run
-        cut in two and continued gives the same frames, bit for bit, as one run. When continuing, the
+        start of the scene; controls and gusts change at frame starts (``before``: see :meth:`advance`). A run
+        that ends between two grid points emits a last, shorter frame with the next index; a run continued
+        from there (after :meth:`restore`) first completes that frame and emits it again under the same index,
+        so a run cut in two and continued gives the same frames, bit for bit, as one run. When continuing, the
         current state is not passed to ``on_frame`` again.
 
         ``on_progress(t, seconds, steps, wall)`` is called at most about 5 times per wall second.
@@ -250,61 +301,65 @@ class Simulation:
         the state goes back to the last good frame and :class:`BlowUpError` is raised.
         """
         total_steps = int(round(seconds / self.dt))
-        spf = self.steps_per_frame
         pace = _Pace(self.dt, realtime, on_progress, seconds)
         worst, steps, interrupted = 0.0, 0, False
         try:
-            first = self.frame(-(-self.steps_taken // spf))  # ceil: the frame the current state belongs to
-            problem = self.blowup(first)
-            if problem:
-                raise BlowUpError(
-                    self.steps_taken, first.time, *problem, -1, first.time, RunSummary(0.0, 0, 0.0, 0.0, blew_up=True)
-                )
+            first = self.start_frames()
             worst = first.worst_stretch
-            good, good_frame = self.checkpoint(), first  # taken before on_frame can touch the state
             if on_frame and self.steps_taken == 0:
                 on_frame(first)
             while steps < total_steps:
                 if stop is not None and stop():
                     interrupted = True
                     break
-                into = self.steps_taken % spf
-                if into == 0:  # a frame starts: controls and gusts move
-                    self.apply_schedule()
-                n = min(spf - into, total_steps - steps)
-                self.step(n)
-                steps += n
-                frame = self.frame(-(-self.steps_taken // spf))
-                problem = self.blowup(frame)
-                if problem:
-                    steps -= self.steps_taken - good_frame.steps
-                    raise self._blew_up(frame, problem, good, good_frame, steps, worst, pace)
+                before_steps = self.steps_taken
+                try:
+                    frame = self.advance(total_steps - steps, before)
+                except BlowUpError as err:
+                    steps -= before_steps - self._good[1].steps  # the run's count up to the good frame
+                    err.summary = self._summary(steps, worst, pace, blew_up=True)
+                    raise
+                steps += self.steps_taken - before_steps
                 worst = max(worst, frame.worst_stretch)
-                self.contacts.note(frame)
-                good, good_frame = self.checkpoint(), frame
                 if on_frame:
                     on_frame(frame)
                 pace.after_frame(self.state.time, steps)
         except KeyboardInterrupt:
             interrupted = True
         wp.synchronize_device(self.model.device)
-        return RunSummary(
-            steps * self.dt, steps, pace.wall(), worst, interrupted, False, self.startup_time, self.contacts.by_time()
-        )
+        return self._summary(steps, worst, pace, interrupted=interrupted)
 
-    def _blew_up(self, frame, problem, good, good_frame, steps, worst, pace) -> BlowUpError:
-        """Put the state back to the ``good`` checkpoint of ``good_frame`` and describe the blow-up seen in
-        ``frame`` (``steps`` and ``worst``: the run's counts up to the good frame)."""
-        bad_step = self.steps_taken
-        self.restore(good)
-        wp.synchronize_device(self.model.device)
-        summary = RunSummary(
+    def _summary(self, steps: int, worst: float, pace: _Pace, **flags) -> RunSummary:
+        """The :class:`RunSummary` of ``steps`` steps whose worst stretch was ``worst``."""
+        return RunSummary(
             steps * self.dt,
             steps,
             pace.wall(),
             worst,
-            blew_up=True,
             startup_time=self.startup_time,
             ground_contacts=self.contacts.by_time(),
+            **flags,
         )
-        return BlowUpError(bad_step, frame.time, *problem, good_frame.index, good_frame.time, summary)
+
+
+class RecordedControls:
+    """The controls of a recorded flight, set again frame by frame: pass it as ``before`` to
+    :meth:`Simulation.run` or :meth:`Simulation.advance` of a simulation of the recording's descriptor, and the
+    run repeats the recorded frames bit for bit (what ``warpsim run --replay`` does).
+
+    Args:
+        sim: the simulation to drive. controls: per frame index, the controls in force while that frame was
+            stepped (:meth:`warpsim.io.hdf5.Recording.controls`); frames past the end keep the last ones.
+    """
+
+    def __init__(self, sim: Simulation, controls: list[dict]):
+        self.sim, self.controls = sim, controls
+
+    def __call__(self, index: int) -> None:
+        """Set, before frame ``index`` is stepped, the recorded controls that differ from those in force."""
+        if not self.controls:
+            return
+        values = self.controls[min(index, len(self.controls) - 1)]
+        changed = {name: value for name, value in values.items() if self.sim.controls.get(name) != value}
+        if changed:
+            self.sim.set_controls(**changed)

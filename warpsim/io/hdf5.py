@@ -9,6 +9,10 @@ Layout (``F`` frames, ``N`` particles, ``M`` sticks, ``T`` triangles, ``O`` obje
     /diagnostics/centre          [F, O, 3]  float32  mass centre of each object [m]
     /diagnostics/altitude        [F, O]     float32  height of that centre above the terrain [m]
     /diagnostics/airspeed        [F, O]     float32  |mean velocity - wind| of each object [m/s]
+    /controls                    [F, C, 3]  float64  the controls in force while each frame was stepped, one row
+                                                     per name of ``/checkpoint`` attr ``control_names`` (a unit
+                                                     control in column 0, a vector in its first columns; NaN:
+                                                     not set); what a replay sets again (:meth:`Recording.controls`)
     /topology/sticks             [M, 2]     int32    particle indices of each stick
     /topology/stick_rest         [M]        float32  built rest lengths [m]
     /topology/triangles          [T, 3]     int32    particle indices of each air-force triangle
@@ -53,7 +57,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..checkpoint import DIGEST_BYTES, Checkpoint
+from ..checkpoint import DIGEST_BYTES, Checkpoint, pack_controls, unpack_controls
 from ..diagnostics import object_metrics
 from . import OutputWriteError, check_output_path, reason, with_disk_state
 from .h5safe import (
@@ -69,15 +73,16 @@ from .h5safe import (
 
 EXTENSIONS = (".h5", ".hdf5")
 FORMAT = "warpsim-recording"
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 SLOTS = ("slot0", "slot1")
 _CHECKSUM = {"fletcher32": True}
 
 
-def _frame_layout(particles: int, objects: int) -> dict[str, tuple[tuple[int, ...], str, int]]:
+def _frame_layout(particles: int, objects: int, controls: int) -> dict[str, tuple[tuple[int, ...], str, int]]:
     """Each frame dataset: ``(shape of one frame, dtype, frames per chunk)``; what a recording is created with
     and what a resume checks before it appends."""
     return {
+        "controls": ((controls, 3), "f8", 256),
         "time": ((), "f8", 256),
         "positions": ((particles, 3), "f4", 1),
         "diagnostics/worst_stretch": ((), "f4", 256),
@@ -88,7 +93,7 @@ def _frame_layout(particles: int, objects: int) -> dict[str, tuple[tuple[int, ..
     }
 
 
-_FRAME_DATASETS = tuple(_frame_layout(0, 0))
+_FRAME_DATASETS = tuple(_frame_layout(0, 0, 0))
 
 _TOPOLOGY = (
     "sticks",
@@ -218,6 +223,7 @@ class H5Recorder:
         self._slots = [
             {name: self.file[f"checkpoint/{slot}/{name}"] for name in self.file[f"checkpoint/{slot}"]} for slot in SLOTS
         ]
+        self._control_names = tuple(str(n) for n in self.file["checkpoint"].attrs["control_names"])
         self._unsaved: tuple[int, int, float] | None = None
         self._last_sync = -float("inf")
 
@@ -242,7 +248,8 @@ class H5Recorder:
         """Raise :class:`RecordingError` unless every dataset a resume writes has the shape, type and growth this
         simulation writes (a recording edited or damaged since could not take its frames)."""
         model, f = self.model, self.file
-        for name, (frame_shape, dtype, _) in _frame_layout(model.particle_count, len(model.objects)).items():
+        layout = _frame_layout(model.particle_count, len(model.objects), len(self.checkpoint().control_names))
+        for name, (frame_shape, dtype, _) in layout.items():
             d = f[name]
             if (
                 d.shape[1:] != frame_shape
@@ -272,6 +279,7 @@ class H5Recorder:
         dt = float(descriptor["solver"]["dt"])
         steps_per_frame = from_section(SceneConfig, descriptor["scene"]).steps_per_frame(dt)
         n, objects = model.particle_count, len(model.objects)
+        cp = self.checkpoint()  # shapes and types of what later checkpoints write
         self.file = f = open_for_writing(self.path, create=True)
         object_names, parts, particle_part, triangle_part, particle_object = _names(model)
         f.attrs.update(
@@ -306,7 +314,7 @@ class H5Recorder:
                 name, data=data, chunks=data.shape if data.size else None, **(_CHECKSUM if data.size else {})
             )
         gz = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
-        for name, (frame_shape, dtype, rows) in _frame_layout(n, objects).items():
+        for name, (frame_shape, dtype, rows) in _frame_layout(n, objects, len(cp.control_names)).items():
             f.create_dataset(
                 name,
                 (0, *frame_shape),
@@ -317,7 +325,6 @@ class H5Recorder:
                 **_CHECKSUM,
             )
         c = f.create_group("checkpoint")
-        cp = self.checkpoint()  # shapes and types of what later checkpoints write
         c.attrs["control_names"] = list(cp.control_names)
         for slot in SLOTS:
             g = c.create_group(slot)
@@ -352,6 +359,7 @@ class H5Recorder:
                 for name in _FRAME_DATASETS:
                     d[name].resize(k + 1, axis=0)
             d["time"][k] = frame.time
+            d["controls"][k] = pack_controls(self._control_names, frame.controls)[1]
             d["positions"][k] = frame.positions
             d["diagnostics/worst_stretch"][k] = frame.worst_stretch
             d["diagnostics/kinetic_energy"][k] = frame.kinetic_energy
@@ -556,6 +564,20 @@ class Recording:
             if not -self.frame_count <= k < self.frame_count:
                 raise RecordingError(f"{self.path}: no frame {k}; the recording has frames 0..{self.frame_count - 1}")
             return self.file["positions"][k % self.frame_count]
+
+    @property
+    def control_names(self) -> tuple[str, ...]:
+        """Names of the scene's controls (the rows of ``/controls``)."""
+        return tuple(str(n) for n in self.file["checkpoint"].attrs["control_names"])
+
+    def controls(self, frame: int) -> dict:
+        """The controls in force while frame ``frame`` was stepped, by name (those set by then; see
+        :meth:`warpsim.runner.Simulation.set_controls`)."""
+        if not 0 <= frame < self.frame_count:
+            raise RecordingError(f"{self.path}: no frame {frame}; the recording has frames 0..{self.frame_count - 1}")
+        with _reading(self.path):
+            table = self.file["controls"][frame]
+        return unpack_controls(self.control_names, ~np.isnan(table[:, 0]), table)
 
     def checkpoint(self) -> Checkpoint:
         """The saved state after frame :attr:`checkpoint_frame` (see :meth:`warpsim.runner.Simulation.restore`)."""

@@ -168,6 +168,40 @@ def build_parser() -> argparse.ArgumentParser:
         "`warpsim view`), for as long as it lasts (or --seconds); the frames come out bit for bit the same",
     )
 
+    view = sub.add_parser(
+        "view",
+        help="fly a scene in a live 3-D window (keyboard control, real time)",
+        description="Open a window and fly the scene at wall-clock pace: arrows steer the hang glider (held keys "
+        "ramp pitch/roll to +-1, release ramps back), W/A/S/D walk the kite's anchor, +/- and [/] change the wind, "
+        "Space pauses, '.' steps one frame, R restarts, C cycles the camera, H shows every key, Esc quits. "
+        "Needs the viewer extra (pip install -e '.[viewer]') and a display (on a remote machine: ssh -X, or "
+        "xvfb-run with --screenshot).",
+    )
+    view.add_argument("scene", metavar="SCENE")
+    view.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a descriptor value, e.g. --set wind.velocity=[8,0,0] (repeatable)",
+    )
+    _world_arguments(view)
+    view.add_argument("--dt", type=_number("--dt"), help="time step [s] (default: scene's)")
+    view.add_argument("--iterations", type=_iterations, help="constraint iterations per step (default 55)")
+    view.add_argument("--fps", type=_number("--fps"), help="simulated frames per second (default: scene's)")
+    view.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
+    view.add_argument(
+        "--h5",
+        metavar="OUT.h5",
+        help="record what is flown, with the controls as applied (replay: warpsim run --replay OUT.h5); after a "
+        "restart the next take goes to OUT.take2.h5, ...",
+    )
+    view.add_argument(
+        "--seconds", type=_number("--seconds"), help="close after this much simulated time (default: when you quit)"
+    )
+    view.add_argument("--screenshot", metavar="OUT.png", help="save the last picture drawn as a PNG when closing")
+    view.add_argument("--size", type=_size, default=(1280, 720), metavar="WxH", help="window size (default 1280x720)")
+
     convert = sub.add_parser(
         "convert",
         help="turn a recording into a USD stage",
@@ -661,6 +695,60 @@ def cmd_render(args) -> int:
     return 0
 
 
+def cmd_view(args) -> int:
+    """Fly a scene in a window until the user quits (or --seconds); print where the outputs went."""
+    from .descriptor import to_toml
+    from .io.hdf5 import RecordingError, check_recording_path
+    from .io.render import check_picture_path
+    from .runner import Simulation
+    from .viewer import ViewerUnavailableError
+    from .viewer.core import Viewer
+    from .viewer.gl import PygletBackend
+
+    h5_path = _checked_output(check_recording_path, args.h5, "--h5")
+    shot = _checked_output(check_picture_path, args.screenshot, "--screenshot")
+    if shot is not None:
+        from .io.render import _pillow
+
+        try:
+            _pillow()
+        except RuntimeError as err:
+            raise UsageError(f"--screenshot: {err}") from None
+    device = _check_device(args.device)
+    descriptor, _, where = _load(args)
+    _same_file_check(args.scene, {"--h5": h5_path, "--screenshot": shot})
+    from .viewer import gl
+
+    gl._pyglet()  # a missing extra is said before the model is built
+    sim = Simulation(descriptor, device=device, where=where)
+    backend = PygletBackend(args.size)
+    backend.keep_pictures = shot is not None
+    try:
+        viewer = Viewer(sim, backend, f"warpsim: {where}", h5_path, to_toml(descriptor), where, seconds=args.seconds)
+    except ViewerUnavailableError:
+        backend.close()
+        raise
+    except RecordingError as err:
+        backend.close()
+        raise UsageError(f"--h5 {err}") from None
+    try:
+        viewer.run()
+    except KeyboardInterrupt:
+        viewer.close()
+    if shot is not None:
+        from PIL import Image
+
+        from .io.render import _atomic_save
+
+        image = Image.fromarray(backend.screenshot())
+        _atomic_save(shot, lambda p: image.save(p, format="PNG"))
+        print(f"screenshot: {shot}")
+    print(f"simulated {sim.state.time:.2f} s; drew {viewer.pictures} pictures")
+    if h5_path:
+        print(f"recording: {h5_path}" + (f" (and {viewer._take - 1} more takes)" if viewer._take > 1 else ""))
+    return EXIT_BLOWUP if viewer.error.startswith("the simulation blew up") else 0
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``warpsim`` console script."""
     try:
@@ -683,11 +771,19 @@ def _main(argv: list[str] | None) -> int:
     _warp.init()  # quietly: no banner, module load lines or CUDA-driver note on a CPU machine
     from .descriptor import DescriptorError
     from .io import OutputWriteError
+    from .viewer.backend import ViewerUnavailableError
 
-    commands = {"list": cmd_list, "info": cmd_info, "run": cmd_run, "convert": cmd_convert, "render": cmd_render}
+    commands = {
+        "list": cmd_list,
+        "info": cmd_info,
+        "run": cmd_run,
+        "view": cmd_view,
+        "convert": cmd_convert,
+        "render": cmd_render,
+    }
     try:
         return commands[args.command](args)
-    except (DescriptorError, UsageError) as err:
+    except (DescriptorError, UsageError, ViewerUnavailableError) as err:
         sys.stderr.write(f"warpsim {args.command}: error: {one_line(str(err))}\n")
         return EXIT_USAGE
     except OutputWriteError as err:

@@ -1,0 +1,139 @@
+"""What the viewer asks of a window: the :class:`Backend` interface, what to draw, and a backend that draws nothing.
+
+Key names are plain strings: ``"UP" "DOWN" "LEFT" "RIGHT"`` (arrows), letters ``"A"``..``"Z"``, ``"SPACE"``,
+``"ESCAPE"``, ``"PLUS"``, ``"MINUS"``, ``"["``, ``"]"``, ``"."`` and ``"?"``. Events are tuples:
+``("press", key)``, ``("release", key)``, ``("drag", dx, dy)`` [pixels], ``("scroll", clicks)`` and
+``("close",)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+class ViewerUnavailableError(RuntimeError):
+    """The window cannot open (the ``viewer`` extra is missing, or there is no display); a one-line reason."""
+
+
+@dataclass
+class DrawList:
+    """What a scene draws, fixed when it is built; positions come with every frame.
+
+    Attributes:
+        meshes: ``(triangles [t, 3] particle indices, rgb)`` per object part (sail, keel, canopy, cloth).
+        curves: ``(particle chain [n], rgb)`` per rope or line.
+        spheres: ``(particle, radius [m], rgb)`` per pilot or person.
+        terrain_points: ``[v, 3]`` terrain vertices [m]. terrain_triangles: ``[t, 3]`` vertex indices.
+        terrain_colours: ``[v, 3]`` rgb per terrain vertex.
+        drawn: indices of the particles drawn.
+        focus: the particles the camera frames: those of the meshes and spheres (a rope's ground end is
+            not what one watches), else every drawn one.
+    """
+
+    meshes: list = field(default_factory=list)
+    curves: list = field(default_factory=list)
+    spheres: list = field(default_factory=list)
+    terrain_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.float32))
+    terrain_triangles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int32))
+    terrain_colours: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.float32))
+    drawn: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    focus: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+
+
+@dataclass
+class View:
+    """A perspective camera: ``eye`` and ``target`` [m], vertical field of view ``fov`` [deg]; Z is up."""
+
+    eye: np.ndarray
+    target: np.ndarray
+    fov: float = 50.0
+
+
+class Backend:
+    """A window the viewer draws into and reads keys from.
+
+    Attributes: ``size`` (width, height) [pixels]; ``closed``: the user closed the window.
+    """
+
+    size: tuple[int, int] = (1280, 720)
+    closed: bool = False
+
+    def open(self, draw_list: DrawList, title: str) -> None:
+        """Open the window and upload what does not move (terrain, topology)."""
+        raise NotImplementedError
+
+    def events(self) -> list[tuple]:
+        """The input events since the last call (see the module notes)."""
+        raise NotImplementedError
+
+    def held(self) -> frozenset[str]:
+        """Keys held down now."""
+        raise NotImplementedError
+
+    def draw(self, positions: np.ndarray, view: View, hud: list[str], overlay: list[str]) -> None:
+        """Draw one picture: particles at ``positions`` ``[P, 3]`` [m] seen from ``view``, the ``hud`` lines
+        in a corner and ``overlay`` lines (help, errors) in the middle when not empty; then show it."""
+        raise NotImplementedError
+
+    def screenshot(self) -> np.ndarray:
+        """The last picture drawn, ``[height, width, 3]`` uint8, top row first."""
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """Close the window (safe to call twice)."""
+
+
+class NullBackend(Backend):
+    """A backend without a window: tests press and release keys with :meth:`press` and :meth:`release`;
+    :meth:`draw` keeps what it was given (``last_hud``, ``last_overlay``, ``last_view``) and counts pictures."""
+
+    def __init__(self, size: tuple[int, int] = (320, 180)):
+        self.size = size
+        self.closed = False
+        self._events: list[tuple] = []
+        self._held: set[str] = set()
+        self.pictures = 0
+        self.last_hud: list[str] = []
+        self.last_overlay: list[str] = []
+        self.last_view: View | None = None
+
+    def open(self, draw_list: DrawList, title: str) -> None:
+        self.draw_list, self.title = draw_list, title
+
+    def press(self, key: str) -> None:
+        """Press ``key`` (held until :meth:`release`)."""
+        self._held.add(key)
+        self._events.append(("press", key))
+
+    def release(self, key: str) -> None:
+        """Release ``key``."""
+        self._held.discard(key)
+        self._events.append(("release", key))
+
+    def tap(self, key: str) -> None:
+        """Press and release ``key`` (both seen by the next tick)."""
+        self.press(key)
+        self.release(key)
+
+    def send(self, *event) -> None:
+        """Queue any event, e.g. ``send("drag", 10, 0)``."""
+        self._events.append(tuple(event))
+
+    def events(self) -> list[tuple]:
+        out, self._events = self._events, []
+        return out
+
+    def held(self) -> frozenset[str]:
+        return frozenset(self._held)
+
+    def draw(self, positions, view, hud, overlay) -> None:
+        self.pictures += 1
+        self.last_hud, self.last_overlay, self.last_view = list(hud), list(overlay), view
+
+    def screenshot(self) -> np.ndarray:
+        return np.zeros((self.size[1], self.size[0], 3), dtype=np.uint8)
+
+    def close(self) -> None:
+        self.closed = True

@@ -1,0 +1,504 @@
+"""The viewer's logic, apart from any window: pacing, keyboard controls, camera, heads-up text, restarts.
+
+One :meth:`Viewer.tick` reads the window's events, steps as many frames as wall time asks (each through
+:meth:`warpsim.runner.Simulation.advance`, the keyboard's controls set at the frame start through
+:meth:`~warpsim.runner.Simulation.set_controls`), records them, and draws one picture. Controls change only
+at frame starts and depend only on which keys were held there, so a recording of what was flown replays
+bit for bit (``warpsim run --replay``).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..diagnostics import Frame, object_metrics
+from ..io.style import COLOURS
+from ..runner import BlowUpError, Simulation
+from .backend import Backend, DrawList, View
+
+KEYS = (
+    ("Up / Down", "hang glider: bar in (pitch +1: nose down, faster) / bar out (pitch -1: slower)"),
+    ("Left / Right", "hang glider: weight shift (roll -1 / +1), to turn that way"),
+    ("W A S D", "kite: walk the line's ground anchor towards / left of / away from / right of the kite"),
+    ("+ / -", "wind speed up / down by 1 m/s"),
+    ("[ / ]", "wind direction 15 deg anticlockwise / clockwise (seen from above)"),
+    ("Space", "pause / go on"),
+    (".", "one frame (when paused)"),
+    ("R", "restart from the initial state"),
+    ("C", "camera: orbit / chase behind the object / ground observer"),
+    ("mouse", "drag to orbit, wheel to zoom"),
+    ("H or ?", "show / hide this help"),
+    ("Esc or Q", "quit"),
+)
+"""The key map shown by the help overlay (and the README)."""
+
+CAMERAS = ("orbit", "chase", "ground")
+
+
+def draw_list(model, terrain_samples: int = 129) -> DrawList:
+    """What to draw of ``model``: part meshes with the outputs' colours, curves, spheres, and the terrain
+    resampled to at most ``terrain_samples`` per side (heights from the model's heightfield)."""
+    from ..io.render import Scene
+
+    scene = Scene(model)
+    hf = model.terrain
+    ny, nx = hf.heights.shape
+    stride = max(1, math.ceil((max(nx, ny) - 1) / (terrain_samples - 1)))
+    ix, iy = np.arange(0, nx, stride), np.arange(0, ny, stride)
+    if ix[-1] != nx - 1:
+        ix = np.append(ix, nx - 1)
+    if iy[-1] != ny - 1:
+        iy = np.append(iy, ny - 1)
+    gx, gy = np.meshgrid(hf.origin[0] + ix * hf.cell[0], hf.origin[1] + iy * hf.cell[1])
+    gz = hf.heights[np.ix_(iy, ix)]
+    points = np.stack([gx, gy, gz], axis=-1).reshape(-1, 3).astype(np.float32)
+    w = len(ix)
+    cells = np.arange((len(iy) - 1) * w).reshape(len(iy) - 1, w)[:, :-1].ravel()
+    triangles = np.concatenate(
+        [np.stack([cells, cells + 1, cells + w + 1], 1), np.stack([cells, cells + w + 1, cells + w], 1)]
+    ).astype(np.int32)
+    low, high = float(gz.min()), float(gz.max())
+    s = ((gz - low) / (high - low) if high > low else np.zeros_like(gz)).reshape(-1, 1)
+    grass, rock = np.asarray(COLOURS["terrain"]), np.array([0.55, 0.50, 0.42])
+    colours = (grass * (1 - s) + rock * s).astype(np.float32)
+    bodies = [np.asarray(t).ravel() for t, _ in scene.triangles] + [np.array([p]) for p, _, _ in scene.discs]
+    focus = np.unique(np.concatenate(bodies)) if bodies else scene.drawn
+    return DrawList(
+        meshes=scene.triangles,
+        curves=scene.curves,
+        spheres=scene.discs,
+        terrain_points=points,
+        terrain_triangles=triangles,
+        terrain_colours=colours,
+        drawn=scene.drawn,
+        focus=focus,
+    )
+
+
+def _towards(value: float, target: float, step: float) -> float:
+    """``value`` moved by at most ``step`` towards ``target``."""
+    return min(value + step, target) if target > value else max(value - step, target)
+
+
+class Viewer:
+    """Fly a :class:`~warpsim.runner.Simulation` in a window.
+
+    Args:
+        sim: the scene, at its start. backend: the window (:class:`~warpsim.viewer.backend.Backend`).
+        title: window title. record: path of an ``.h5`` recording of what is flown (None: no recording);
+            after a restart (``R``) the next take goes to ``NAME.take2.h5`` and so on.
+        descriptor_text: the scene as TOML, stored in the recording. scene: where it came from.
+        seconds: quit after this much simulated time (None: when the user quits).
+        say: where messages go (one line each; stderr by default).
+
+    Attributes:
+        paused, camera (one of :data:`CAMERAS`), axes (the keyboard's pitch and roll, each in [-1, 1]),
+        frame (the last :class:`~warpsim.diagnostics.Frame`), error (the last blow-up or output message),
+        behind (wall time ran ahead of what the machine could simulate in the last second),
+        step_time and draw_time (wall seconds spent stepping and drawing), pictures (drawn so far).
+    """
+
+    RAMP = 2.0  # [1/s] of simulated time: a held arrow takes pitch or roll from 0 to 1 in 0.5 s, release back
+    WALK = 2.0  # [m/s] walking speed of the kite's anchor
+    WIND_STEP = 1.0  # [m/s] per + or - press
+    WIND_TURN = 15.0  # [deg] per [ or ] press
+    BUDGET = 0.05  # [s] of wall time stepping per tick at most, so that the window keeps answering
+    MAX_FPS = 60.0  # pictures per wall second at most: the rest of the time is left to stepping or idle
+
+    def __init__(
+        self,
+        sim: Simulation,
+        backend: Backend,
+        title: str = "warpsim",
+        record: str | Path | None = None,
+        descriptor_text: str = "",
+        scene: str = "",
+        seconds: float | None = None,
+        say=None,
+    ):
+        self.sim, self.backend, self.title = sim, backend, title
+        self.say = say or (lambda line: print(line, file=sys.stderr))
+        self.seconds = seconds
+        self.model = sim.model
+        self.frame_interval = sim.steps_per_frame * sim.dt
+        names = sim.control_names()
+        self.has_glider_keys = "pitch" in names and "roll" in names
+        self.has_anchor = "anchor" in names
+        self.draw_list = draw_list(self.model)
+        self.initial = sim.checkpoint()
+        self.frame: Frame = sim.start_frames()
+        self.axes = {"pitch": 0.0, "roll": 0.0}
+        self.paused = False
+        self.show_help = False
+        self.camera = "orbit"
+        self.quit = False
+        self.error = ""
+        self.behind = False
+        self.step_time = self.draw_time = 0.0
+        self.pictures = 0
+        focus = self.draw_list.focus
+        size = np.ptp(self.frame.positions[focus], axis=0) if len(focus) else np.ones(3)
+        self.orbit = {"azimuth": -120.0, "elevation": 20.0, "distance": float(max(1.6 * np.linalg.norm(size), 6.0))}
+        self._chase_heading = np.array([1.0, 0.0])
+        self._ground_eye = self._ground_point()
+        self._debt = 0.0  # simulated seconds owed to the wall clock
+        self._last = None  # wall time of the last tick
+        self._rate = []  # (wall time, simulated time, steps) of the last ticks, for the rates shown
+        self._pending_wind = None
+        self._one_frame = False
+        self.recorder = None
+        self._record_path, self._take = (Path(record) if record else None), 1
+        self._descriptor_text, self._scene = descriptor_text, scene
+        self.backend.open(self.draw_list, title)
+        if self._record_path is not None:
+            self._open_recorder(self._record_path)
+
+    # ------------------------------------------------------------------ recording
+    def _open_recorder(self, path: Path) -> None:
+        from ..io.hdf5 import H5Recorder
+
+        self.recorder = H5Recorder(
+            path, self.model, self.sim.descriptor, self.sim.checkpoint, self._descriptor_text, self._scene
+        )
+        self.recorder.write(self.frame)
+        self.say(f"recording to {path}")
+
+    def _write(self, frame: Frame) -> None:
+        if self.recorder is None:
+            return
+        from ..io import OutputWriteError
+
+        try:
+            self.recorder.write(frame)
+        except OutputWriteError as err:
+            self.recorder = None
+            self._fail(str(err))
+
+    def _close_recorder(self) -> None:
+        from ..io import OutputWriteError
+
+        recorder, self.recorder = self.recorder, None
+        if recorder is not None:
+            try:
+                recorder.close()
+            except OutputWriteError as err:
+                self._fail(str(err))
+
+    def _fail(self, message: str) -> None:
+        self.error = message
+        self.paused = True
+        self.say(f"warpsim view: error: {message}")
+
+    # ------------------------------------------------------------------ controls
+    def _held_axis(self, held, minus: str, plus: str) -> float:
+        return float((plus in held) - (minus in held))
+
+    def _controls_at_frame_start(self, index: int) -> None:
+        """Set the keyboard's controls for the frame about to be stepped (see Simulation.advance)."""
+        held = self.backend.held()
+        values: dict = {}
+        if self.has_glider_keys:
+            for name, minus, plus in (("pitch", "DOWN", "UP"), ("roll", "LEFT", "RIGHT")):
+                value = _towards(self.axes[name], self._held_axis(held, minus, plus), self.RAMP * self.frame_interval)
+                if value != self.axes[name] or (value != 0.0 and name not in self.sim.controls):
+                    self.axes[name] = value
+                    values[name] = value
+        if self.has_anchor:
+            forward = self._held_axis(held, "S", "W")
+            right = self._held_axis(held, "A", "D")
+            if forward or right:
+                anchor = np.asarray(self._anchor(), dtype=np.float64)
+                ahead = self._bearing(anchor)
+                side = np.array([ahead[1], -ahead[0]])
+                move = (forward * ahead + right * side) * self.WALK * self.frame_interval
+                values["anchor"] = tuple(float(v) for v in anchor + move)
+        if self._pending_wind is not None:
+            values["wind"], self._pending_wind = self._pending_wind, None
+        if values:
+            self.sim.set_controls(**values)
+
+    def _anchor(self) -> tuple[float, float]:
+        """Where the kite's line is anchored now (x, y) [m]."""
+        if "anchor" in self.sim.controls:
+            return self.sim.controls["anchor"]
+        record = next(r for r in self.model.objects if r.kind == "kite")
+        target = self.sim.control.nail_target.numpy()[record.anchor_nail]
+        return float(target[0]), float(target[1])
+
+    def _bearing(self, anchor: np.ndarray) -> np.ndarray:
+        """Unit horizontal vector from the anchor towards the first kite (downwind when right above it)."""
+        record = next(r for r in self.model.objects if r.kind == "kite")
+        d = self.frame.positions[record.parts["sail"]].mean(axis=0)[:2] - anchor
+        if np.linalg.norm(d) < 1e-3:
+            d = self.wind()[:2]
+        n = np.linalg.norm(d)
+        return d / n if n > 1e-9 else np.array([1.0, 0.0])
+
+    def wind(self) -> np.ndarray:
+        """The wind the scene blows now (the mean, with gusts) [m/s]."""
+        if "wind" in self.sim.controls:
+            return np.asarray(self.sim.controls["wind"], dtype=np.float64)
+        return np.asarray(self.sim.settings.wind.velocity, dtype=np.float64)
+
+    def _change_wind(self, faster: float = 0.0, turn: float = 0.0) -> None:
+        w = self._pending_wind if self._pending_wind is not None else tuple(self.wind())
+        x, y, z = w
+        speed = math.hypot(x, y)
+        heading = math.atan2(y, x) if speed > 1e-9 else math.atan2(*self._chase_heading[::-1])
+        speed = min(max(speed + faster, 0.0), 60.0)
+        heading += math.radians(turn)
+        self._pending_wind = (speed * math.cos(heading), speed * math.sin(heading), z)
+
+    # ------------------------------------------------------------------ events
+    def _handle(self, event: tuple) -> None:
+        kind = event[0]
+        if kind == "close":
+            self.quit = True
+        elif kind == "drag":
+            self.camera = "orbit"
+            self.orbit["azimuth"] -= 0.3 * event[1]
+            self.orbit["elevation"] = min(max(self.orbit["elevation"] - 0.3 * event[2], -5.0), 89.0)
+        elif kind == "scroll":
+            self.orbit["distance"] = min(max(self.orbit["distance"] * 0.9 ** event[1], 1.0), 5000.0)
+        elif kind == "press":
+            key = event[1]
+            if key in ("ESCAPE", "Q"):
+                self.quit = True
+            elif key == "SPACE":
+                self.paused = not self.paused
+                self._debt = 0.0
+            elif key == ".":
+                self.paused = True
+                self._one_frame = True
+            elif key == "R":
+                self.restart()
+            elif key == "C":
+                self.camera = CAMERAS[(CAMERAS.index(self.camera) + 1) % len(CAMERAS)]
+            elif key in ("H", "?"):
+                self.show_help = not self.show_help
+            elif key == "PLUS":
+                self._change_wind(faster=self.WIND_STEP)
+            elif key == "MINUS":
+                self._change_wind(faster=-self.WIND_STEP)
+            elif key == "[":
+                self._change_wind(turn=self.WIND_TURN)
+            elif key == "]":
+                self._change_wind(turn=-self.WIND_TURN)
+
+    def restart(self) -> None:
+        """Back to the initial state and controls; a recording goes on in a new take file."""
+        self.sim.restore(self.initial)
+        self.frame = self.sim.start_frames()
+        self.axes = {"pitch": 0.0, "roll": 0.0}
+        self._pending_wind = None
+        self._debt, self.error, self.paused = 0.0, "", False
+        if self._record_path is not None:
+            self._close_recorder()
+            self._take += 1
+            p = self._record_path
+            try:
+                self._open_recorder(p.with_name(f"{p.stem}.take{self._take}{p.suffix}"))
+            except Exception as err:  # noqa: BLE001 - shown, and flying goes on without a recording
+                self._fail(f"cannot record take {self._take}: {err}")
+
+    # ------------------------------------------------------------------ stepping
+    def advance(self) -> bool:
+        """Step one frame with the keyboard's controls, record it; False (and paused) after a blow-up."""
+        started = time.perf_counter()
+        try:
+            self.frame = self.sim.advance(before=self._controls_at_frame_start)
+        except BlowUpError as err:
+            self.frame = self.sim.frame(err.last_good_frame)
+            self._fail(f"{err}; press R to restart")
+            return False
+        finally:
+            self.step_time += time.perf_counter() - started
+        self._write(self.frame)
+        if self.seconds is not None and self.sim.state.time >= self.seconds - 1e-9:
+            self.quit = True
+        return True
+
+    def tick(self, now: float | None = None) -> bool:
+        """Read events, step what wall time asks (all of it within :attr:`BUDGET`, else fall behind and say
+        so), draw. ``now``: the wall clock [s] (default ``time.perf_counter()``; tests pass their own).
+        Returns False once the viewer should close."""
+        now = time.perf_counter() if now is None else now
+        elapsed = 0.0 if self._last is None else max(now - self._last, 0.0)
+        self._last = now
+        for event in self.backend.events():
+            self._handle(event)
+        if self.backend.closed:
+            self.quit = True
+        if self.quit:
+            return False
+        if self.paused:
+            if self._one_frame:
+                self.advance()
+            self._one_frame = False
+            self._debt = 0.0
+        else:
+            self._debt += elapsed
+            started = time.perf_counter()
+            while self._debt >= self.frame_interval * (1 - 1e-6) and not self.quit:
+                if not self.advance():
+                    break
+                self._debt -= self.frame_interval
+                if time.perf_counter() - started > self.BUDGET:
+                    break
+            self.behind = self._debt > 2 * self.frame_interval
+            if self.behind:
+                self._debt = 0.0  # slow down instead of owing ever more: simulated time falls behind the wall
+        self._rate.append((now, self.sim.state.time, self.sim.steps_taken))
+        while len(self._rate) > 2 and now - self._rate[0][0] > 1.0:
+            self._rate.pop(0)
+        started = time.perf_counter()
+        self.backend.draw(self.frame.positions, self.view(), self.hud(), self.overlay())
+        self.draw_time += time.perf_counter() - started
+        self.pictures += 1
+        return not self.quit
+
+    def run(self) -> None:
+        """Tick until the user quits (or ``seconds`` have been simulated), then close the recording and window."""
+        try:
+            while True:
+                started = time.perf_counter()
+                if not self.tick():
+                    break
+                spare = 1.0 / self.MAX_FPS - (time.perf_counter() - started)
+                if spare > 0:
+                    time.sleep(spare)
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        """Close the recording (its frames are kept) and the window."""
+        self._close_recorder()
+        self.backend.close()
+
+    # ------------------------------------------------------------------ camera
+    def centre(self) -> np.ndarray:
+        """Centre of the bounding box of the particles the camera frames [m] (``DrawList.focus``)."""
+        p = self.frame.positions[self.draw_list.focus]
+        return (p.min(axis=0) + p.max(axis=0)) / 2
+
+    def _ground_point(self) -> np.ndarray:
+        """Where the ground observer stands: the kite's anchor, else 30 m aside of the start, eyes at 1.7 m."""
+        kites = [r for r in self.model.objects if r.kind == "kite"]
+        if kites:
+            x, y = self._anchor()
+            x, y = x - 8.0, y - 8.0
+        else:
+            c = self.centre()
+            x, y = c[0] - 20.0, c[1] - 30.0
+        return np.array([x, y, float(self.model.terrain.height(x, y)) + 1.7])
+
+    def view(self) -> View:
+        """The camera of the current mode."""
+        target = self.centre()
+        if self.camera == "chase":
+            velocity = self.frame.velocities[self.draw_list.focus].mean(axis=0)
+            if np.linalg.norm(velocity[:2]) > 0.5:
+                heading = velocity[:2] / np.linalg.norm(velocity[:2])
+                self._chase_heading = 0.9 * self._chase_heading + 0.1 * heading  # smooth the turns
+                self._chase_heading /= np.linalg.norm(self._chase_heading)
+            d = max(self.orbit["distance"] * 0.6, 4.0)
+            eye = target - d * np.append(self._chase_heading, 0.0) + np.array([0.0, 0.0, 0.3 * d])
+        elif self.camera == "ground":
+            if any(r.kind == "kite" for r in self.model.objects):
+                self._ground_eye = self._ground_point()
+            eye = self._ground_eye
+        else:
+            az, el = np.radians(self.orbit["azimuth"]), np.radians(self.orbit["elevation"])
+            back = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+            eye = target + self.orbit["distance"] * back
+        floor = float(self.model.terrain.height(eye[0], eye[1])) + 0.5  # never look from under the ground
+        eye = np.array([eye[0], eye[1], max(eye[2], floor)])
+        return View(eye=eye, target=target)
+
+    # ------------------------------------------------------------------ text
+    def rates(self) -> tuple[float, float]:
+        """(real-time factor, steps per wall second) over the last second of ticks."""
+        if len(self._rate) < 2:
+            return 0.0, 0.0
+        (w0, t0, s0), (w1, t1, s1) = self._rate[0], self._rate[-1]
+        wall = w1 - w0
+        return ((t1 - t0) / wall, (s1 - s0) / wall) if wall > 0 else (0.0, 0.0)
+
+    def hud(self) -> list[str]:
+        """The heads-up lines: time and rates, each object's flight figures, the controls in force."""
+        factor, steps = self.rates()
+        state = "paused" if self.paused else f"{factor:.2f}x real time" + (" (machine too slow)" if self.behind else "")
+        busy = self.step_time / max(self.step_time + self.draw_time, 1e-9)
+        lines = [
+            f"t = {self.sim.state.time:7.2f} s   {state}   {steps:,.0f} steps/s   "
+            f"time stepping {100 * busy:.0f}% / drawing {100 - 100 * busy:.0f}%   camera {self.camera}"
+        ]
+        lines += object_lines(self.sim, self.frame)[:8]
+        wind = self.wind()
+        controls = [
+            f"wind {np.linalg.norm(wind[:2]):.1f} m/s towards {math.degrees(math.atan2(wind[1], wind[0])):.0f} deg"
+        ]
+        if self.has_glider_keys:
+            controls.append(f"pitch {self.axes['pitch']:+.2f}  roll {self.axes['roll']:+.2f}")
+        if self.has_anchor:
+            x, y = self._anchor()
+            controls.append(f"anchor ({x:.1f}, {y:.1f}) m")
+        lines.append("   ".join(controls))
+        if self.recorder is not None:
+            lines.append(f"recording {self.recorder.path.name}")
+        lines.append("H: help")
+        return lines
+
+    def overlay(self) -> list[str]:
+        """The lines shown in the middle: an error, else the key map while help is on."""
+        if self.error:
+            return ["", self.error, "", "R: restart    Esc: quit"]
+        if self.show_help:
+            return [f"{keys:>13}   {what}" for keys, what in KEYS]
+        return []
+
+
+def object_lines(sim: Simulation, frame: Frame) -> list[str]:
+    """One heads-up line per object: altitude and airspeed, and per kind its own figures (glider: sink rate,
+    glide ratio, bank; kite: line angle and pull; parachute: descent speed and radius), and the worst stretch."""
+    from ..objects.kite import line_state
+    from ..objects.parachute import projected_radius
+
+    model = sim.model
+    metrics = object_metrics(model, frame)
+    mass = model.particle_free_mass
+    tri_force = None
+    lines = []
+    for k, record in enumerate(model.objects):
+        ids = np.asarray(record.particles)
+        m = mass[ids]
+        v = (m[:, None] * frame.velocities[ids]).sum(axis=0) / max(m.sum(), 1e-12)
+        sink = -v[2]
+        text = f"{record.name}: altitude {metrics.altitude[k]:6.1f} m  airspeed {metrics.airspeed[k]:5.1f} m/s"
+        if record.kind == "hang-glider":
+            q = frame.positions
+            span = q[record.tips[0]] - q[record.tips[1]]
+            bank = math.degrees(math.atan2(span[2], np.linalg.norm(span[:2])))
+            glide = f"{np.linalg.norm(v[:2]) / sink:4.1f}" if sink > 0.05 else " -- "
+            side = "right" if bank > 0.5 else "left" if bank < -0.5 else ""
+            text += f"  sink {sink:5.2f} m/s  glide {glide}  bank {abs(bank):3.0f} deg {side}"
+        elif record.kind == "kite":
+            line = line_state(record, frame.positions)
+            if tri_force is None:
+                tri_force = sim.solver.tri_force.numpy()
+            sail = np.concatenate([np.asarray(ids) for part, ids in record.tri_parts.items()]).astype(np.int64)
+            from ..config import GRAVITY
+
+            kite_mass = float(mass[np.unique(model.tri_indices_np[sail])].sum())
+            pull = np.linalg.norm(3.0 * tri_force[sail].sum(axis=0) - np.array([0.0, 0.0, GRAVITY * kite_mass]))
+            text += f"  line {line['elevation_deg']:4.1f} deg  pull ~{pull:5.1f} N"
+        elif record.kind == "parachute":
+            text += f"  descent {sink:5.2f} m/s  radius {projected_radius(record, frame.positions):4.2f} m"
+        lines.append(text)
+    lines.append(f"worst stick stretch {100 * frame.worst_stretch:.2f}%")
+    return lines

@@ -1,0 +1,396 @@
+"""An OpenGL 3.3 window for the viewer, with pyglet (the ``viewer`` extra: ``pip install -e '.[viewer]'``).
+
+Meshes are drawn from one vertex buffer each (position, normal, colour), rewritten from NumPy every frame;
+the terrain is uploaded once. Cloth is lit from both sides with a sun and sky light; the terrain gets a 10 m
+grid so that motion over it can be seen; ropes and lines are lines; the pilot or person a small sphere; the
+sky a gradient. Text (heads-up and overlay) is pyglet's. Runs on Mesa's software renderer (llvmpipe), as on
+a virtual X screen, and on GPUs.
+"""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+
+from .backend import Backend, DrawList, View, ViewerUnavailableError
+
+_VERTEX = """
+#version 330 core
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec3 normal;
+layout(location = 2) in vec3 colour;
+uniform mat4 view_projection;
+out vec3 v_normal;
+out vec3 v_colour;
+out vec3 v_world;
+void main() {
+    gl_Position = view_projection * vec4(position, 1.0);
+    v_normal = normal;
+    v_colour = colour;
+    v_world = position;
+}
+"""
+
+_FRAGMENT = """
+#version 330 core
+in vec3 v_normal;
+in vec3 v_colour;
+in vec3 v_world;
+uniform int mode;  // 0: lit both sides, 1: unlit, 2: lit terrain with a 10 m grid
+uniform vec3 sun;
+out vec4 colour;
+void main() {
+    vec3 c = v_colour;
+    if (mode != 1) {
+        vec3 n = normalize(v_normal);
+        float light = 0.35 + 0.65 * abs(dot(n, sun));
+        c = c * light;
+    }
+    if (mode == 2) {
+        vec2 g = v_world.xy / 10.0;
+        vec2 d = abs(fract(g + 0.5) - 0.5) / max(fwidth(g), vec2(1e-6));  // distance to a line in pixels
+        float line = (1.0 - min(min(d.x, d.y), 1.0)) * (1.0 - smoothstep(0.05, 0.5, max(fwidth(g).x, fwidth(g).y)));
+        c = mix(c, c * 0.82, line);  // grid lines fade out where they would be closer than 2 pixels
+    }
+    colour = vec4(c, 1.0);
+}
+"""
+
+_KEYS = {
+    "UP": "UP",
+    "DOWN": "DOWN",
+    "LEFT": "LEFT",
+    "RIGHT": "RIGHT",
+    "SPACE": "SPACE",
+    "ESCAPE": "ESCAPE",
+    "PLUS": "PLUS",
+    "EQUAL": "PLUS",
+    "NUM_ADD": "PLUS",
+    "MINUS": "MINUS",
+    "NUM_SUBTRACT": "MINUS",
+    "BRACKETLEFT": "[",
+    "BRACKETRIGHT": "]",
+    "PERIOD": ".",
+    "QUESTION": "?",
+    "SLASH": "?",
+}
+
+
+def _pyglet():
+    try:
+        import pyglet
+    except ImportError:
+        raise ViewerUnavailableError(
+            "the viewer needs pyglet: pip install -e '.[viewer]' (or pip install pyglet)"
+        ) from None
+    pyglet.options["debug_gl"] = False  # no glGetError after every call: it halves the frame rate
+    return pyglet
+
+
+def _sphere(rings: int = 6, segments: int = 10) -> tuple[np.ndarray, np.ndarray]:
+    """A unit sphere: vertices ``[v, 3]`` (also its normals) and triangles ``[t, 3]``."""
+    theta = np.linspace(0.0, np.pi, rings + 1)
+    phi = np.linspace(0.0, 2 * np.pi, segments, endpoint=False)
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    v = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], -1).reshape(-1, 3)
+    tris = []
+    for i in range(rings):
+        for j in range(segments):
+            a, b = i * segments + j, i * segments + (j + 1) % segments
+            tris += [(a, a + segments, b + segments), (a, b + segments, b)]
+    return v.astype(np.float32), np.array(tris, dtype=np.int32)
+
+
+def _vertex_normals(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Area-weighted vertex normals of a triangle mesh (unnormalised; the shader normalises)."""
+    p = points[triangles]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    out = np.zeros_like(points)
+    for k in range(3):
+        np.add.at(out, triangles[:, k], n)
+    return out
+
+
+def _perspective(fov: float, aspect: float, near: float, far: float) -> np.ndarray:
+    f = 1.0 / np.tan(np.radians(fov) / 2)
+    return np.array(
+        [
+            [f / aspect, 0, 0, 0],
+            [0, f, 0, 0],
+            [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)],
+            [0, 0, -1, 0],
+        ]
+    )
+
+
+def _look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
+    forward = target - eye
+    forward = forward / max(np.linalg.norm(forward), 1e-9)
+    up = np.array([0.0, 0.0, 1.0])
+    if abs(forward @ up) > 0.999:
+        up = np.array([0.0, 1.0, 0.0])
+    right = np.cross(forward, up)
+    right /= np.linalg.norm(right)
+    true_up = np.cross(right, forward)
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = right, true_up, -forward
+    m[:3, 3] = -m[:3, :3] @ eye
+    return m
+
+
+class _Buffer:
+    """One vertex array: interleaved position, normal, colour (9 floats) and optional indices."""
+
+    def __init__(self, gl, vertices: int, indices: np.ndarray | None, mode):
+        self.gl, self.mode, self.count = gl, mode, vertices
+        self.vao, self.vbo = gl.GLuint(), gl.GLuint()
+        gl.glGenVertexArrays(1, ctypes.byref(self.vao))
+        gl.glBindVertexArray(self.vao)
+        gl.glGenBuffers(1, ctypes.byref(self.vbo))
+        gl.glBindBuffer(gl.GL_ARRAY_BUFFER, self.vbo)
+        gl.glBufferData(gl.GL_ARRAY_BUFFER, max(vertices, 1) * 36, None, gl.GL_DYNAMIC_DRAW)
+        for location in range(3):
+            gl.glEnableVertexAttribArray(location)
+            gl.glVertexAttribPointer(location, 3, gl.GL_FLOAT, gl.GL_FALSE, 36, ctypes.c_void_p(12 * location))
+        self.index_count = 0
+        if indices is not None:
+            indices = np.ascontiguousarray(indices, dtype=np.uint32).ravel()
+            self.ebo = gl.GLuint()
+            gl.glGenBuffers(1, ctypes.byref(self.ebo))
+            gl.glBindBuffer(gl.GL_ELEMENT_ARRAY_BUFFER, self.ebo)
+            gl.glBufferData(
+                gl.GL_ELEMENT_ARRAY_BUFFER, indices.nbytes, indices.ctypes.data_as(ctypes.c_void_p), gl.GL_STATIC_DRAW
+            )
+            self.index_count = len(indices)
+        gl.glBindVertexArray(0)
+
+    def update(self, points: np.ndarray, normals: np.ndarray, colours: np.ndarray) -> None:
+        data = np.ascontiguousarray(np.hstack([points, normals, colours]), dtype=np.float32)
+        gl = self.gl
+        gl.glBindBuffer(gl.GL_ARRAY_BUFFER, self.vbo)
+        gl.glBufferSubData(gl.GL_ARRAY_BUFFER, 0, data.nbytes, data.ctypes.data_as(ctypes.c_void_p))
+
+    def draw(self) -> None:
+        gl = self.gl
+        gl.glBindVertexArray(self.vao)
+        if self.index_count:
+            gl.glDrawElements(self.mode, self.index_count, gl.GL_UNSIGNED_INT, None)
+        else:
+            gl.glDrawArrays(self.mode, 0, self.count)
+        gl.glBindVertexArray(0)
+
+
+class PygletBackend(Backend):
+    """The viewer's window: ``size`` (width, height) [pixels], ``visible`` False for an off-screen window on
+    an X display (still needs one)."""
+
+    def __init__(self, size: tuple[int, int] = (1280, 720), visible: bool = True):
+        self.size = tuple(size)
+        self.visible = visible
+        self.closed = False
+        self.window = None
+        self.keep_pictures = False  # read every picture back (for screenshot()); costs a few ms a frame
+        self._events: list[tuple] = []
+        self._held: set[str] = set()
+
+    # ------------------------------------------------------------------ window
+    def open(self, draw_list: DrawList, title: str) -> None:
+        pyglet = _pyglet()
+        try:
+            import pyglet.window
+            from pyglet import gl
+            from pyglet.graphics.shader import Shader, ShaderProgram
+        except Exception as err:  # noqa: BLE001 - a missing libGL or X library: one line
+            raise ViewerUnavailableError(f"the viewer's window library cannot load ({err})") from None
+        try:
+            config = gl.Config(double_buffer=True, depth_size=24, major_version=3, minor_version=3)
+            self.window = pyglet.window.Window(
+                *self.size, caption=title, config=config, visible=self.visible, vsync=False, resizable=True
+            )
+        except Exception as err:  # noqa: BLE001 - no display, no GLX, no OpenGL 3.3
+            reason = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+            raise ViewerUnavailableError(
+                f"cannot open a window ({reason}); is there a display? (DISPLAY, or run under xvfb-run)"
+            ) from None
+        self.gl, self.pyglet = gl, pyglet
+        self.window.switch_to()
+        self._program = ShaderProgram(Shader(_VERTEX, "vertex"), Shader(_FRAGMENT, "fragment"))
+        self.draw_list = d = draw_list
+        self._terrain = _Buffer(gl, len(d.terrain_points), d.terrain_triangles, gl.GL_TRIANGLES)
+        self._terrain.update(
+            d.terrain_points, _vertex_normals(d.terrain_points, d.terrain_triangles), d.terrain_colours
+        )
+        self._meshes = []
+        for triangles, rgb in d.meshes:
+            ids, local = np.unique(np.asarray(triangles).ravel(), return_inverse=True)
+            local = local.reshape(-1, 3).astype(np.int32)
+            colours = np.tile(np.asarray(rgb, dtype=np.float32), (len(ids), 1))
+            self._meshes.append((ids, local, colours, _Buffer(gl, len(ids), local, gl.GL_TRIANGLES)))
+        segments = [np.stack([c[:-1], c[1:]], 1) for c, _ in d.curves if len(c) > 1]
+        self._segments = np.concatenate(segments).ravel() if segments else np.zeros(0, np.int64)
+        self._segment_colours = (
+            np.concatenate(
+                [np.tile(np.asarray(rgb, np.float32), (2 * (len(c) - 1), 1)) for c, rgb in d.curves if len(c) > 1]
+            )
+            if segments
+            else np.zeros((0, 3), np.float32)
+        )
+        self._lines = _Buffer(gl, len(self._segments), None, gl.GL_LINES)
+        self._unit_sphere, sphere_tris = _sphere()
+        n = len(self._unit_sphere)
+        tris = np.concatenate([sphere_tris + k * n for k in range(len(d.spheres))]) if d.spheres else None
+        self._spheres = _Buffer(gl, n * len(d.spheres), tris, gl.GL_TRIANGLES) if d.spheres else None
+        sky = np.array([[-1, -1, 0.999], [1, -1, 0.999], [1, 1, 0.999], [-1, 1, 0.999]], np.float32)
+        sky_colours = np.array(
+            [[0.88, 0.93, 0.98], [0.88, 0.93, 0.98], [0.45, 0.65, 0.90], [0.45, 0.65, 0.90]], np.float32
+        )
+        self._sky = _Buffer(gl, 4, np.array([0, 1, 2, 0, 2, 3]), gl.GL_TRIANGLES)
+        self._sky.update(sky, np.zeros_like(sky), sky_colours)
+        self._hud = pyglet.text.Label(
+            "", x=10, y=self.size[1] - 10, anchor_y="top", multiline=True, width=self.size[0] - 20,
+            font_name="DejaVu Sans Mono", font_size=11, color=(15, 20, 30, 255),
+        )  # fmt: skip
+        self._overlay = pyglet.text.Label(
+            "", x=self.size[0] // 2, y=self.size[1] // 2, anchor_x="center", anchor_y="center", multiline=True,
+            width=int(self.size[0] * 0.8), font_name="DejaVu Sans Mono", font_size=12, color=(255, 255, 255, 255),
+        )  # fmt: skip
+        self._shade = pyglet.shapes.Rectangle(0, 0, 1, 1, color=(20, 25, 35, 200))
+        w = self.window
+
+        @w.event
+        def on_key_press(symbol, modifiers):
+            key = self._name(symbol)
+            if key:
+                self._held.add(key)
+                self._events.append(("press", key))
+            return True  # pyglet's default closes the window on Esc: the viewer decides
+
+        @w.event
+        def on_key_release(symbol, modifiers):
+            key = self._name(symbol)
+            if key:
+                self._held.discard(key)
+                self._events.append(("release", key))
+
+        @w.event
+        def on_mouse_drag(x, y, dx, dy, buttons, modifiers):
+            self._events.append(("drag", dx, dy))
+
+        @w.event
+        def on_mouse_scroll(x, y, scroll_x, scroll_y):
+            self._events.append(("scroll", scroll_y))
+
+        @w.event
+        def on_close():
+            self._events.append(("close",))
+            self.closed = True
+            return True
+
+        @w.event
+        def on_deactivate():  # keys released while another window has the focus would stay held
+            for key in list(self._held):
+                self._events.append(("release", key))
+            self._held.clear()
+
+        @w.event
+        def on_resize(width, height):
+            self.size = (max(width, 1), max(height, 1))
+            self._hud.y, self._hud.width = height - 10, max(width - 20, 10)
+            self._overlay.x, self._overlay.y = width // 2, height // 2
+            self._overlay.width = max(int(width * 0.8), 10)
+
+        w.dispatch_events()
+
+    def _name(self, symbol: int) -> str | None:
+        name = self.pyglet.window.key.symbol_string(symbol)
+        if name in _KEYS:
+            return _KEYS[name]
+        return name if len(name) == 1 and name.isalpha() else None
+
+    def events(self) -> list[tuple]:
+        if self.window is not None and not self.closed:
+            self.window.dispatch_events()
+        out, self._events = self._events, []
+        return out
+
+    def held(self) -> frozenset[str]:
+        return frozenset(self._held)
+
+    # ------------------------------------------------------------------ drawing
+    def draw(self, positions: np.ndarray, view: View, hud: list[str], overlay: list[str]) -> None:
+        if self.window is None or self.closed:
+            return
+        gl, q = self.gl, np.asarray(positions, dtype=np.float32)
+        self.window.switch_to()
+        width, height = self.window.get_framebuffer_size()
+        gl.glViewport(0, 0, width, height)
+        gl.glClearColor(0.6, 0.75, 0.92, 1.0)
+        gl.glClear(gl.GL_COLOR_BUFFER_BIT | gl.GL_DEPTH_BUFFER_BIT)
+        program = self._program
+        program.use()
+        distance = float(np.linalg.norm(view.target - view.eye))
+        projection = _perspective(view.fov, width / max(height, 1), max(0.05, distance / 500), 20000.0)
+        matrix = projection @ _look_at(np.asarray(view.eye, float), np.asarray(view.target, float))
+        gl.glDisable(gl.GL_DEPTH_TEST)
+        program["view_projection"] = tuple(np.eye(4).T.ravel())
+        program["mode"] = 1
+        self._sky.draw()
+        gl.glEnable(gl.GL_DEPTH_TEST)
+        program["view_projection"] = tuple(matrix.T.ravel())
+        program["sun"] = tuple(np.array([0.35, -0.25, 0.9]) / np.linalg.norm([0.35, -0.25, 0.9]))
+        program["mode"] = 2
+        self._terrain.draw()
+        program["mode"] = 0
+        for ids, local, colours, buffer in self._meshes:
+            p = q[ids]
+            buffer.update(p, _vertex_normals(p, local), colours)
+            buffer.draw()
+        if self._spheres is not None:
+            points = np.concatenate([self._unit_sphere * r + q[p] for p, r, _ in self.draw_list.spheres])
+            colours = np.concatenate(
+                [
+                    np.tile(np.asarray(rgb, np.float32), (len(self._unit_sphere), 1))
+                    for _, _, rgb in self.draw_list.spheres
+                ]
+            )
+            normals = np.tile(self._unit_sphere, (len(self.draw_list.spheres), 1))
+            self._spheres.update(points, normals, colours)
+            self._spheres.draw()
+        if len(self._segments):
+            program["mode"] = 1
+            p = q[self._segments]
+            self._lines.update(p, np.zeros_like(p), self._segment_colours)
+            self._lines.draw()
+        program.stop()
+        gl.glDisable(gl.GL_DEPTH_TEST)
+        self._hud.text = "\n".join(hud)
+        self._hud.draw()
+        if overlay:
+            self._overlay.text = "\n".join(overlay)
+            h = self._overlay.content_height + 30
+            w = min(self._overlay.content_width + 40, width)
+            self._shade.x, self._shade.y = (width - w) / 2, (height - h) / 2
+            self._shade.width, self._shade.height = w, h
+            self._shade.draw()
+            self._overlay.draw()
+        if self.keep_pictures:
+            self._picture = self._read()
+        self.window.flip()
+
+    def _read(self) -> np.ndarray:
+        gl = self.gl
+        width, height = self.window.get_framebuffer_size()
+        buffer = (ctypes.c_ubyte * (width * height * 3))()
+        gl.glPixelStorei(gl.GL_PACK_ALIGNMENT, 1)
+        gl.glReadPixels(0, 0, width, height, gl.GL_RGB, gl.GL_UNSIGNED_BYTE, buffer)
+        return np.frombuffer(buffer, np.uint8).reshape(height, width, 3)[::-1].copy()
+
+    def screenshot(self) -> np.ndarray:
+        return getattr(self, "_picture", np.zeros((self.size[1], self.size[0], 3), dtype=np.uint8))
+
+    def close(self) -> None:
+        if self.window is not None:
+            window, self.window = self.window, None
+            self.closed = True
+            window.close()

@@ -719,7 +719,7 @@ def cmd_view(args) -> int:
     _same_file_check(args.scene, {"--h5": h5_path, "--screenshot": shot})
     from .viewer import gl
 
-    gl._pyglet()  # a missing extra is said before the model is built
+    gl.check_display()  # a missing extra or display is said before the model is built
     sim = Simulation(descriptor, device=device, where=where)
     backend = PygletBackend(args.size)
     backend.keep_pictures = shot is not None

@@ -151,8 +151,9 @@ class Viewer:
         self._rate = []  # (wall time, simulated time, steps) of the last ticks, for the rates shown
         self._pending_wind = None
         self._one_frame = False
+        self._restarted = False
         self.recorder = None
-        self._record_path, self._take = (Path(record) if record else None), 1
+        self._record_path, self._take = (Path(record) if record else None), 1  # take k > 1: NAME.takek.h5
         self._descriptor_text, self._scene = descriptor_text, scene
         self.backend.open(self.draw_list, title)
         if self._record_path is not None:
@@ -292,13 +293,15 @@ class Viewer:
 
     def restart(self) -> None:
         """Back to the initial state and controls; a recording goes on in a new take file."""
+        if self._record_path is not None:
+            self._close_recorder()  # before the state goes back: its checkpoint is of the last frame flown
         self.sim.restore(self.initial)
         self.frame = self.sim.start_frames()
         self.axes = {"pitch": 0.0, "roll": 0.0}
         self._pending_wind = None
         self._debt, self.error, self.paused = 0.0, "", False
+        self._restarted = True  # the wall time of the tick that restarts is not owed to the new run
         if self._record_path is not None:
-            self._close_recorder()
             self._take += 1
             p = self._record_path
             try:
@@ -330,8 +333,11 @@ class Viewer:
         now = time.perf_counter() if now is None else now
         elapsed = 0.0 if self._last is None else max(now - self._last, 0.0)
         self._last = now
+        self._restarted = False
         for event in self.backend.events():
             self._handle(event)
+        if self._restarted:
+            elapsed = 0.0
         if self.backend.closed:
             self.quit = True
         if self.quit:

@@ -88,6 +88,22 @@ def _pyglet():
     return pyglet
 
 
+NO_DISPLAY_HINT = (
+    "on a machine without a screen: ssh -X, or xvfb-run -a warpsim view ... --seconds S --screenshot OUT.png"
+)
+
+
+def check_display() -> None:
+    """Raise :class:`ViewerUnavailableError` when the viewer cannot work here: pyglet missing, or (on Linux and
+    other X11 systems) no ``DISPLAY`` to open a window on."""
+    import os
+    import sys
+
+    _pyglet()
+    if sys.platform.startswith(("linux", "freebsd", "openbsd")) and not os.environ.get("DISPLAY"):
+        raise ViewerUnavailableError(f"no display to open a window on (DISPLAY is not set); {NO_DISPLAY_HINT}")
+
+
 def _sphere(rings: int = 6, segments: int = 10) -> tuple[np.ndarray, np.ndarray]:
     """A unit sphere: vertices ``[v, 3]`` (also its normals) and triangles ``[t, 3]``."""
     theta = np.linspace(0.0, np.pi, rings + 1)
@@ -201,8 +217,10 @@ class PygletBackend(Backend):
             import pyglet.window
             from pyglet import gl
             from pyglet.graphics.shader import Shader, ShaderProgram
-        except Exception as err:  # noqa: BLE001 - a missing libGL or X library: one line
-            raise ViewerUnavailableError(f"the viewer's window library cannot load ({err})") from None
+        except Exception as err:  # noqa: BLE001 - a missing libGL or X library, an X server that does not answer
+            raise ViewerUnavailableError(
+                f"the viewer's window library cannot start ({err}); {NO_DISPLAY_HINT}"
+            ) from None
         try:
             config = gl.Config(double_buffer=True, depth_size=24, major_version=3, minor_version=3)
             self.window = pyglet.window.Window(
@@ -210,9 +228,7 @@ class PygletBackend(Backend):
             )
         except Exception as err:  # noqa: BLE001 - no display, no GLX, no OpenGL 3.3
             reason = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
-            raise ViewerUnavailableError(
-                f"cannot open a window ({reason}); is there a display? (DISPLAY, or run under xvfb-run)"
-            ) from None
+            raise ViewerUnavailableError(f"cannot open a window ({reason}); {NO_DISPLAY_HINT}") from None
         self.gl, self.pyglet = gl, pyglet
         self.window.switch_to()
         self._program = ShaderProgram(Shader(_VERTEX, "vertex"), Shader(_FRAGMENT, "fragment"))
@@ -249,11 +265,12 @@ class PygletBackend(Backend):
         self._sky.update(sky, np.zeros_like(sky), sky_colours)
         self._hud = pyglet.text.Label(
             "", x=10, y=self.size[1] - 10, anchor_y="top", multiline=True, width=self.size[0] - 20,
-            font_name="DejaVu Sans Mono", font_size=11, color=(15, 20, 30, 255),
+            font_name="DejaVu Sans Mono", font_size=11 if self.size[0] >= 1000 else 7, color=(15, 20, 30, 255),
         )  # fmt: skip
         self._overlay = pyglet.text.Label(
             "", x=self.size[0] // 2, y=self.size[1] // 2, anchor_x="center", anchor_y="center", multiline=True,
-            width=int(self.size[0] * 0.8), font_name="DejaVu Sans Mono", font_size=12, color=(255, 255, 255, 255),
+            width=int(self.size[0] * 0.8), font_name="DejaVu Sans Mono", font_size=12 if self.size[0] >= 1000 else 8,
+            color=(255, 255, 255, 255),
         )  # fmt: skip
         self._shade = pyglet.shapes.Rectangle(0, 0, 1, 1, color=(20, 25, 35, 200))
         w = self.window

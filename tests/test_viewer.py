@@ -1,0 +1,452 @@
+"""The live viewer (``warpsim view``): its logic with the null backend, and the real window on a virtual X screen.
+
+The window tests start Xvfb and drive ``tests/viewer_driver.py`` in a subprocess with keys injected by
+xdotool; they are skipped where Xvfb, xdotool or pyglet are missing, unless ``WARPSIM_REQUIRE_DISPLAY_TESTS=1``
+(``.ci/run`` sets it and installs them), where a missing piece fails.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from warpsim.cli import main, scene_dirs
+from warpsim.descriptor import merge, resolve, to_toml
+from warpsim.io.hdf5 import Recording
+from warpsim.runner import Simulation
+from warpsim.viewer import NullBackend, Viewer
+
+HERE = Path(__file__).parent
+
+
+def _viewer(scene: str, record=None, **overrides) -> tuple[Viewer, NullBackend]:
+    descriptor, _, where = resolve(scene, scene_dirs())
+    if overrides:
+        descriptor = merge("test", descriptor, overrides)
+    backend = NullBackend()
+    viewer = Viewer(Simulation(descriptor), backend, record=record, descriptor_text=to_toml(descriptor), scene=where)
+    viewer.say = lambda line: None
+    return viewer, backend
+
+
+class _Clock:
+    """Wall time for ``Viewer.tick``: one frame interval per tick, so each tick steps one frame."""
+
+    def __init__(self, viewer: Viewer):
+        self.viewer, self.now = viewer, 0.0
+        viewer.tick(self.now)
+
+    def ticks(self, count: int) -> None:
+        for _ in range(count):
+            self.now += self.viewer.frame_interval
+            self.viewer.tick(self.now)
+
+    def seconds(self, simulated: float) -> None:
+        self.ticks(int(round(simulated / self.viewer.frame_interval)))
+
+
+def _bank(viewer: Viewer) -> float:
+    """Bank of the hang glider [deg], positive with the right wing down."""
+    record = viewer.model.objects[0]
+    span = viewer.frame.positions[record.tips[0]] - viewer.frame.positions[record.tips[1]]
+    return math.degrees(math.atan2(span[2], np.linalg.norm(span[:2])))
+
+
+# ---------------------------------------------------------------------------------------------- null backend
+
+
+@pytest.mark.parametrize("key, side", [("RIGHT", 1.0), ("LEFT", -1.0)])
+def test_held_arrow_ramps_roll_and_banks_that_way_then_release_ramps_back(key, side):
+    viewer, keys = _viewer("hang-glider")
+    clock = _Clock(viewer)
+    keys.press(key)
+    clock.ticks(5)
+    # RAMP per simulated second: 5 frames ramp by 5 * RAMP * frame interval
+    assert viewer.sim.controls["roll"] == pytest.approx(side * min(1.0, 5 * viewer.RAMP * viewer.frame_interval))
+    clock.seconds(2.0 - 5 * viewer.frame_interval)
+    assert viewer.sim.controls["roll"] == side
+    assert side * _bank(viewer) > 10.0  # banked towards the held side within 2 simulated seconds
+    keys.release(key)
+    clock.ticks(3)
+    assert abs(viewer.sim.controls["roll"]) == pytest.approx(1.0 - 3 * viewer.RAMP * viewer.frame_interval)
+    clock.seconds(1.0)
+    assert viewer.sim.controls["roll"] == 0.0
+
+
+def test_hands_off_the_glider_does_not_bank():
+    viewer, _ = _viewer("hang-glider")
+    _Clock(viewer).seconds(2.0)
+    assert abs(_bank(viewer)) < 1.0
+    assert "roll" not in viewer.sim.controls  # nothing was set: the keyboard sets only what changes
+
+
+def test_up_arrow_pulls_the_bar_in():
+    viewer, keys = _viewer("hang-glider")
+    clock = _Clock(viewer)
+    keys.press("UP")
+    clock.seconds(1.0)
+    assert viewer.sim.controls["pitch"] == 1.0
+    keys.release("UP")
+    keys.press("DOWN")
+    clock.seconds(1.5)
+    assert viewer.sim.controls["pitch"] == -1.0
+
+
+def test_w_walks_the_kite_anchor_towards_the_kite_and_s_back():
+    viewer, keys = _viewer("kite")
+    clock = _Clock(viewer)
+    start = np.array(viewer._anchor())
+    kite = viewer.frame.positions[viewer.model.objects[0].parts["sail"]].mean(axis=0)[:2]
+    towards = (kite - start) / np.linalg.norm(kite - start)
+    keys.press("W")
+    clock.seconds(1.0)
+    keys.release("W")
+    moved = np.array(viewer.sim.controls["anchor"]) - start
+    assert moved @ towards == pytest.approx(viewer.WALK * 1.0, rel=0.05)  # walking speed [m/s] x 1 s
+    record = viewer.model.objects[0]
+    nail = viewer.sim.control.nail_target.numpy()[record.anchor_nail]
+    assert nail[:2] == pytest.approx(viewer.sim.controls["anchor"], abs=1e-5)  # the rope's ground end moved
+    keys.press("S")
+    clock.seconds(1.0)
+    assert np.linalg.norm(np.array(viewer.sim.controls["anchor"]) - start) < 0.2
+
+
+def test_wind_keys_change_speed_and_direction():
+    viewer, keys = _viewer("kite")  # 6 m/s along +x
+    clock = _Clock(viewer)
+    keys.tap("PLUS")
+    keys.tap("PLUS")
+    clock.ticks(1)
+    assert viewer.sim.controls["wind"] == pytest.approx((8.0, 0.0, 0.0))
+    assert viewer.sim.control.wind.numpy()[0] == pytest.approx([8.0, 0.0, 0.0])
+    keys.tap("[")
+    clock.ticks(1)
+    w = np.array(viewer.sim.controls["wind"])
+    assert math.degrees(math.atan2(w[1], w[0])) == pytest.approx(viewer.WIND_TURN)
+    assert np.linalg.norm(w) == pytest.approx(8.0)
+    for _ in range(12):
+        keys.tap("MINUS")
+    clock.ticks(1)
+    assert np.linalg.norm(viewer.sim.controls["wind"]) == 0.0  # never below calm
+
+
+def test_space_stops_simulated_time_and_period_steps_one_frame():
+    viewer, keys = _viewer("flag")
+    clock = _Clock(viewer)
+    clock.ticks(3)
+    keys.tap("SPACE")
+    clock.ticks(1)
+    t = viewer.sim.state.time
+    clock.ticks(20)
+    assert viewer.paused and viewer.sim.state.time == t
+    keys.tap(".")
+    clock.ticks(1)
+    assert viewer.sim.state.time == pytest.approx(t + viewer.frame_interval)
+    keys.tap("SPACE")
+    clock.ticks(4)
+    assert viewer.sim.state.time == pytest.approx(t + 5 * viewer.frame_interval)
+
+
+def test_r_restores_the_initial_state_and_controls():
+    viewer, keys = _viewer("hang-glider")
+    clock = _Clock(viewer)
+    initial = viewer.frame.positions.copy()
+    keys.press("RIGHT")
+    clock.seconds(1.0)
+    keys.release("RIGHT")
+    keys.tap("R")
+    clock.ticks(1)
+    assert viewer.sim.state.time == 0.0 and viewer.sim.steps_taken == 0
+    assert np.array_equal(viewer.frame.positions, initial)
+    assert np.array_equal(viewer.sim.state.particle_q.numpy(), initial)
+    assert viewer.sim.controls == {} and viewer.axes == {"pitch": 0.0, "roll": 0.0}
+
+
+def test_machine_too_slow_slows_down_instead_of_owing_frames(monkeypatch):
+    viewer, _ = _viewer("flag")
+    viewer.BUDGET = 0.0  # one frame per tick at most, as on a machine that cannot keep up
+    clock = _Clock(viewer)
+    clock.now += 10.0  # ten wall seconds pass in one tick
+    viewer.tick(clock.now)
+    assert viewer.behind and viewer.sim.state.time == pytest.approx(viewer.frame_interval)
+    assert "machine too slow" in viewer.hud()[0]
+    clock.ticks(1)  # the debt was dropped: back to one frame per frame interval
+    assert not viewer.behind and viewer.sim.state.time == pytest.approx(2 * viewer.frame_interval)
+
+
+def test_camera_cycles_and_mouse_orbits_and_zooms():
+    viewer, keys = _viewer("parachute")
+    clock = _Clock(viewer)
+    seen = []
+    for _ in range(3):
+        seen.append(viewer.camera)
+        view = viewer.view()
+        assert np.isfinite(view.eye).all() and np.linalg.norm(view.eye - view.target) > 1.0
+        keys.tap("C")
+        clock.ticks(1)
+    assert seen == ["orbit", "chase", "ground"] and viewer.camera == "orbit"
+    distance, azimuth = viewer.orbit["distance"], viewer.orbit["azimuth"]
+    keys.send("scroll", 2)
+    keys.send("drag", 100, 0)
+    clock.ticks(1)
+    assert viewer.orbit["distance"] == pytest.approx(distance * 0.81)
+    assert viewer.orbit["azimuth"] == pytest.approx(azimuth - 30.0)
+
+
+def test_hud_shows_time_rates_object_figures_and_controls():
+    viewer, keys = _viewer("hang-glider")
+    clock = _Clock(viewer)
+    keys.press("RIGHT")
+    clock.seconds(1.0)
+    hud = keys.last_hud
+    assert hud[0].startswith("t =") and "real time" in hud[0] and "steps/s" in hud[0]
+    assert any("hang_glider: altitude" in line and "sink" in line and "glide" in line for line in hud)
+    assert any("roll +1.00" in line for line in hud)
+    assert viewer.rates()[0] == pytest.approx(1.0, rel=0.05)  # paced to the (test's) wall clock
+    kite, kite_keys = _viewer("kite")
+    _Clock(kite).ticks(2)
+    assert any("line" in line and "deg" in line and "pull" in line for line in kite_keys.last_hud)
+    chute, chute_keys = _viewer("parachute")
+    _Clock(chute).ticks(2)
+    assert any("descent" in line and "radius" in line for line in chute_keys.last_hud)
+    keys.tap("H")
+    clock.ticks(1)
+    assert any("R" in line and "restart" in line for line in keys.last_overlay)
+
+
+def test_blowup_is_shown_state_kept_at_the_last_good_frame_and_r_restarts(tmp_path):
+    path = tmp_path / "flight.h5"
+    viewer, keys = _viewer("kite", record=path, solver={"max_stretch": 1e-4})
+    messages = []
+    viewer.say = messages.append
+    clock = _Clock(viewer)
+    clock.ticks(3)
+    assert viewer.paused and "blew up" in viewer.error and "press R" in viewer.error
+    assert any("blew up" in m for m in messages)  # said on stderr too
+    assert "blew up" in " ".join(keys.last_overlay)
+    assert viewer.sim.steps_taken == 0  # back at the last good frame: the start
+    keys.tap("R")
+    clock.ticks(1)
+    assert viewer.error == "" and not viewer.paused
+    viewer.close()
+    with Recording(path) as recording:
+        assert recording.frame_count == 1  # the initial frame, kept; the bad one never written
+
+
+def test_a_flight_recorded_in_the_viewer_replays_headless_bit_for_bit(tmp_path):
+    path = tmp_path / "flight.h5"
+    viewer, keys = _viewer("hang-glider", record=path)
+    clock = _Clock(viewer)
+    for key, seconds in (("RIGHT", 0.7), ("UP", 0.5), ("LEFT", 0.4), (None, 0.3)):
+        if key:
+            keys.press(key)
+        clock.seconds(seconds)
+        if key:
+            keys.release(key)
+    keys.tap("PLUS")
+    clock.seconds(0.4)
+    viewer.close()
+    again = tmp_path / "again.h5"
+    assert main(["run", "--replay", str(path), "--h5", str(again), "--quiet"]) == 0
+    with Recording(path) as flown, Recording(again) as replayed:
+        assert flown.frame_count == replayed.frame_count > 50
+        assert np.array_equal(flown.positions(), replayed.positions())
+        assert np.array_equal(flown.time, replayed.time)
+        rolls = [flown.controls(k).get("roll", 0.0) for k in range(flown.frame_count)]
+        assert max(rolls) == 1.0 and min(rolls) < -0.5  # the flight did use the controls (left ramps from +1)
+        assert flown.controls(flown.frame_count - 1)["wind"] == (1.0, 0.0, 0.0)
+        assert replayed.controls(replayed.frame_count - 1) == flown.controls(flown.frame_count - 1)
+
+
+def test_restart_while_recording_starts_a_new_take(tmp_path):
+    path = tmp_path / "flight.h5"
+    viewer, keys = _viewer("flag", record=path)
+    clock = _Clock(viewer)
+    clock.ticks(5)
+    keys.tap("R")
+    clock.ticks(3)  # the first restarts (no step), the next two step
+    viewer.close()
+    with Recording(path) as first, Recording(tmp_path / "flight.take2.h5") as second:
+        assert first.frame_count == 6 and second.frame_count == 3  # each with its initial frame, none lost
+
+
+# ---------------------------------------------------------------------------------------------- command line
+
+
+def _cli(argv, env=None, cwd=None):
+    return subprocess.run(
+        [sys.executable, "-m", "warpsim", *argv], capture_output=True, text=True, env=env, cwd=cwd, timeout=300
+    )
+
+
+def test_no_display_is_one_line_exit_2(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    result = _cli(["view", "kite", "--h5", str(tmp_path / "x.h5")], env=env)
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.count("\n") == 1 and "no display" in result.stderr and "xvfb-run" in result.stderr
+    assert not list(tmp_path.iterdir())
+
+
+def test_missing_viewer_extra_is_one_line_exit_2(tmp_path):
+    stub = tmp_path / "stub"
+    stub.mkdir()
+    (stub / "pyglet.py").write_text("raise ImportError('No module named pyglet')\n")
+    env = {**os.environ, "PYTHONPATH": str(stub)}
+    result = _cli(["view", "kite"], env=env)
+    assert result.returncode == 2
+    assert result.stderr.count("\n") == 1 and "pip install -e '.[viewer]'" in result.stderr
+
+
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (["view", "kite", "--set", "kite.rope_length=-1"], "rope_length"),
+        (["view", "nope"], "nope"),
+        (["view", "kite", "--h5", "out.txt"], "extension"),
+        (["view", "kite", "--screenshot", "shot.jpg"], "extension"),
+        (["view", "kite", "--size", "0x0"], "size"),
+    ],
+)
+def test_bad_view_arguments_are_one_line_exit_2(argv, words, capsys):
+    try:
+        code = main(argv)
+    except SystemExit as exit:  # argparse's own refusals
+        code = exit.code
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and words in err, err
+
+
+# ---------------------------------------------------------------------------------------------- real window
+
+
+def _missing() -> str:
+    missing = [tool for tool in ("Xvfb", "xdotool") if shutil.which(tool) is None]
+    if importlib.util.find_spec("pyglet") is None:
+        missing.append("pyglet")
+    return ", ".join(missing)
+
+
+@pytest.fixture(scope="module")
+def display():
+    """A virtual X screen for the module's window tests: yields the environment that points at it."""
+    missing = _missing()
+    if missing:
+        if os.environ.get("WARPSIM_REQUIRE_DISPLAY_TESTS") == "1":
+            pytest.fail(f"window tests need {missing} (WARPSIM_REQUIRE_DISPLAY_TESTS=1)")
+        pytest.skip(f"window tests need {missing} (apt install xvfb xdotool; pip install pyglet)")
+    read, write = os.pipe()
+    server = subprocess.Popen(
+        ["Xvfb", "-displayfd", str(write), "-screen", "0", "1280x720x24", "-nolisten", "tcp"],
+        pass_fds=(write,),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    os.close(write)
+    number = b""
+    while not number.endswith(b"\n"):
+        chunk = os.read(read, 16)
+        if not chunk:
+            break
+        number += chunk
+    os.close(read)
+    try:
+        assert number.strip(), "Xvfb did not start"
+        yield {**os.environ, "DISPLAY": f":{number.decode().strip()}"}
+    finally:
+        server.terminate()
+        server.wait(timeout=10)
+
+
+def _drive(display, scenario: str, out: Path) -> dict:
+    result = subprocess.run(
+        [sys.executable, str(HERE / "viewer_driver.py"), scenario, str(out)],
+        env=display,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    return json.loads((out / f"{scenario}.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def glider_flight(display, tmp_path_factory):
+    out = tmp_path_factory.mktemp("glider")
+    return _drive(display, "glider", out), out
+
+
+def test_window_first_picture_shows_the_sail_where_the_glider_is(glider_flight):
+    from PIL import Image
+
+    result, out = glider_flight
+    picture = np.asarray(Image.open(out / "first.png").convert("RGB")).astype(float) / 255
+    assert picture.std() > 0.05  # not blank
+    r, g, b = picture[..., 0], picture[..., 1], picture[..., 2]
+    sail = (b > 0.25) & (r < 0.3 * b) & (g < 0.8 * b)  # the sail's blue, shaded; the sky is much paler
+    assert sail.sum() > 200
+    rows, cols = np.nonzero(sail)
+    x, y = result["sail_pixel"]  # where the sail's centre projects
+    h, w = picture.shape[:2]
+    assert abs(cols.mean() - x) < 0.1 * w and abs(rows.mean() - y) < 0.1 * h
+    sky = picture[5:40, w // 2 :]
+    assert (sky[..., 2] > sky[..., 0]).all()  # a blue sky above
+
+
+def test_window_held_right_arrow_banks_right_within_two_seconds(glider_flight):
+    result, _ = glider_flight
+    held = np.array(result["held"])  # time [s], roll, bank [deg]
+    assert held[-1, 0] <= 2.0 + 1e-9
+    assert held[:, 1].max() == 1.0 and np.all(np.diff(held[:, 1]) >= 0)  # ramped up, held
+    assert held[-1, 2] > 10.0  # banked right
+    assert 0.0 < result["roll_after_release"] < 1.0  # ramping back after the key was released
+
+
+def test_window_space_pauses_period_steps_r_restarts_escape_closes(glider_flight):
+    result, _ = glider_flight
+    before, after, paused = result["paused"]
+    assert paused and after == before
+    assert result["one_frame"] == pytest.approx(0.03, abs=0.011)  # one frame of the scene
+    assert result["restart_time"] == 0.0 and result["restart_same"]
+    assert result["takes"] == ["flown.h5", "flown.take2.h5"]
+    assert result["closed"]
+
+
+def test_window_flight_replays_headless_bit_for_bit(glider_flight, tmp_path):
+    _, out = glider_flight
+    again = tmp_path / "again.h5"
+    assert main(["run", "--replay", str(out / "flown.h5"), "--h5", str(again), "--quiet"]) == 0
+    with Recording(out / "flown.h5") as flown, Recording(again) as replayed:
+        assert flown.frame_count == replayed.frame_count > 60
+        assert np.array_equal(flown.positions(), replayed.positions())
+        assert max(flown.controls(k).get("roll", 0.0) for k in range(flown.frame_count)) == 1.0
+
+
+def test_window_w_walks_the_kite_anchor(display, tmp_path):
+    result = _drive(display, "kite", tmp_path)
+    start, end, kite = (np.array(result[k]) for k in ("anchor_start", "anchor_end", "kite"))
+    towards = (kite - start) / np.linalg.norm(kite - start)
+    assert (end - start) @ towards > 1.5  # about 2 m in about 1 s of walking
+
+
+def test_view_command_on_the_virtual_screen_saves_a_screenshot_and_recording(display, tmp_path):
+    result = _cli(
+        ["view", "parachute", "--seconds", "1", "--size", "640x360", "--screenshot", "s.png", "--h5", "f.h5"],
+        env=display,
+        cwd=tmp_path,
+    )
+    assert result.returncode == 0, result.stderr
+    from PIL import Image
+
+    picture = np.asarray(Image.open(tmp_path / "s.png").convert("RGB"))
+    assert picture.shape == (360, 640, 3) and picture.std() > 10
+    with Recording(tmp_path / "f.h5") as recording:
+        assert recording.time[-1] == pytest.approx(1.0, abs=0.04)

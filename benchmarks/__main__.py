@@ -71,6 +71,15 @@ def table(rows: list[dict]) -> str:
                 "(`warpsim run hang-glider --seconds 1`, fresh process) |||||||||"
             )
             continue
+        if r["case"] == "viewer":
+            scenes = "; ".join(
+                f"{name} {v['fps']:.0f} fps, {v['realtime_factor']:.2f}x real time, stepping "
+                f"{100 * v['step_share']:.0f}% / drawing {100 * v['draw_share']:.0f}% of the wall time"
+                for name, v in r["scenes"].items()
+            )
+            renderer = next(iter(r["scenes"].values()))["renderer"]
+            lines.append(f"| viewer | `warpsim view` at {r['size']} on {renderer}: {scenes} |||||||||")
+            continue
         if r["case"] == "build-scaling":
             sizes = ", ".join(f"{k}: {v:.1f} us" for k, v in r["us_per_particle"].items())
             lines.append(

@@ -238,6 +238,54 @@ def case_startup(opts: Options) -> dict:
     return {"case": "startup", "cold_start_s": times["cold"], "warm_start_s": times["warm"], "device": opts.device}
 
 
+def _x_display() -> tuple[dict | None, subprocess.Popen | None, str]:
+    """An environment with an X display: the one there is, else a virtual one (Xvfb) started now.
+    Returns (environment or None, the Xvfb process to stop or None, why there is none)."""
+    if os.environ.get("DISPLAY"):
+        return dict(os.environ), None, ""
+    if shutil.which("Xvfb") is None:
+        return None, None, "no display and no Xvfb (apt install xvfb)"
+    read, write = os.pipe()
+    server = subprocess.Popen(
+        ["Xvfb", "-displayfd", str(write), "-screen", "0", "1920x1080x24", "-nolisten", "tcp"],
+        pass_fds=(write,),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    os.close(write)
+    number = os.read(read, 16).decode().strip()
+    os.close(read)
+    return dict(os.environ, DISPLAY=f":{number}"), server, ""
+
+
+def case_viewer(opts: Options) -> dict:
+    """`warpsim view` of each built-in scene at 1280x720, real clock: pictures/s, real-time factor, step/draw share"""
+    try:
+        import pyglet  # noqa: F401
+    except ImportError:
+        return {"case": "viewer", "skipped": "needs pyglet (pip install -e '.[viewer]')"}
+    env, server, why = _x_display()
+    if env is None:
+        return {"case": "viewer", "skipped": why}
+    try:
+        seconds = max(3.0, 3 * opts.min_time)
+        result = subprocess.run(
+            [sys.executable, "-m", "benchmarks.viewer", str(seconds), "1280x720"],
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+            cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+        )
+    finally:
+        if server is not None:
+            server.terminate()
+            server.wait(timeout=10)
+    import json
+
+    return {"case": "viewer", "size": "1280x720", "scenes": json.loads(result.stdout.splitlines()[-1])}
+
+
 BUILD_SIZES = (32, 64, 128, 256, 512)
 
 
@@ -268,5 +316,6 @@ CASES: dict[str, Callable[[Options], dict]] = {
     "numpy-flag-256": case_numpy("flag-256"),
     **{f"newton-flag-{n}": case_newton(n) for n in FLAG_SIZES},
     "startup": case_startup,
+    "viewer": case_viewer,
     "build-scaling": case_build_scaling,
 }

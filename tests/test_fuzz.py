@@ -175,6 +175,16 @@ FLAGS = {  # each command's own options, and one it does not have
     "run": RUN_FLAGS + [("--bogus", None)],
     "info": [("--set", "set"), ("--worlds", "count"), ("--vary", "vary"), ("--h5", "path")],
     "render": [("--frame", "count"), ("--size", "count"), ("--azimuth", "number"), ("--elevation", "number")],
+    "view": [
+        ("--set", "set"),
+        ("--worlds", "count"),
+        ("--h5", "path"),
+        ("--seconds", "number"),
+        ("--screenshot", "path"),
+        ("--size", "count"),
+        ("--device", "device"),
+        ("--bogus", None),
+    ],
     "convert": [("--quiet", None)],
     "list": [("--set", "set")],
     "nope": [],
@@ -183,9 +193,9 @@ FLAGS = {  # each command's own options, and one it does not have
 
 @st.composite
 def command_lines(draw) -> list[str]:
-    command = draw(st.sampled_from(["run", "run", "run", "info", "convert", "render", "list", "nope"]))
+    command = draw(st.sampled_from(["run", "run", "run", "info", "view", "convert", "render", "list", "nope"]))
     argv = [command]
-    if command in ("run", "info"):
+    if command in ("run", "info", "view"):
         argv += ["--seconds", "0.05"] if command == "run" else []  # fuzzed --seconds below override this
         argv += [draw(st.sampled_from(TOKENS["scene"]))] if draw(st.integers(0, 5)) else []
     elif command in ("convert", "render"):
@@ -215,6 +225,7 @@ def test_command_line_never_tracebacks_and_leaves_nothing_on_error(argv):
         out, err = io.StringIO(), io.StringIO()
         cwd = os.getcwd()
         os.chdir(directory)
+        display = os.environ.pop("DISPLAY", None)  # `view` must say "no display", never open a window here
         try:
             with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
                 try:
@@ -223,6 +234,8 @@ def test_command_line_never_tracebacks_and_leaves_nothing_on_error(argv):
                     code = exit.code
         finally:
             os.chdir(cwd)
+            if display is not None:
+                os.environ["DISPLAY"] = display
         errors = err.getvalue()
         event(f"exit {code}")
         assert "Traceback" not in errors and "Error:" not in errors.replace("error:", ""), (argv, errors)

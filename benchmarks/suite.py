@@ -238,49 +238,31 @@ def case_startup(opts: Options) -> dict:
     return {"case": "startup", "cold_start_s": times["cold"], "warm_start_s": times["warm"], "device": opts.device}
 
 
-def _x_display() -> tuple[dict | None, subprocess.Popen | None, str]:
-    """An environment with an X display: the one there is, else a virtual one (Xvfb) started now.
-    Returns (environment or None, the Xvfb process to stop or None, why there is none)."""
-    if os.environ.get("DISPLAY"):
-        return dict(os.environ), None, ""
-    if shutil.which("Xvfb") is None:
-        return None, None, "no display and no Xvfb (apt install xvfb)"
-    read, write = os.pipe()
-    server = subprocess.Popen(
-        ["Xvfb", "-displayfd", str(write), "-screen", "0", "1920x1080x24", "-nolisten", "tcp"],
-        pass_fds=(write,),
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    os.close(write)
-    number = os.read(read, 16).decode().strip()
-    os.close(read)
-    return dict(os.environ, DISPLAY=f":{number}"), server, ""
-
-
 def case_viewer(opts: Options) -> dict:
     """`warpsim view` of each built-in scene at 1280x720, real clock: pictures/s, real-time factor, step/draw share"""
     try:
         import pyglet  # noqa: F401
     except ImportError:
         return {"case": "viewer", "skipped": "needs pyglet (pip install -e '.[viewer]')"}
-    env, server, why = _x_display()
-    if env is None:
-        return {"case": "viewer", "skipped": why}
+    import contextlib
+
+    from warpsim.viewer.xvfb import VirtualDisplayError, virtual_display
+
     try:
-        seconds = max(3.0, 3 * opts.min_time)
-        result = subprocess.run(
-            [sys.executable, "-m", "benchmarks.viewer", str(seconds), "1280x720"],
-            env=env,
-            capture_output=True,
-            text=True,
-            check=True,
-            cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
-        )
-    finally:
-        if server is not None:
-            server.terminate()
-            server.wait(timeout=10)
+        with contextlib.ExitStack() as stack:
+            env = dict(os.environ) if os.environ.get("DISPLAY") else stack.enter_context(virtual_display())
+            seconds = max(3.0, 3 * opts.min_time)
+            result = subprocess.run(
+                [sys.executable, "-m", "benchmarks.viewer", str(seconds), "1280x720"],
+                env=env,
+                capture_output=True,
+                text=True,
+                cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+            )
+    except VirtualDisplayError as err:
+        return {"case": "viewer", "skipped": f"no display ({err})"}
+    if result.returncode != 0:
+        raise RuntimeError(f"the viewer benchmark failed: {result.stderr.strip()[-2000:]}")
     import json
 
     return {"case": "viewer", "size": "1280x720", "scenes": json.loads(result.stdout.splitlines()[-1])}

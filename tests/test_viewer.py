@@ -343,27 +343,10 @@ def display():
         if os.environ.get("WARPSIM_REQUIRE_DISPLAY_TESTS") == "1":
             pytest.fail(f"window tests need {missing} (WARPSIM_REQUIRE_DISPLAY_TESTS=1)")
         pytest.skip(f"window tests need {missing} (apt install xvfb xdotool; pip install pyglet)")
-    read, write = os.pipe()
-    server = subprocess.Popen(
-        ["Xvfb", "-displayfd", str(write), "-screen", "0", "1280x720x24", "-nolisten", "tcp"],
-        pass_fds=(write,),
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    os.close(write)
-    number = b""
-    while not number.endswith(b"\n"):
-        chunk = os.read(read, 16)
-        if not chunk:
-            break
-        number += chunk
-    os.close(read)
-    try:
-        assert number.strip(), "Xvfb did not start"
-        yield {**os.environ, "DISPLAY": f":{number.decode().strip()}"}
-    finally:
-        server.terminate()
-        server.wait(timeout=10)
+    from warpsim.viewer.xvfb import virtual_display
+
+    with virtual_display((1280, 720)) as env:
+        yield env
 
 
 def _drive(display, scenario: str, out: Path) -> dict:

@@ -445,10 +445,10 @@ class Viewer:
             f"time stepping {100 * busy:.0f}% / drawing {100 - 100 * busy:.0f}%   camera {self.camera}"
         ]
         lines += object_lines(self.sim, self.frame)[:8]
-        wind = self.wind()
-        controls = [
-            f"wind {np.linalg.norm(wind[:2]):.1f} m/s towards {math.degrees(math.atan2(wind[1], wind[0])):.0f} deg"
-        ]
+        wind = self.frame.wind[0]  # blowing now (gusts included), in the first world
+        heading = math.degrees(math.atan2(wind[1], wind[0]))
+        where = " (world 0)" if self.model.world_count > 1 else ""
+        controls = [f"wind{where} {np.linalg.norm(wind[:2]):.1f} m/s towards {heading:.0f} deg"]
         if self.has_glider_keys:
             controls.append(f"pitch {self.axes['pitch']:+.2f}  roll {self.axes['roll']:+.2f}")
         if self.has_anchor:

@@ -142,7 +142,17 @@ TOKENS = {
     ],
     "number": ["0.05", "0", "-1", "nan", "inf", "1e-300", "abc", "", "2", "0.001", "1e9"],
     "count": ["1", "2", "0", "-3", "x", "70000", "3.5"],
-    "path": ["out.usda", "out.usdc", "out.h5", "out.obj", "missing/out.usda", "missing/out.h5", "", "bin.toml"],
+    "path": [
+        "out.usda",
+        "out.usdc",
+        "out.h5",
+        "rec.h5",
+        "out.obj",
+        "missing/out.usda",
+        "missing/out.h5",
+        "",
+        "bin.toml",
+    ],
     "set": [
         "wind.velocity=[8,0,0]",
         "wind.velocity=[1e308,0,0]",
@@ -169,6 +179,7 @@ RUN_FLAGS = [
     ("--usd", "path"),
     ("--h5", "path"),
     ("--resume", "path"),
+    ("--replay", "path"),
     ("--quiet", None),
 ]
 FLAGS = {  # each command's own options, and one it does not have

@@ -416,7 +416,7 @@ class _StopRequests:
             signal.signal(sig, handler)
 
 
-def _same_file_check(scene: str, outputs: dict) -> None:
+def _same_file_check(scene: str, outputs: dict, what: str = "the scene file") -> None:
     """Refuse an output that would overwrite the scene file being run."""
     from .io import same_file
 
@@ -424,7 +424,7 @@ def _same_file_check(scene: str, outputs: dict) -> None:
         return
     for flag, path in outputs.items():
         if path is not None and Path(path).exists() and same_file(scene, path):
-            raise UsageError(f"{flag} {path} is the scene file itself; choose another output name")
+            raise UsageError(f"{flag} {path} is {what} itself; choose another output name")
 
 
 def cmd_run(args) -> int:
@@ -485,7 +485,7 @@ def _check_run_options(args) -> tuple[Path | None, Path | None]:
     if args.scene:
         _same_file_check(args.scene, {"--h5": h5_path, "--usd": usd_path})
     if args.replay:
-        _same_file_check(args.replay, {"--h5": h5_path, "--usd": usd_path})
+        _same_file_check(args.replay, {"--h5": h5_path, "--usd": usd_path}, "the recording replayed")
     return usd_path, h5_path
 
 

@@ -25,6 +25,9 @@ from warpsim.io.hdf5 import Recording
 from warpsim.runner import Simulation
 from warpsim.viewer import NullBackend, Viewer
 
+sys.path.insert(0, str(Path(__file__).parent))
+from viewer_driver import Clock  # noqa: E402  (the wall clock the window driver gives too)
+
 HERE = Path(__file__).parent
 
 
@@ -36,22 +39,6 @@ def _viewer(scene: str, record=None, **overrides) -> tuple[Viewer, NullBackend]:
     viewer = Viewer(Simulation(descriptor), backend, record=record, descriptor_text=to_toml(descriptor), scene=where)
     viewer.say = lambda line: None
     return viewer, backend
-
-
-class _Clock:
-    """Wall time for ``Viewer.tick``: one frame interval per tick, so each tick steps one frame."""
-
-    def __init__(self, viewer: Viewer):
-        self.viewer, self.now = viewer, 0.0
-        viewer.tick(self.now)
-
-    def ticks(self, count: int) -> None:
-        for _ in range(count):
-            self.now += self.viewer.frame_interval
-            self.viewer.tick(self.now)
-
-    def seconds(self, simulated: float) -> None:
-        self.ticks(int(round(simulated / self.viewer.frame_interval)))
 
 
 def _bank(viewer: Viewer) -> float:
@@ -67,7 +54,7 @@ def _bank(viewer: Viewer) -> float:
 @pytest.mark.parametrize("key, side", [("RIGHT", 1.0), ("LEFT", -1.0)])
 def test_held_arrow_ramps_roll_and_banks_that_way_then_release_ramps_back(key, side):
     viewer, keys = _viewer("hang-glider")
-    clock = _Clock(viewer)
+    clock = Clock(viewer)
     keys.press(key)
     clock.ticks(5)
     # RAMP per simulated second: 5 frames ramp by 5 * RAMP * frame interval
@@ -84,14 +71,14 @@ def test_held_arrow_ramps_roll_and_banks_that_way_then_release_ramps_back(key, s
 
 def test_hands_off_the_glider_does_not_bank():
     viewer, _ = _viewer("hang-glider")
-    _Clock(viewer).seconds(2.0)
+    Clock(viewer).seconds(2.0)
     assert abs(_bank(viewer)) < 1.0
     assert "roll" not in viewer.sim.controls  # nothing was set: the keyboard sets only what changes
 
 
 def test_up_arrow_pulls_the_bar_in():
     viewer, keys = _viewer("hang-glider")
-    clock = _Clock(viewer)
+    clock = Clock(viewer)
     keys.press("UP")
     clock.seconds(1.0)
     assert viewer.sim.controls["pitch"] == 1.0
@@ -103,7 +90,7 @@ def test_up_arrow_pulls_the_bar_in():
 
 def test_w_walks_the_kite_anchor_towards_the_kite_and_s_back():
     viewer, keys = _viewer("kite")
-    clock = _Clock(viewer)
+    clock = Clock(viewer)
     start = np.array(viewer._anchor())
     kite = viewer.frame.positions[viewer.model.objects[0].parts["sail"]].mean(axis=0)[:2]
     towards = (kite - start) / np.linalg.norm(kite - start)
@@ -122,7 +109,7 @@ def test_w_walks_the_kite_anchor_towards_the_kite_and_s_back():
 
 def test_wind_keys_change_speed_and_direction():
     viewer, keys = _viewer("kite")  # 6 m/s along +x
-    clock = _Clock(viewer)
+    clock = Clock(viewer)
     keys.tap("PLUS")
     keys.tap("PLUS")
     clock.ticks(1)
@@ -141,7 +128,7 @@ def test_wind_keys_change_speed_and_direction():
 
 def test_space_stops_simulated_time_and_period_steps_one_frame():
     viewer, keys = _viewer("flag")
-    clock = _Clock(viewer)
+    clock = Clock(viewer)
     clock.ticks(3)
     keys.tap("SPACE")
     clock.ticks(1)
@@ -158,7 +145,7 @@ def test_space_stops_simulated_time_and_period_steps_one_frame():
 
 def test_r_restores_the_initial_state_and_controls():
     viewer, keys = _viewer("hang-glider")
-    clock = _Clock(viewer)
+    clock = Clock(viewer)
     initial = viewer.frame.positions.copy()
     keys.press("RIGHT")
     clock.seconds(1.0)
@@ -174,7 +161,7 @@ def test_r_restores_the_initial_state_and_controls():
 def test_machine_too_slow_slows_down_instead_of_owing_frames(monkeypatch):
     viewer, _ = _viewer("flag")
     viewer.BUDGET = 0.0  # one frame per tick at most, as on a machine that cannot keep up
-    clock = _Clock(viewer)
+    clock = Clock(viewer)
     clock.now += 10.0  # ten wall seconds pass in one tick
     viewer.tick(clock.now)
     assert viewer.behind and viewer.sim.state.time == pytest.approx(viewer.frame_interval)
@@ -185,7 +172,7 @@ def test_machine_too_slow_slows_down_instead_of_owing_frames(monkeypatch):
 
 def test_camera_cycles_and_mouse_orbits_and_zooms():
     viewer, keys = _viewer("parachute")
-    clock = _Clock(viewer)
+    clock = Clock(viewer)
     seen = []
     for _ in range(3):
         seen.append(viewer.camera)
@@ -204,7 +191,7 @@ def test_camera_cycles_and_mouse_orbits_and_zooms():
 
 def test_hud_shows_time_rates_object_figures_and_controls():
     viewer, keys = _viewer("hang-glider")
-    clock = _Clock(viewer)
+    clock = Clock(viewer)
     keys.press("RIGHT")
     clock.seconds(1.0)
     hud = keys.last_hud
@@ -213,10 +200,10 @@ def test_hud_shows_time_rates_object_figures_and_controls():
     assert any("roll +1.00" in line for line in hud)
     assert viewer.rates()[0] == pytest.approx(1.0, rel=0.05)  # paced to the (test's) wall clock
     kite, kite_keys = _viewer("kite")
-    _Clock(kite).ticks(2)
+    Clock(kite).ticks(2)
     assert any("line" in line and "deg" in line and "pull" in line for line in kite_keys.last_hud)
     chute, chute_keys = _viewer("parachute")
-    _Clock(chute).ticks(2)
+    Clock(chute).ticks(2)
     assert any("descent" in line and "radius" in line for line in chute_keys.last_hud)
     keys.tap("H")
     clock.ticks(1)
@@ -228,7 +215,7 @@ def test_blowup_is_shown_state_kept_at_the_last_good_frame_and_r_restarts(tmp_pa
     viewer, keys = _viewer("kite", record=path, solver={"max_stretch": 1e-4})
     messages = []
     viewer.say = messages.append
-    clock = _Clock(viewer)
+    clock = Clock(viewer)
     clock.ticks(3)
     assert viewer.paused and "blew up" in viewer.error and "press R" in viewer.error
     assert any("blew up" in m for m in messages)  # said on stderr too
@@ -245,7 +232,7 @@ def test_blowup_is_shown_state_kept_at_the_last_good_frame_and_r_restarts(tmp_pa
 def test_a_flight_recorded_in_the_viewer_replays_headless_bit_for_bit(tmp_path):
     path = tmp_path / "flight.h5"
     viewer, keys = _viewer("hang-glider", record=path)
-    clock = _Clock(viewer)
+    clock = Clock(viewer)
     for key, seconds in (("RIGHT", 0.7), ("UP", 0.5), ("LEFT", 0.4), (None, 0.3)):
         if key:
             keys.press(key)
@@ -270,7 +257,7 @@ def test_a_flight_recorded_in_the_viewer_replays_headless_bit_for_bit(tmp_path):
 def test_restart_while_recording_starts_a_new_take(tmp_path):
     path = tmp_path / "flight.h5"
     viewer, keys = _viewer("flag", record=path)
-    clock = _Clock(viewer)
+    clock = Clock(viewer)
     clock.ticks(5)
     keys.tap("R")
     clock.ticks(3)  # the first restarts (no step), the next two step

@@ -55,6 +55,9 @@ class Clock:
             self.now += self.viewer.frame_interval
             self.viewer.tick(self.now)
 
+    def seconds(self, simulated: float) -> None:
+        self.ticks(int(round(simulated / self.viewer.frame_interval)))
+
 
 def projected(viewer, point: np.ndarray) -> list[float]:
     """Pixel (column, row from the top) of a world point in the viewer's current view."""

@@ -130,18 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=_number("--seconds"),
         help="simulated time [s] (default: scene's); with --resume, the time to add",
     )
-    run.add_argument("--dt", type=_number("--dt"), help="time step [s] (default: scene's, 0.01)")
-    run.add_argument("--iterations", type=_iterations, help="constraint iterations per step (default 55)")
-    run.add_argument("--fps", type=_number("--fps"), help="output frames per simulated second")
-    run.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
-    run.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a descriptor value, e.g. --set wind.velocity=[8,0,0] (repeatable)",
-    )
-    _world_arguments(run)
+    _scene_arguments(run)
     run.add_argument("--realtime", action="store_true", help="pace the run to the wall clock")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
     run.add_argument(
@@ -178,18 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
         "xvfb-run with --screenshot).",
     )
     view.add_argument("scene", metavar="SCENE")
-    view.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a descriptor value, e.g. --set wind.velocity=[8,0,0] (repeatable)",
-    )
-    _world_arguments(view)
-    view.add_argument("--dt", type=_number("--dt"), help="time step [s] (default: scene's)")
-    view.add_argument("--iterations", type=_iterations, help="constraint iterations per step (default 55)")
-    view.add_argument("--fps", type=_number("--fps"), help="simulated frames per second (default: scene's)")
-    view.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
+    _scene_arguments(view)
     view.add_argument(
         "--h5",
         metavar="OUT.h5",
@@ -244,6 +222,23 @@ def _size(text: str) -> tuple[int, int]:
     if not (16 <= w <= 8192 and 16 <= h <= 8192):
         raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels (16..8192), e.g. 960x540, got {text!r}")
     return w, h
+
+
+def _scene_arguments(parser) -> None:
+    """The options that change the scene a command simulates: time step, iterations, frame rate, device,
+    ``--set`` and the worlds."""
+    parser.add_argument("--dt", type=_number("--dt"), help="time step [s] (default: scene's, 0.01)")
+    parser.add_argument("--iterations", type=_iterations, help="constraint iterations per step (default 55)")
+    parser.add_argument("--fps", type=_number("--fps"), help="output frames per simulated second")
+    parser.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a descriptor value, e.g. --set wind.velocity=[8,0,0] (repeatable)",
+    )
+    _world_arguments(parser)
 
 
 def _world_arguments(parser) -> None:

@@ -31,15 +31,11 @@ def measure(scene: str, seconds: float, size: tuple[int, int]) -> dict:
     try:
         end = time.perf_counter() + 1.0
         while time.perf_counter() < end:  # warm-up: first pictures, graph capture
-            viewer.tick()
+            viewer.paced_tick()
         t0, pictures0, step0, draw0 = sim.state.time, viewer.pictures, viewer.step_time, viewer.draw_time
         start = time.perf_counter()
         while time.perf_counter() - start < seconds:
-            begun = time.perf_counter()
-            viewer.tick()
-            spare = 1.0 / viewer.MAX_FPS - (time.perf_counter() - begun)
-            if spare > 0:
-                time.sleep(spare)
+            viewer.paced_tick()  # as `warpsim view` ticks
         wall = time.perf_counter() - start
         from pyglet import gl
 

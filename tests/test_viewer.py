@@ -22,6 +22,7 @@ import pytest
 from warpsim.cli import main, scene_dirs
 from warpsim.descriptor import merge, resolve, to_toml
 from warpsim.io.hdf5 import Recording
+from warpsim.objects.hang_glider import bank
 from warpsim.runner import Simulation
 from warpsim.viewer import NullBackend, Viewer
 
@@ -43,9 +44,7 @@ def _viewer(scene: str, record=None, **overrides) -> tuple[Viewer, NullBackend]:
 
 def _bank(viewer: Viewer) -> float:
     """Bank of the hang glider [deg], positive with the right wing down."""
-    record = viewer.model.objects[0]
-    span = viewer.frame.positions[record.tips[0]] - viewer.frame.positions[record.tips[1]]
-    return math.degrees(math.atan2(span[2], np.linalg.norm(span[:2])))
+    return bank(viewer.model.objects[0], viewer.frame.positions)
 
 
 # ---------------------------------------------------------------------------------------------- null backend
@@ -386,7 +385,7 @@ def test_window_space_pauses_period_steps_r_restarts_escape_closes(glider_flight
     assert paused and after == before
     assert result["one_frame"] == pytest.approx(0.03, abs=0.011)  # one frame of the scene
     assert result["restart_time"] == 0.0 and result["restart_same"]
-    assert result["takes"] == ["flown.h5", "flown.take2.h5"]
+    assert result["takes"] == ["flown.h5", "flown.take2.h5"] == result["takes_said"]
     assert result["closed"]
 
 

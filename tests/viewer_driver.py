@@ -11,7 +11,6 @@ does not depend on how fast the machine draws.
 from __future__ import annotations
 
 import json
-import math
 import subprocess
 import sys
 from pathlib import Path
@@ -21,9 +20,10 @@ import numpy as np
 from warpsim import _warp
 from warpsim.cli import scene_dirs
 from warpsim.descriptor import resolve, to_toml
+from warpsim.objects.hang_glider import bank
 from warpsim.runner import Simulation
 from warpsim.viewer.core import Viewer
-from warpsim.viewer.gl import PygletBackend, _look_at, _perspective
+from warpsim.viewer.gl import PygletBackend, view_matrix
 
 SIZE = (640, 360)
 
@@ -35,8 +35,7 @@ def xdotool(*args: str) -> str:
 def open_viewer(scene: str, title: str, record: Path | None):
     descriptor, _, where = resolve(scene, scene_dirs())
     sim = Simulation(descriptor)
-    backend = PygletBackend(SIZE)
-    backend.keep_pictures = True
+    backend = PygletBackend(SIZE, keep_pictures=True)
     viewer = Viewer(sim, backend, title, record, to_toml(descriptor), where, say=lambda line: None)
     window = xdotool("search", "--sync", "--name", title).split()[0]
     xdotool("windowfocus", "--sync", window)
@@ -61,19 +60,10 @@ class Clock:
 
 def projected(viewer, point: np.ndarray) -> list[float]:
     """Pixel (column, row from the top) of a world point in the viewer's current view."""
-    view = viewer.view()
     w, h = SIZE
-    distance = float(np.linalg.norm(view.target - view.eye))
-    m = _perspective(view.fov, w / h, max(0.05, distance / 500), 20000.0) @ _look_at(view.eye, view.target)
-    clip = m @ np.append(point, 1.0)
+    clip = view_matrix(viewer.view(), w, h) @ np.append(point, 1.0)
     x, y = clip[:2] / clip[3]
     return [float((x + 1) / 2 * w), float((1 - y) / 2 * h)]
-
-
-def bank(viewer) -> float:
-    record = viewer.model.objects[0]
-    span = viewer.frame.positions[record.tips[0]] - viewer.frame.positions[record.tips[1]]
-    return math.degrees(math.atan2(span[2], np.linalg.norm(span[:2])))
 
 
 def glider(out: Path) -> dict:
@@ -82,14 +72,15 @@ def glider(out: Path) -> dict:
     from PIL import Image
 
     Image.fromarray(backend.screenshot()).save(out / "first.png")
-    sail = viewer.model.objects[0].parts["sail"]
+    glider = viewer.model.objects[0]
+    sail = glider.parts["sail"]
     result = {"sail_pixel": projected(viewer, viewer.frame.positions[sail].mean(axis=0))}
     initial = viewer.frame.positions.copy()
     xdotool("keydown", "Right")
     held = []
     for _ in range(int(2.0 / viewer.frame_interval + 1e-9)):
         clock.ticks(1)
-        held.append((viewer.sim.state.time, viewer.sim.controls.get("roll", 0.0), bank(viewer)))
+        held.append((viewer.sim.state.time, viewer.sim.controls.get("roll", 0.0), bank(glider, viewer.frame.positions)))
     xdotool("keyup", "Right")
     clock.ticks(10)
     result["held"] = held
@@ -107,6 +98,7 @@ def glider(out: Path) -> dict:
     result["restart_time"] = viewer.sim.state.time
     result["restart_same"] = bool(np.array_equal(viewer.frame.positions, initial))
     result["takes"] = sorted(p.name for p in out.glob("flown*.h5"))
+    result["takes_said"] = [p.name for p in viewer.takes]
     xdotool("key", "Escape")
     result["closed"] = not viewer.tick(clock.now + 0.1)
     viewer.close()

@@ -525,7 +525,7 @@ def _resolve_run(args) -> _RunInputs:
             with Recording(args.replay) as recording:
                 if recording.frame_count == 0:
                     raise RecordingError(f"{args.replay}: the recording has no frames")
-                controls = [recording.controls(k) for k in range(recording.frame_count)]
+                controls = recording.controls()
                 text, length = recording.descriptor_text, float(recording.time[-1])
         except RecordingError as err:
             raise UsageError(f"--replay {err}") from None
@@ -692,21 +692,22 @@ def cmd_render(args) -> int:
 
 def cmd_view(args) -> int:
     """Fly a scene in a window until the user quits (or --seconds); print where the outputs went."""
+    import contextlib
+
     from .descriptor import to_toml
     from .io.hdf5 import RecordingError, check_recording_path
     from .io.render import check_picture_path
     from .runner import Simulation
-    from .viewer import ViewerUnavailableError
     from .viewer.core import Viewer
     from .viewer.gl import PygletBackend
 
     h5_path = _checked_output(check_recording_path, args.h5, "--h5")
     shot = _checked_output(check_picture_path, args.screenshot, "--screenshot")
     if shot is not None:
-        from .io.render import _pillow
+        from .io.render import require_pillow
 
         try:
-            _pillow()
+            require_pillow()
         except RuntimeError as err:
             raise UsageError(f"--screenshot: {err}") from None
     device = _check_device(args.device)
@@ -716,32 +717,21 @@ def cmd_view(args) -> int:
 
     gl.check_display()  # a missing extra or display is said before the model is built
     sim = Simulation(descriptor, device=device, where=where)
-    backend = PygletBackend(args.size)
-    backend.keep_pictures = shot is not None
+    backend = PygletBackend(args.size, keep_pictures=shot is not None)
     try:
         viewer = Viewer(sim, backend, f"warpsim: {where}", h5_path, to_toml(descriptor), where, seconds=args.seconds)
-    except ViewerUnavailableError:
-        backend.close()
-        raise
     except RecordingError as err:
-        backend.close()
         raise UsageError(f"--h5 {err}") from None
-    try:
-        viewer.run()
-    except KeyboardInterrupt:
-        viewer.close()
+    with contextlib.suppress(KeyboardInterrupt):  # Ctrl-C in the terminal quits like Esc
+        viewer.run()  # closes the recording and the window, however it ends
     if shot is not None:
-        from PIL import Image
+        from .io.render import save_png
 
-        from .io.render import _atomic_save
-
-        image = Image.fromarray(backend.screenshot())
-        _atomic_save(shot, lambda p: image.save(p, format="PNG"))
-        print(f"screenshot: {shot}")
+        print(f"screenshot: {save_png(shot, backend.screenshot())}")
     print(f"simulated {sim.state.time:.2f} s; drew {viewer.pictures} pictures")
-    if h5_path:
-        print(f"recording: {h5_path}" + (f" (and {viewer._take - 1} more takes)" if viewer._take > 1 else ""))
-    return EXIT_BLOWUP if viewer.error.startswith("the simulation blew up") else 0
+    for path in viewer.takes:
+        print(f"recording: {path}")
+    return EXIT_BLOWUP if viewer.blew_up else 0
 
 
 def main(argv: list[str] | None = None) -> int:

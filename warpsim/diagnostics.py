@@ -89,11 +89,13 @@ class ObjectMetrics:
     Attributes:
         centre: ``[K, 3]`` mass centre of the free particles [m].
         altitude: ``[K]`` height of the mass centre above the terrain under it [m].
+        velocity: ``[K, 3]`` velocity of the mass centre [m/s].
         airspeed: ``[K]`` speed of the mass centre relative to its world's wind [m/s].
     """
 
     centre: np.ndarray
     altitude: np.ndarray
+    velocity: np.ndarray
     airspeed: np.ndarray
 
 
@@ -110,7 +112,7 @@ def object_metrics(model: Model, frame: Frame) -> ObjectMetrics:
     worlds = np.array([record.world for record in model.objects], dtype=np.int64)
     altitude = centre[:, 2] - model.terrain.height(centre[:, 0], centre[:, 1])
     airspeed = np.linalg.norm(velocity - frame.wind[worlds], axis=1)
-    return ObjectMetrics(centre, altitude, airspeed)
+    return ObjectMetrics(centre, altitude, velocity, airspeed)
 
 
 class GroundContacts:

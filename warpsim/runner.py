@@ -141,11 +141,6 @@ class Simulation:
         self.state = self.model.state(self.dt)
         self.control = self.model.control()
         self.steps_taken = 0
-        problem = self.blowup(self.frame(0))
-        if problem:
-            raise DescriptorError(
-                f"{where}: the built {problem[0]} is not sound: {problem[1]}; check its sizes, masses, speed and dt"
-            )
         self.world_count = self.model.world_count
         winds = [from_section(WindConfig, world_descriptor(descriptor, k)["wind"]) for k in range(self.world_count)]
         try:
@@ -153,6 +148,11 @@ class Simulation:
         except ControlError as err:
             raise DescriptorError(str(err)) from None
         self.inputs = Inputs(self.model, self.control, winds, schedule)
+        problem = self.blowup(self.frame(0))
+        if problem:
+            raise DescriptorError(
+                f"{where}: the built {problem[0]} is not sound: {problem[1]}; check its sizes, masses, speed and dt"
+            )
         self.steps_per_frame = cfg.scene.steps_per_frame(self.dt)
         self.contacts = GroundContacts(self.model)
         self.solver.load_kernels()  # compile now, not in the first frame's time (the graph is captured there)
@@ -191,9 +191,7 @@ class Simulation:
         """The current state measured as frame ``index`` (see :func:`warpsim.diagnostics.measure`), with the
         controls in force."""
         frame = measure(self.model, self.state, self.control, self.dt, index, self.steps_taken)
-        inputs = getattr(self, "inputs", None)  # not yet made when __init__ checks the built state
-        if inputs is not None:
-            frame.controls = dict(inputs.in_force)
+        frame.controls = dict(self.inputs.in_force)
         return frame
 
     def blowup(self, frame: Frame) -> tuple[str, str] | None:

@@ -247,8 +247,8 @@ class H5Recorder:
     def _check_layout(self) -> None:
         """Raise :class:`RecordingError` unless every dataset a resume writes has the shape, type and growth this
         simulation writes (a recording edited or damaged since could not take its frames)."""
-        model, f = self.model, self.file
-        layout = _frame_layout(model.particle_count, len(model.objects), len(self.checkpoint().control_names))
+        model, f, cp = self.model, self.file, self.checkpoint()
+        layout = _frame_layout(model.particle_count, len(model.objects), len(cp.control_names))
         for name, (frame_shape, dtype, _) in layout.items():
             d = f[name]
             if (
@@ -258,7 +258,7 @@ class H5Recorder:
                 or d.maxshape[0] is not None
             ):
                 raise RecordingError(f"{self.path}: dataset {name} is {d.dtype}{list(d.shape)}; cannot append to it")
-        arrays = self.checkpoint().arrays()
+        arrays = cp.arrays()
         for slot in SLOTS:
             group = f[f"checkpoint/{slot}"]
             for name, data in arrays.items():
@@ -565,19 +565,16 @@ class Recording:
                 raise RecordingError(f"{self.path}: no frame {k}; the recording has frames 0..{self.frame_count - 1}")
             return self.file["positions"][k % self.frame_count]
 
-    @property
-    def control_names(self) -> tuple[str, ...]:
-        """Names of the scene's controls (the rows of ``/controls``)."""
-        return tuple(str(n) for n in self.file["checkpoint"].attrs["control_names"])
-
-    def controls(self, frame: int) -> dict:
+    def controls(self, frame: int | None = None) -> dict | list[dict]:
         """The controls in force while frame ``frame`` was stepped, by name (those set by then; see
-        :meth:`warpsim.runner.Simulation.set_controls`)."""
-        if not 0 <= frame < self.frame_count:
+        :meth:`warpsim.runner.Simulation.set_controls`); without ``frame``, those of every frame, in one read."""
+        if frame is not None and not 0 <= frame < self.frame_count:
             raise RecordingError(f"{self.path}: no frame {frame}; the recording has frames 0..{self.frame_count - 1}")
+        names = tuple(str(n) for n in self.file["checkpoint"].attrs["control_names"])
         with _reading(self.path):
-            table = self.file["controls"][frame]
-        return unpack_controls(self.control_names, ~np.isnan(table[:, 0]), table)
+            tables = self.file["controls"][: self.frame_count] if frame is None else self.file["controls"][frame][None]
+        rows = [unpack_controls(names, ~np.isnan(table[:, 0]), table) for table in tables]
+        return rows if frame is None else rows[0]
 
     def checkpoint(self) -> Checkpoint:
         """The saved state after frame :attr:`checkpoint_frame` (see :meth:`warpsim.runner.Simulation.restore`)."""

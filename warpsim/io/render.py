@@ -30,7 +30,8 @@ def check_picture_path(path) -> Path:
     return check_output_path(path, EXTENSIONS, "picture")
 
 
-def _pillow():
+def require_pillow():
+    """Pillow's ``(Image, ImageDraw)``; ``RuntimeError`` with the install command when it is missing."""
     try:
         from PIL import Image, ImageDraw
     except ImportError:
@@ -107,7 +108,7 @@ class Scene:
 
     def draw(self, q: np.ndarray, camera: Camera, label: str = ""):
         """A PIL image of positions ``q`` ``[N, 3]``."""
-        image_mod, draw_mod = _pillow()
+        image_mod, draw_mod = require_pillow()
         w, h = camera.size
         t = np.linspace(0.0, 1.0, h)[:, None]
         sky = (SKY_TOP * (1 - t) + SKY_BOTTOM * t) * 255
@@ -195,6 +196,13 @@ def _atomic_save(path: Path, save) -> Path:
     return path
 
 
+def save_png(path, pixels: np.ndarray) -> Path:
+    """Write ``[height, width, 3]`` uint8 ``pixels`` (top row first) to the .png ``path``, complete or not at all."""
+    image_mod, _ = require_pillow()
+    image = image_mod.fromarray(np.asarray(pixels, dtype=np.uint8), "RGB")
+    return _atomic_save(Path(path), lambda p: image.save(p, format="PNG"))
+
+
 def render_recording(
     recording_path,
     output,
@@ -212,7 +220,7 @@ def render_recording(
     from .hdf5 import Recording, RecordingError
 
     output = check_picture_path(output)
-    _pillow()
+    require_pillow()
     with Recording(recording_path) as recording:
         count = recording.frame_count
         if count == 0:

@@ -225,6 +225,12 @@ def apply_controls(record: HangGliderRecord, targets: dict, values: dict) -> Non
     targets["stick_rest"][record.control_sticks] = control_rest_lengths(record, pitch, roll)
 
 
+def bank(record: HangGliderRecord, q: np.ndarray) -> float:
+    """Bank of the sail [deg]: the tip-to-tip line against the horizontal, positive with the right tip lower."""
+    span_dir = q[record.tips[0]] - q[record.tips[1]]
+    return float(np.degrees(np.arctan2(span_dir[2], np.linalg.norm(span_dir[:2]))))
+
+
 def flight_state(record: HangGliderRecord, q: np.ndarray, q_prev: np.ndarray, dt: float, wind) -> dict:
     """Diagnostics: nose pitch angle [deg], bank [deg], airspeed [m/s], pilot offset [m] in the sail frame."""
     nose = q[record.nose]
@@ -233,7 +239,6 @@ def flight_state(record: HangGliderRecord, q: np.ndarray, q_prev: np.ndarray, dt
     keel_dir = nose - keel_end
     pitch = np.degrees(np.arctan2(keel_dir[2], np.linalg.norm(keel_dir[:2])))
     span_dir = tip_l - tip_r
-    bank = np.degrees(np.arctan2(span_dir[2], np.linalg.norm(span_dir[:2])))
     sail = record.parts["sail"]
     velocity = (q[sail] - q_prev[sail]).mean(axis=0) / dt
     airspeed = float(np.linalg.norm(velocity - np.asarray(wind)))
@@ -244,7 +249,7 @@ def flight_state(record: HangGliderRecord, q: np.ndarray, q_prev: np.ndarray, dt
     pilot = q[record.pilot] - q[sail].mean(axis=0)
     return {
         "pitch_deg": float(pitch),
-        "bank_deg": float(bank),
+        "bank_deg": bank(record, q),
         "airspeed": airspeed,
         "velocity": velocity,
         "pilot_forward": float(pilot @ fwd),

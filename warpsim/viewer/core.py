@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..config import GRAVITY
 from ..diagnostics import Frame, object_metrics
 from ..io.style import COLOURS
 from ..runner import BlowUpError, Simulation
@@ -128,7 +129,8 @@ class Viewer:
         self.frame_interval = sim.steps_per_frame * sim.dt
         names = sim.control_names()
         self.has_glider_keys = "pitch" in names and "roll" in names
-        self.has_anchor = "anchor" in names
+        self.kite = next((r for r in self.model.objects if r.kind == "kite"), None)  # the one W/A/S/D walks
+        self.has_anchor = "anchor" in names and self.kite is not None
         self.draw_list = draw_list(self.model)
         self.initial = sim.checkpoint()
         self.frame: Frame = sim.start_frames()
@@ -138,6 +140,7 @@ class Viewer:
         self.camera = "orbit"
         self.quit = False
         self.error = ""
+        self.blew_up = False  # the last frame stepped blew up (cleared by a restart)
         self.behind = False
         self.step_time = self.draw_time = 0.0
         self.pictures = 0
@@ -153,11 +156,16 @@ class Viewer:
         self._one_frame = False
         self._restarted = False
         self.recorder = None
-        self._record_path, self._take = (Path(record) if record else None), 1  # take k > 1: NAME.takek.h5
+        self._record_path = Path(record) if record else None
+        self.takes: list[Path] = []  # the recordings made: NAME.h5, then NAME.take2.h5, ... after each restart
         self._descriptor_text, self._scene = descriptor_text, scene
         self.backend.open(self.draw_list, title)
         if self._record_path is not None:
-            self._open_recorder(self._record_path)
+            try:
+                self._open_recorder(self._record_path)
+            except BaseException:
+                self.backend.close()
+                raise
 
     # ------------------------------------------------------------------ recording
     def _open_recorder(self, path: Path) -> None:
@@ -167,6 +175,7 @@ class Viewer:
             path, self.model, self.sim.descriptor, self.sim.checkpoint, self._descriptor_text, self._scene
         )
         self.recorder.write(self.frame)
+        self.takes.append(path)
         self.say(f"recording to {path}")
 
     def _write(self, frame: Frame) -> None:
@@ -206,7 +215,7 @@ class Viewer:
         if self.has_glider_keys:
             for name, minus, plus in (("pitch", "DOWN", "UP"), ("roll", "LEFT", "RIGHT")):
                 value = _towards(self.axes[name], self._held_axis(held, minus, plus), self.RAMP * self.frame_interval)
-                if value != self.axes[name] or (value != 0.0 and name not in self.sim.controls):
+                if value != self.axes[name]:  # keys that do not move an axis leave a schedule's value alone
                     self.axes[name] = value
                     values[name] = value
         if self.has_anchor:
@@ -227,14 +236,12 @@ class Viewer:
         """Where the kite's line is anchored now (x, y) [m]."""
         if "anchor" in self.sim.controls:
             return self.sim.controls["anchor"]
-        record = next(r for r in self.model.objects if r.kind == "kite")
-        target = self.sim.control.nail_target.numpy()[record.anchor_nail]
+        target = self.sim.control.nail_target.numpy()[self.kite.anchor_nail]
         return float(target[0]), float(target[1])
 
     def _bearing(self, anchor: np.ndarray) -> np.ndarray:
         """Unit horizontal vector from the anchor towards the first kite (downwind when right above it)."""
-        record = next(r for r in self.model.objects if r.kind == "kite")
-        d = self.frame.positions[record.parts["sail"]].mean(axis=0)[:2] - anchor
+        d = self.frame.positions[self.kite.parts["sail"]].mean(axis=0)[:2] - anchor
         if np.linalg.norm(d) < 1e-3:
             d = self.wind()[:2]
         n = np.linalg.norm(d)
@@ -299,15 +306,14 @@ class Viewer:
         self.frame = self.sim.start_frames()
         self.axes = {"pitch": 0.0, "roll": 0.0}
         self._pending_wind = None
-        self._debt, self.error, self.paused = 0.0, "", False
+        self._debt, self.error, self.paused, self.blew_up = 0.0, "", False, False
         self._restarted = True  # the wall time of the tick that restarts is not owed to the new run
         if self._record_path is not None:
-            self._take += 1
-            p = self._record_path
+            p, take = self._record_path, len(self.takes) + 1
             try:
-                self._open_recorder(p.with_name(f"{p.stem}.take{self._take}{p.suffix}"))
+                self._open_recorder(p.with_name(f"{p.stem}.take{take}{p.suffix}"))
             except Exception as err:  # noqa: BLE001 - shown, and flying goes on without a recording
-                self._fail(f"cannot record take {self._take}: {err}")
+                self._fail(f"cannot record take {take}: {err}")
 
     # ------------------------------------------------------------------ stepping
     def advance(self) -> bool:
@@ -317,6 +323,7 @@ class Viewer:
             self.frame = self.sim.advance(before=self._controls_at_frame_start)
         except BlowUpError as err:
             self.frame = self.sim.frame(err.last_good_frame)
+            self.blew_up = True
             self._fail(f"{err}; press R to restart")
             return False
         finally:
@@ -368,16 +375,20 @@ class Viewer:
         self.pictures += 1
         return not self.quit
 
+    def paced_tick(self) -> bool:
+        """:meth:`tick` on the wall clock, then sleep what is left of a picture's share (:attr:`MAX_FPS`)."""
+        started = time.perf_counter()
+        going = self.tick()
+        spare = 1.0 / self.MAX_FPS - (time.perf_counter() - started)
+        if going and spare > 0:
+            time.sleep(spare)
+        return going
+
     def run(self) -> None:
         """Tick until the user quits (or ``seconds`` have been simulated), then close the recording and window."""
         try:
-            while True:
-                started = time.perf_counter()
-                if not self.tick():
-                    break
-                spare = 1.0 / self.MAX_FPS - (time.perf_counter() - started)
-                if spare > 0:
-                    time.sleep(spare)
+            while self.paced_tick():
+                pass
         finally:
             self.close()
 
@@ -394,8 +405,7 @@ class Viewer:
 
     def _ground_point(self) -> np.ndarray:
         """Where the ground observer stands: the kite's anchor, else 30 m aside of the start, eyes at 1.7 m."""
-        kites = [r for r in self.model.objects if r.kind == "kite"]
-        if kites:
+        if self.kite is not None:
             x, y = self._anchor()
             x, y = x - 8.0, y - 8.0
         else:
@@ -415,7 +425,7 @@ class Viewer:
             d = max(self.orbit["distance"] * 0.6, 4.0)
             eye = target - d * np.append(self._chase_heading, 0.0) + np.array([0.0, 0.0, 0.3 * d])
         elif self.camera == "ground":
-            if any(r.kind == "kite" for r in self.model.objects):
+            if self.kite is not None:  # the observer walks with the anchor
                 self._ground_eye = self._ground_point()
             eye = self._ground_eye
         else:
@@ -450,7 +460,8 @@ class Viewer:
         where = " (world 0)" if self.model.world_count > 1 else ""
         controls = [f"wind{where} {np.linalg.norm(wind[:2]):.1f} m/s towards {heading:.0f} deg"]
         if self.has_glider_keys:
-            controls.append(f"pitch {self.axes['pitch']:+.2f}  roll {self.axes['roll']:+.2f}")
+            pitch, roll = (self.sim.controls.get(name, 0.0) for name in ("pitch", "roll"))
+            controls.append(f"pitch {pitch:+.2f}  roll {roll:+.2f}")
         if self.has_anchor:
             x, y = self._anchor()
             controls.append(f"anchor ({x:.1f}, {y:.1f}) m")
@@ -472,36 +483,31 @@ class Viewer:
 def object_lines(sim: Simulation, frame: Frame) -> list[str]:
     """One heads-up line per object: altitude and airspeed, and per kind its own figures (glider: sink rate,
     glide ratio, bank; kite: line angle and pull; parachute: descent speed and radius), and the worst stretch."""
+    from ..objects.hang_glider import bank
     from ..objects.kite import line_state
     from ..objects.parachute import projected_radius
 
     model = sim.model
     metrics = object_metrics(model, frame)
-    mass = model.particle_free_mass
     tri_force = None
     lines = []
     for k, record in enumerate(model.objects):
-        ids = np.asarray(record.particles)
-        m = mass[ids]
-        v = (m[:, None] * frame.velocities[ids]).sum(axis=0) / max(m.sum(), 1e-12)
+        v = metrics.velocity[k]
         sink = -v[2]
         text = f"{record.name}: altitude {metrics.altitude[k]:6.1f} m  airspeed {metrics.airspeed[k]:5.1f} m/s"
         if record.kind == "hang-glider":
-            q = frame.positions
-            span = q[record.tips[0]] - q[record.tips[1]]
-            bank = math.degrees(math.atan2(span[2], np.linalg.norm(span[:2])))
+            angle = bank(record, frame.positions)
             glide = f"{np.linalg.norm(v[:2]) / sink:4.1f}" if sink > 0.05 else " -- "
-            side = "right" if bank > 0.5 else "left" if bank < -0.5 else ""
-            text += f"  sink {sink:5.2f} m/s  glide {glide}  bank {abs(bank):3.0f} deg {side}"
+            side = "right" if angle > 0.5 else "left" if angle < -0.5 else ""
+            text += f"  sink {sink:5.2f} m/s  glide {glide}  bank {abs(angle):3.0f} deg {side}"
         elif record.kind == "kite":
             line = line_state(record, frame.positions)
             if tri_force is None:
                 tri_force = sim.solver.tri_force.numpy()
-            sail = np.concatenate([np.asarray(ids) for part, ids in record.tri_parts.items()]).astype(np.int64)
-            from ..config import GRAVITY
-
-            kite_mass = float(mass[np.unique(model.tri_indices_np[sail])].sum())
-            pull = np.linalg.norm(3.0 * tri_force[sail].sum(axis=0) - np.array([0.0, 0.0, GRAVITY * kite_mass]))
+            triangles = np.concatenate([np.asarray(t) for t in record.tri_parts.values()]).astype(np.int64)
+            kite_mass = float(model.particle_free_mass[np.unique(model.tri_indices_np[triangles])].sum())
+            weight = np.array([0.0, 0.0, GRAVITY * kite_mass])
+            pull = np.linalg.norm(3.0 * tri_force[triangles].sum(axis=0) - weight)
             text += f"  line {line['elevation_deg']:4.1f} deg  pull ~{pull:5.1f} N"
         elif record.kind == "parachute":
             text += f"  descent {sink:5.2f} m/s  radius {projected_radius(record, frame.positions):4.2f} m"

@@ -140,6 +140,13 @@ def _perspective(fov: float, aspect: float, near: float, far: float) -> np.ndarr
     )
 
 
+def view_matrix(view: View, width: int, height: int) -> np.ndarray:
+    """The 4x4 matrix from world coordinates [m] to clip space of ``view`` in a ``width`` x ``height`` picture."""
+    eye, target = np.asarray(view.eye, float), np.asarray(view.target, float)
+    near = max(0.05, float(np.linalg.norm(target - eye)) / 500)  # depth precision where the object is
+    return _perspective(view.fov, width / max(height, 1), near, 20000.0) @ _look_at(eye, target)
+
+
 def _look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
     forward = target - eye
     forward = forward / max(np.linalg.norm(forward), 1e-9)
@@ -199,14 +206,14 @@ class _Buffer:
 
 class PygletBackend(Backend):
     """The viewer's window: ``size`` (width, height) [pixels], ``visible`` False for an off-screen window on
-    an X display (still needs one)."""
+    an X display (still needs one), ``keep_pictures`` to read each picture back for :meth:`screenshot`."""
 
-    def __init__(self, size: tuple[int, int] = (1280, 720), visible: bool = True):
+    def __init__(self, size: tuple[int, int] = (1280, 720), visible: bool = True, keep_pictures: bool = False):
         self.size = tuple(size)
         self.visible = visible
         self.closed = False
         self.window = None
-        self.keep_pictures = False  # read every picture back (for screenshot()); costs a few ms a frame
+        self.keep_pictures = keep_pictures  # read every picture back (for screenshot()); a few ms a picture
         self._events: list[tuple] = []
         self._held: set[str] = set()
 
@@ -243,34 +250,40 @@ class PygletBackend(Backend):
             local = local.reshape(-1, 3).astype(np.int32)
             colours = np.tile(np.asarray(rgb, dtype=np.float32), (len(ids), 1))
             self._meshes.append((ids, local, colours, _Buffer(gl, len(ids), local, gl.GL_TRIANGLES)))
-        segments = [np.stack([c[:-1], c[1:]], 1) for c, _ in d.curves if len(c) > 1]
-        self._segments = np.concatenate(segments).ravel() if segments else np.zeros(0, np.int64)
-        self._segment_colours = (
-            np.concatenate(
-                [np.tile(np.asarray(rgb, np.float32), (2 * (len(c) - 1), 1)) for c, rgb in d.curves if len(c) > 1]
-            )
-            if segments
-            else np.zeros((0, 3), np.float32)
-        )
+        ends, colours = [np.zeros(0, np.int64)], [np.zeros((0, 3), np.float32)]
+        for chain, rgb in d.curves:  # each chain as line segments: vertex pairs (k, k + 1)
+            ends.append(np.stack([chain[:-1], chain[1:]], 1).ravel())
+            colours.append(np.tile(np.asarray(rgb, np.float32), (2 * max(len(chain) - 1, 0), 1)))
+        self._segments, self._segment_colours = np.concatenate(ends), np.concatenate(colours)
         self._lines = _Buffer(gl, len(self._segments), None, gl.GL_LINES)
-        self._unit_sphere, sphere_tris = _sphere()
-        n = len(self._unit_sphere)
-        tris = np.concatenate([sphere_tris + k * n for k in range(len(d.spheres))]) if d.spheres else None
-        self._spheres = _Buffer(gl, n * len(d.spheres), tris, gl.GL_TRIANGLES) if d.spheres else None
+        self._spheres = None
+        if d.spheres:  # one buffer for every sphere; only the centres move
+            unit, sphere_triangles = _sphere()
+            n, count = len(unit), len(d.spheres)
+            triangles = np.concatenate([sphere_triangles + k * n for k in range(count)])
+            self._spheres = _Buffer(gl, n * count, triangles, gl.GL_TRIANGLES)
+            self._sphere_offsets = np.concatenate([unit * radius for _, radius, _ in d.spheres])
+            self._sphere_particles = np.repeat([p for p, _, _ in d.spheres], n)
+            self._sphere_normals = np.tile(unit, (count, 1))
+            self._sphere_colours = np.concatenate([np.tile(np.asarray(c, np.float32), (n, 1)) for *_, c in d.spheres])
         sky = np.array([[-1, -1, 0.999], [1, -1, 0.999], [1, 1, 0.999], [-1, 1, 0.999]], np.float32)
         sky_colours = np.array(
             [[0.88, 0.93, 0.98], [0.88, 0.93, 0.98], [0.45, 0.65, 0.90], [0.45, 0.65, 0.90]], np.float32
         )
         self._sky = _Buffer(gl, 4, np.array([0, 1, 2, 0, 2, 3]), gl.GL_TRIANGLES)
         self._sky.update(sky, np.zeros_like(sky), sky_colours)
-        self._hud = pyglet.text.Label(
-            "", x=10, y=self.size[1] - 10, anchor_y="top", multiline=True, width=self.size[0] - 20,
-            font_name="DejaVu Sans Mono", font_size=11 if self.size[0] >= 1000 else 7, color=(15, 20, 30, 255),
-        )  # fmt: skip
-        self._overlay = pyglet.text.Label(
-            "", x=self.size[0] // 2, y=self.size[1] // 2, anchor_x="center", anchor_y="center", multiline=True,
-            width=int(self.size[0] * 0.8), font_name="DejaVu Sans Mono", font_size=12 if self.size[0] >= 1000 else 8,
-            color=(255, 255, 255, 255),
+        small = self.size[0] < 1000
+
+        def label(font_size: int, colour: tuple, **place):
+            return pyglet.text.Label(
+                "", multiline=True, font_name="DejaVu Sans Mono", font_size=font_size, color=colour, **place
+            )
+
+        width, height = self.size
+        self._hud = label(7 if small else 11, (15, 20, 30, 255), x=10, y=height - 10, anchor_y="top", width=width - 20)
+        self._overlay = label(
+            8 if small else 12, (255, 255, 255, 255), x=width // 2, y=height // 2, anchor_x="center",
+            anchor_y="center", width=int(width * 0.8),
         )  # fmt: skip
         self._shade = pyglet.shapes.Rectangle(0, 0, 1, 1, color=(20, 25, 35, 200))
         w = self.window
@@ -346,9 +359,7 @@ class PygletBackend(Backend):
         gl.glClear(gl.GL_COLOR_BUFFER_BIT | gl.GL_DEPTH_BUFFER_BIT)
         program = self._program
         program.use()
-        distance = float(np.linalg.norm(view.target - view.eye))
-        projection = _perspective(view.fov, width / max(height, 1), max(0.05, distance / 500), 20000.0)
-        matrix = projection @ _look_at(np.asarray(view.eye, float), np.asarray(view.target, float))
+        matrix = view_matrix(view, width, height)
         gl.glDisable(gl.GL_DEPTH_TEST)
         program["view_projection"] = tuple(np.eye(4).T.ravel())
         program["mode"] = 1
@@ -364,15 +375,9 @@ class PygletBackend(Backend):
             buffer.update(p, _vertex_normals(p, local), colours)
             buffer.draw()
         if self._spheres is not None:
-            points = np.concatenate([self._unit_sphere * r + q[p] for p, r, _ in self.draw_list.spheres])
-            colours = np.concatenate(
-                [
-                    np.tile(np.asarray(rgb, np.float32), (len(self._unit_sphere), 1))
-                    for _, _, rgb in self.draw_list.spheres
-                ]
+            self._spheres.update(
+                self._sphere_offsets + q[self._sphere_particles], self._sphere_normals, self._sphere_colours
             )
-            normals = np.tile(self._unit_sphere, (len(self.draw_list.spheres), 1))
-            self._spheres.update(points, normals, colours)
             self._spheres.draw()
         if len(self._segments):
             program["mode"] = 1

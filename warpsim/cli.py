@@ -1,4 +1,4 @@
-"""The ``warpsim`` command: list, info, run, convert.
+"""The ``warpsim`` command: list, info, run, view, sweep, plot, convert, render.
 
 Every error a user can cause ends with one line ``warpsim <command>: error: ...`` and exit code 2; a run that
 blows up (NaN/Inf, or a stick past ``solver.max_stretch``) ends with exit code 3 and keeps its outputs up to the
@@ -180,6 +180,94 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--screenshot", metavar="OUT.png", help="save the last picture drawn as a PNG when closing")
     view.add_argument("--size", type=_size, default=(1280, 720), metavar="WxH", help="window size (default 1280x720)")
 
+    sweep = sub.add_parser(
+        "sweep",
+        help="run every combination of a few settings on every core (Dask) into a table",
+        description="Run the cartesian product of the --vary axes (and of the scene's [sweep] table) and write "
+        "one row per case, its swept values and its metrics, to a .parquet (or .csv) table. Cases run in chunks of "
+        "batched worlds, one Dask task each, on a local cluster of one single-threaded worker process per core, "
+        "or on a running Dask cluster (--scheduler). Running the same sweep again with the same --out runs only the "
+        "cases the table does not hold yet; Ctrl-C keeps the finished rows. A case that blows up is a row saying "
+        "when and why. Needs the sweep extra: pip install -e '.[sweep]'.",
+        epilog="Metrics (see --list-metrics): window figures as NAME_mean/_min/_max over --window (default the "
+        "second half of the run): altitude [m], airspeed [m/s], sink [m/s]; glider glide [-] and bank [deg]; kite "
+        "line_angle [deg] and line_pull [N]; parachute radius [m]; and airborne [-], ground_time [s], "
+        "worst_stretch [-], window_frames, blew_up, blowup_time [s], blowup_reason. Exit codes: 0 done, 2 bad "
+        "input, 1 a task failed for good (the finished rows are kept), 130 interrupted (the finished rows are kept).",
+    )
+    sweep.add_argument("scene", metavar="SCENE")
+    sweep.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        metavar="KEY=VALUES",
+        help="a swept key: START:STOP:COUNT (COUNT values, both ends included) or V1,V2,...; any key outside "
+        "[scene], and wind.speed, e.g. --vary kite.tow_point=0.2:0.5:4 --vary wind.speed=4,8,12 (repeatable)",
+    )
+    sweep.add_argument("--out", metavar="OUT.parquet|OUT.csv", help="the results table (required)")
+    sweep.add_argument(
+        "--seconds", type=_number("--seconds"), help="simulated time of every case [s] (default: scene's)"
+    )
+    sweep.add_argument(
+        "--window",
+        type=_window,
+        metavar="START:STOP",
+        help="simulated seconds the window metrics cover (default: the second half of the run)",
+    )
+    sweep.add_argument(
+        "--metrics", type=_names, metavar="M1,M2", help="report only these metrics (default: all the object has)"
+    )
+    sweep.add_argument("--list-metrics", action="store_true", help="print the scene's metrics with units and stop")
+    sweep.add_argument(
+        "--workers", type=_world_count, metavar="N", help="local worker processes (default: one per core)"
+    )
+    sweep.add_argument(
+        "--scheduler",
+        metavar="tcp://HOST:PORT",
+        help="run on this running Dask scheduler's workers instead of a local cluster (see README: Sweeps)",
+    )
+    sweep.add_argument(
+        "--chunk", type=_world_count, metavar="N", help="cases per task (default: about 4 tasks per worker, <= 64)"
+    )
+    sweep.add_argument("--h5-dir", metavar="DIR", help="also write one recording per chunk into DIR")
+    sweep.add_argument("--resume", action="store_true", help="require --out to hold rows of this sweep already")
+    sweep.add_argument("--restart", action="store_true", help="forget the rows --out holds and run every case")
+    sweep.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    for flag, kind, what in (
+        ("--dt", _number("--dt"), "time step [s] (default: scene's, 0.01)"),
+        ("--iterations", _iterations, "constraint iterations per step (default 55)"),
+        ("--fps", _number("--fps"), "measured frames per simulated second (default: scene's)"),
+    ):
+        sweep.add_argument(flag, type=kind, help=what)
+    sweep.add_argument("--device", default="cpu", help="Warp device of the workers: cpu (default) or cuda[:N]")
+    sweep.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a descriptor value for every case, e.g. --set kite.mass=0.25 (repeatable)",
+    )
+
+    plot = sub.add_parser(
+        "plot",
+        help="draw a metric of a sweep's table as a line or a heat map (PNG)",
+        description="Draw a sweep's metric against one swept key (a line per combination of the other keys) or "
+        "two (a heat map; the other keys fixed with --where). Blown-up cases are left out and counted in the "
+        "title. Needs matplotlib (the sweep extra).",
+    )
+    plot.add_argument("table", metavar="SWEEP.parquet|SWEEP.csv")
+    plot.add_argument("output", metavar="OUT.png")
+    plot.add_argument("--x", required=True, metavar="KEY", help="swept key on the horizontal axis")
+    plot.add_argument("--y", metavar="KEY", help="second swept key: draw a heat map")
+    plot.add_argument("--metric", required=True, metavar="M", help="the metric to draw, e.g. line_angle_mean")
+    plot.add_argument(
+        "--where",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="keep only the cases with this value of a swept key (repeatable)",
+    )
+
     convert = sub.add_parser(
         "convert",
         help="turn a recording into a USD stage",
@@ -224,6 +312,25 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def _window(text: str) -> tuple[float, float]:
+    try:
+        start, stop = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected START:STOP in simulated seconds, e.g. 10:30, got {text!r}"
+        ) from None
+    if not (math.isfinite(start) and math.isfinite(stop) and 0.0 <= start <= stop):
+        raise argparse.ArgumentTypeError(f"expected 0 <= START <= STOP, got {text!r}")
+    return start, stop
+
+
+def _names(text: str) -> list[str]:
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected names separated by commas, got {text!r}")
+    return names
+
+
 def _scene_arguments(parser) -> None:
     """The options that change the scene a command simulates: time step, iterations, frame rate, device,
     ``--set`` and the worlds."""
@@ -259,7 +366,9 @@ def _world_arguments(parser) -> None:
     )
 
 
-def _load(args) -> tuple[dict, str, str]:
+def _load(args, worlds_from_vary: bool = True) -> tuple[dict, str, str]:
+    """The scene of ``args`` with its ``--set``, ``--dt``, ``--iterations``, ``--fps``, ``--seconds`` and (with
+    ``worlds_from_vary``) ``--worlds``/``--vary`` applied: ``(descriptor, source text, where)``."""
     from .descriptor import merge, parse_override, parse_vary, resolve
 
     descriptor, text, where = resolve(args.scene, scene_dirs())
@@ -267,14 +376,14 @@ def _load(args) -> tuple[dict, str, str]:
         descriptor = merge(f"--set {item}", descriptor, parse_override(item))
     count = getattr(args, "worlds", None)
     worlds: dict = {}
-    for item in getattr(args, "vary", []):
+    for item in getattr(args, "vary", []) if worlds_from_vary else []:
         section, key, values = parse_vary(item, count)
         count = count or len(values)
         worlds.setdefault(section, {})[key] = values
     if count is not None:
         worlds["count"] = count
     if worlds:
-        flags = " ".join([f"--worlds {count}"] + [f"--vary {v}" for v in getattr(args, "vary", [])])
+        flags = " ".join([f"--worlds {count}"] + [f"--vary {v}" for v in args.vary])
         descriptor = merge(flags, descriptor, {"worlds": worlds})
     overrides = {
         ("solver", "dt", "--dt"): getattr(args, "dt", None),
@@ -690,6 +799,97 @@ def cmd_render(args) -> int:
     return 0
 
 
+def cmd_sweep(args) -> int:
+    """Run a sweep into a table and say what it did."""
+    from . import sweeps
+    from .io import OutputPathError, check_output_path
+
+    try:
+        sweeps.require("distributed")
+        sweeps.require("pandas")
+    except sweeps.SweepError as err:
+        raise UsageError(str(err)) from None
+    descriptor, _, where = _load(args, worlds_from_vary=False)  # here --vary makes the sweep's axes
+    kind = descriptor["scene"]["object"]
+    if args.list_metrics:
+        for name in sweeps.metrics_of(kind):
+            unit, _, meaning = sweeps.METRICS[name]
+            print(f"{name:<16} [{unit}]  {meaning}")
+        return 0
+    if not args.out:
+        raise UsageError("--out OUT.parquet (or OUT.csv) is required: where the rows go")
+    try:
+        out = check_output_path(args.out, (".parquet", ".pq", ".csv"), "table")
+    except OutputPathError as err:
+        raise UsageError(f"--out {err}") from None
+    if args.restart and args.resume:
+        raise UsageError("--resume keeps the rows --out holds and --restart forgets them: give one")
+    if args.resume and not (out.exists() or out.with_name(out.name + ".partial").exists()):
+        raise UsageError(f"--resume: {out} holds no rows yet (run without --resume to start the sweep)")
+    _same_file_check(args.scene, {"--out": out})
+    if args.device != "cpu":
+        _check_device(args.device)
+    try:
+        axes = sweeps.parse_axes(descriptor, args.vary)
+        plan = sweeps.SweepPlan(descriptor, axes, args.seconds, args.window, args.metrics)
+    except sweeps.SweepError as err:
+        raise UsageError(str(err)) from None
+    h5_dir = Path(args.h5_dir) if args.h5_dir else None
+    if h5_dir is not None and h5_dir.exists() and not h5_dir.is_dir():
+        raise UsageError(f"--h5-dir {h5_dir} is a file, not a folder")
+    total = len(plan.cases)
+    if not args.quiet:
+        sizes = " x ".join(f"{len(a.values)} {a.name}" for a in plan.axes)
+        print(
+            f"{where}: {total} cases ({sizes}), {plan.seconds:g} s each, window {plan.window[0]:g}-{plan.window[1]:g} s"
+        )
+    progress = _sweep_progress if not args.quiet and sys.stderr.isatty() else None
+    try:
+        outcome = sweeps.run_sweep(
+            plan, out, args.workers, args.scheduler, args.chunk, args.device, h5_dir, args.restart, progress
+        )
+    except sweeps.SweepError as err:
+        raise UsageError(str(err)) from None
+    if progress is not None:
+        sys.stderr.write("\r" + " " * 70 + "\r")
+    table = outcome.table
+    blew = int(table["blew_up"].sum()) if len(table) else 0
+    if not args.quiet:
+        rate = outcome.ran / outcome.wall if outcome.wall > 0 else 0.0
+        kept = f"{outcome.kept} already in {out}; " if outcome.kept else ""
+        where_run = f"{outcome.workers} workers" if outcome.ran else "nothing to run"
+        status = "interrupted" if outcome.interrupted else "done"
+        print(
+            f"{status}: {kept}{outcome.ran} cases run in {outcome.wall:.1f} s on {where_run} ({rate:.2f} cases/s); "
+            f"{len(table)} rows, {blew} blew up"
+        )
+        print(f"  table: {out}")
+    for err in outcome.failures:
+        sys.stderr.write(f"warpsim sweep: error: a task failed: {one_line(str(err) or type(err).__name__)}\n")
+    if outcome.failures:
+        return 1
+    return EXIT_INTERRUPTED if outcome.interrupted else 0
+
+
+def _sweep_progress(done: int, total: int, wall: float) -> None:
+    rate = done / wall if wall > 0 else 0.0
+    eta = (total - done) / rate if rate > 0 else float("nan")
+    sys.stderr.write(f"\r  {done}/{total} cases  {rate:6.2f} cases/s  ETA {eta:5.0f} s")
+    sys.stderr.flush()
+
+
+def cmd_plot(args) -> int:
+    """Draw a sweep's metric as a PNG."""
+    from .io.plot import PlotError, plot_sweep
+
+    try:
+        path = plot_sweep(args.table, args.output, args.x, args.metric, args.y, args.where)
+    except PlotError as err:
+        raise UsageError(str(err)) from None
+    print(f"{args.table} -> {path}")
+    return 0
+
+
 def cmd_view(args) -> int:
     """Fly a scene in a window until the user quits (or --seconds); print where the outputs went."""
     import contextlib
@@ -765,6 +965,8 @@ def _main(argv: list[str] | None) -> int:
         "view": cmd_view,
         "convert": cmd_convert,
         "render": cmd_render,
+        "sweep": cmd_sweep,
+        "plot": cmd_plot,
     }
     try:
         return commands[args.command](args)

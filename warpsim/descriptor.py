@@ -20,6 +20,9 @@ so a descriptor only lists what it changes. Sections and keys (``warpsim info SC
   as dotted keys holding one value per world: any key of the object's section or of ``[wind]``, plus
   ``wind.speed`` [m/s] (the magnitude of ``wind.velocity``, direction kept), e.g.
   ``wind.speed = [4.0, 6.0, 8.0]`` with ``count = 3``. Solver, air, terrain and ground settings are shared.
+* ``[sweep]`` (read by ``warpsim sweep`` only): dotted keys holding the values one key takes across the cases
+  of a sweep, a list or a range ``"START:STOP:COUNT"``, e.g. ``kite.tow_point = "0.2:0.5:4"``; any key
+  outside ``[scene]``, and ``wind.speed``. ``warpsim run`` runs the scene as written and ignores it.
 """
 
 from __future__ import annotations
@@ -137,13 +140,16 @@ def _check_value(where: str, section: str, key: str, default, value):
 def merge(where: str, base: dict, override: dict) -> dict:
     """Validate ``override`` (parsed TOML) against ``base`` (a full descriptor) and merge it in."""
     out = copy.deepcopy(base)
-    worlds = None
+    worlds = sweep = None
     for section, values in override.items():
         if section == "controls":
             out["controls"] = _check_controls(where, values, out["scene"]["object"])
             continue
         if section == "worlds":
             worlds = values  # checked last: its per-world values are checked against the merged sections
+            continue
+        if section == "sweep":
+            sweep = values  # checked last, like [worlds]
             continue
         if section not in out:
             raise DescriptorError(
@@ -166,6 +172,8 @@ def merge(where: str, base: dict, override: dict) -> dict:
             out[section][key] = checked
     if worlds is not None:
         out["worlds"] = _check_worlds(where, worlds, out)
+    if sweep is not None:
+        out["sweep"] = _check_sweep(where, sweep, out)
     return out
 
 
@@ -258,33 +266,101 @@ def parse_override(text: str) -> dict:
     return {section: {key: value}}
 
 
-def parse_vary(text: str, count: int | None) -> tuple[str, str, list]:
-    """Turn ``--vary section.key=VALUES`` into ``(section, key, one value per world)``.
+def parse_vary(text: str, count: int | None, flag: str = "--vary") -> tuple[str, str, list]:
+    """Turn ``--vary section.key=VALUES`` into ``(section, key, values)``.
 
-    VALUES is ``START:STOP`` (evenly spaced over ``count`` worlds, both ends included; whole numbers
-    stay whole when both ends are) or a comma-separated / TOML list (``4,6,8`` or ``[[4,0,0],[8,0,0]]``).
+    VALUES is ``START:STOP:COUNT`` (``COUNT`` evenly spaced values, both ends included; whole numbers stay
+    whole when both ends are), ``START:STOP`` (spread over ``count`` worlds; an error when ``count`` is None),
+    or a comma-separated / TOML list (``4,6,8`` or ``[[4,0,0],[8,0,0]]``). ``flag`` names the option in errors.
     """
-    section, key, raw = _split_assignment("--vary", text, "wind.speed=4:12 or wind.speed=4,8")
+    section, key, raw = _split_assignment(flag, text, "wind.speed=4:12:5 or wind.speed=4,8")
     if ":" in raw and not raw.startswith("["):
-        ends = raw.split(":")
-        try:
-            start, stop = (tomllib.loads(f"v = {e.strip()}")["v"] for e in ends) if len(ends) == 2 else (None, None)
-        except tomllib.TOMLDecodeError:
-            start = stop = None
-        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (start, stop)):
-            raise DescriptorError(f"--vary {text!r}: a range is START:STOP with two numbers, e.g. 4:12")
-        if count is None:
-            raise DescriptorError(f"--vary {text!r}: a range needs --worlds N to know how many values to make")
-        n = max(count - 1, 1)
-        values = [start + (stop - start) * k / n for k in range(count)]
-        if isinstance(start, int) and isinstance(stop, int):
-            values = [round(v) for v in values]
-        return section, key, values
+        return section, key, _range_values(f"{flag} {text!r}", raw, count, flag)
     try:
         values = tomllib.loads(f"v = {raw if raw.startswith('[') else f'[{raw}]'}")["v"]
     except tomllib.TOMLDecodeError:
-        raise DescriptorError(f"--vary {text!r}: VALUES must be START:STOP or a list like 4,6,8") from None
+        raise DescriptorError(f"{flag} {text!r}: VALUES must be START:STOP:COUNT or a list like 4,6,8") from None
     return section, key, values
+
+
+MAX_RANGE = 100_000  # values one range may make
+
+
+def _range_values(where: str, raw: str, count: int | None, flag: str = "--vary") -> list:
+    """The values of a range ``START:STOP[:COUNT]`` (``count`` when COUNT is not written; see :func:`parse_vary`)."""
+    parts = [part.strip() for part in raw.split(":")]
+    try:
+        numbers = [tomllib.loads(f"v = {part}")["v"] for part in parts] if len(parts) in (2, 3) else []
+    except tomllib.TOMLDecodeError:
+        numbers = []
+    if not numbers or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in numbers):
+        raise DescriptorError(f"{where}: a range is START:STOP:COUNT with numbers, e.g. 4:12:5")
+    if len(numbers) == 3:
+        start, stop, count = numbers
+        if not isinstance(count, int) or not 1 <= count <= MAX_RANGE:
+            raise DescriptorError(f"{where}: COUNT in START:STOP:COUNT must be a whole number from 1 to {MAX_RANGE:,}")
+    else:
+        start, stop = numbers
+        if count is None:
+            raise DescriptorError(
+                f"{where}: a range needs a COUNT, START:STOP:COUNT (e.g. 4:12:5)"
+                + (", or --worlds N to spread START:STOP over N worlds" if flag == "--vary" else "")
+            )
+    if not all(abs(v) <= FLOAT_LIMIT for v in (start, stop)):
+        raise DescriptorError(f"{where}: the range's ends must be finite and at most {FLOAT_LIMIT:g} in size")
+    n = max(count - 1, 1)
+    values = [start + (stop - start) * k / n for k in range(count)]
+    if isinstance(start, int) and isinstance(stop, int):
+        values = [round(v) for v in values]
+    return values
+
+
+SWEEP_FIXED = ("scene", "worlds", "controls", "sweep")  # sections a sweep cannot vary
+
+
+def check_axis(where: str, descriptor: dict, section: str, key: str, values) -> list:
+    """Validate one sweep axis over a merged ``descriptor``: ``section.key`` takes each of ``values`` (a list,
+    or a range string ``START:STOP:COUNT``). Any key but those of ``[scene]`` may vary, and ``wind.speed``
+    [m/s] (the magnitude of ``wind.velocity``, direction kept). Returns the checked values."""
+    name = f"{section}.{key}"
+    if section in SWEEP_FIXED or section not in descriptor:
+        sections = [s for s in descriptor if s not in SWEEP_FIXED]
+        raise DescriptorError(
+            f"{where}: {name} cannot be swept: sweep keys of {', '.join(f'[{s}]' for s in sections)}"
+            + (" (the sweep's --seconds sets how long every case runs)" if section == "scene" else "")
+            + _suggest(section, sections)
+        )
+    keys = {**descriptor[section], **({"speed": 0.0} if section == "wind" else {})}
+    if key not in keys:
+        raise DescriptorError(
+            f"{where}: unknown key {name}{_suggest(key, keys)}; [{section}] keys are {', '.join(keys)}"
+        )
+    if isinstance(values, str):
+        values = _range_values(f"{where}: {name} = {values!r}", values, None, "sweep")
+    if not isinstance(values, list) or not values:
+        raise DescriptorError(f"{where}: {name} must list the values to sweep or be a range 'START:STOP:COUNT'")
+    checked = [_check_value(where, section, key, keys[key], v) for v in values]
+    if key == "speed" and min(checked) < 0.0:
+        raise DescriptorError(f"{where}: {name} must be >= 0 (a wind speed in m/s), got {min(checked)}")
+    if len({repr(v) for v in checked}) != len(checked):
+        raise DescriptorError(f"{where}: {name} lists a value twice ({values!r})")
+    return checked
+
+
+def _check_sweep(where: str, sweep, descriptor: dict) -> dict:
+    """Validate a ``[sweep]`` table (``section.key = [values]`` or ``"START:STOP:COUNT"``) against the merged
+    ``descriptor``."""
+    if not isinstance(sweep, dict):
+        raise DescriptorError(f"{where}: [sweep] must be a table of keys, e.g. wind.speed = [4.0, 8.0]")
+    out: dict = {}
+    for section, values in sweep.items():
+        if not isinstance(values, dict):
+            raise DescriptorError(f"{where}: sweep.{section} must name a key, e.g. sweep.wind.speed = [4.0, 8.0]")
+        for key, axis in values.items():
+            out.setdefault(section, {})[key] = check_axis(where, descriptor, section, key, axis)
+    if "speed" in out.get("wind", {}) and "velocity" in out.get("wind", {}):
+        raise DescriptorError(f"{where}: sweep wind.speed or wind.velocity, not both")
+    return out
 
 
 MAX_DEPTH = 8  # a descriptor's deepest nesting is 4 ([worlds] -> wind -> velocity -> numbers)

@@ -29,6 +29,7 @@ class Frame:
         kinetic_energy: total kinetic energy [J] of the free particles.
         controls: the controls in force while the frame's last steps ran, by name (what
             :meth:`warpsim.runner.Simulation.set_controls` takes; empty when none was set).
+        stretches: host ``[S]`` ``|l - r|/r`` of every stick (dimensionless; NaN where a position is not finite).
     """
 
     index: int
@@ -41,6 +42,7 @@ class Frame:
     worst_stick: int
     kinetic_energy: float
     controls: dict = field(default_factory=dict)
+    stretches: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def measure(model: Model, state: State, control: Control, dt: float, index: int, steps: int) -> Frame:
@@ -53,7 +55,8 @@ def measure(model: Model, state: State, control: Control, dt: float, index: int,
         stretch = float(stretches[worst_stick]) if len(stretches) else 0.0
         v = state.velocities(dt)
         energy = float(0.5 * np.sum(model.particle_free_mass * np.einsum("ij,ij->i", v, v)))
-    return Frame(index, state.time, steps, q, v, control.wind.numpy().copy(), stretch, worst_stick, energy)
+    wind = control.wind.numpy().copy()
+    return Frame(index, state.time, steps, q, v, wind, stretch, worst_stick, energy, stretches=stretches)
 
 
 def object_of(model: Model, particle: int) -> str:
@@ -72,14 +75,42 @@ def find_blowup(model: Model, frame: Frame, max_stretch: float) -> tuple[str, st
         p = int(np.flatnonzero(bad)[0])
         return object_of(model, p), f"particle {p} has a non-finite position or velocity ({bad.sum()} particles)"
     if max_stretch > 0.0 and not frame.worst_stretch <= max_stretch:  # NaN stretch counts as too much
-        k = frame.worst_stick
-        a, b = (int(i) for i in model.stick_particles_np[k])
-        return (
-            object_of(model, a),
-            f"stick {k} (particles {a}-{b}) is stretched {100 * frame.worst_stretch:.1f}% "
-            f"(limit solver.max_stretch = {100 * max_stretch:g}%)",
+        return object_of(model, int(model.stick_particles_np[frame.worst_stick][0])), _stretch_reason(
+            model, frame.worst_stick, frame.worst_stretch, max_stretch
         )
     return None
+
+
+def _stretch_reason(model: Model, stick: int, stretch: float, max_stretch: float) -> str:
+    a, b = (int(i) for i in model.stick_particles_np[stick])
+    return (
+        f"stick {stick} (particles {a}-{b}) is stretched {100 * stretch:.1f}% "
+        f"(limit solver.max_stretch = {100 * max_stretch:g}%)"
+    )
+
+
+def world_blowups(model: Model, frame: Frame, max_stretch: float) -> dict[int, str]:
+    """What is wrong in each world of ``frame`` that shows a blow-up, by world index (the worlds of a batch
+    never touch each other, so one world's blow-up leaves the others sound): a non-finite position or
+    velocity, or a stick of that world stretched past ``max_stretch`` (dimensionless; 0 = no limit)."""
+    world = model.particle_world_np
+    bad = ~(np.isfinite(frame.positions).all(axis=1) & np.isfinite(frame.velocities).all(axis=1))
+    problems: dict[int, str] = {}
+    for w in np.unique(world[bad]):
+        mine = np.flatnonzero(bad & (world == w))
+        problems[int(w)] = f"particle {mine[0]} has a non-finite position or velocity ({len(mine)} particles)"
+    if max_stretch > 0.0 and len(frame.stretches):
+        over = ~(frame.stretches <= max_stretch)  # NaN counts as too much
+        if over.any():
+            sticks = np.flatnonzero(over)
+            stick_world = world[model.stick_particles_np[sticks, 0]]
+            for w in np.unique(stick_world):
+                if int(w) in problems:
+                    continue
+                mine = sticks[stick_world == w]
+                k = int(mine[np.argmax(np.nan_to_num(frame.stretches[mine], nan=np.inf))])
+                problems[int(w)] = _stretch_reason(model, k, float(frame.stretches[k]), max_stretch)
+    return problems
 
 
 @dataclass
@@ -115,6 +146,62 @@ def object_metrics(model: Model, frame: Frame) -> ObjectMetrics:
     return ObjectMetrics(centre, altitude, velocity, airspeed)
 
 
+FIGURES: dict[str, tuple[str, tuple[str, ...] | None, str]] = {
+    "altitude": ("m", None, "height of the object's mass centre above the terrain under it"),
+    "airspeed": ("m/s", None, "speed of the mass centre relative to its world's wind"),
+    "sink": ("m/s", None, "descent speed of the mass centre (positive downwards)"),
+    "glide": (
+        "-",
+        ("hang-glider",),
+        "glide ratio: horizontal airspeed / sink of the mass centre (NaN unless it sinks faster than 0.05 m/s)",
+    ),
+    "bank": ("deg", ("hang-glider",), "bank of the sail, tip to tip against the horizontal, + = right tip lower"),
+    "line_angle": ("deg", ("kite",), "elevation of the line above the horizontal, from the anchor to the tow point"),
+    "line_pull": ("N", ("kite",), "|air force on the kite + its weight|, the steady line tension"),
+    "radius": ("m", ("parachute",), "mean horizontal distance of the canopy's rim from its centre"),
+}
+"""The figures :func:`object_figures` gives: name -> (unit, the object kinds that have it (None: all), meaning)."""
+
+
+def figure_names(kind: str) -> tuple[str, ...]:
+    """The :data:`FIGURES` an object of ``kind`` has, in table order."""
+    return tuple(name for name, (_, kinds, _) in FIGURES.items() if kinds is None or kind in kinds)
+
+
+def object_figures(model: Model, frame: Frame, tri_force: np.ndarray | None = None) -> list[dict[str, float]]:
+    """What a pilot or an observer reads off each object of ``frame``: one dict per object (in model order) of
+    the :data:`FIGURES` its kind has, as floats in their units. ``tri_force``: host ``[T, 3]`` air force per
+    triangle vertex [N] (the solver's ``tri_force``), needed for a kite's ``line_pull`` (NaN without it).
+    The heads-up display and the sweeps read their figures here, so each is computed one way."""
+    from .config import GRAVITY
+    from .objects.hang_glider import bank
+    from .objects.kite import line_state
+    from .objects.parachute import projected_radius
+
+    metrics = object_metrics(model, frame)
+    out = []
+    for k, record in enumerate(model.objects):
+        v = metrics.velocity[k]
+        sink = float(-v[2])
+        values = {"altitude": float(metrics.altitude[k]), "airspeed": float(metrics.airspeed[k]), "sink": sink}
+        if record.kind == "hang-glider":
+            horizontal = float(np.linalg.norm((v - frame.wind[record.world])[:2]))
+            values["glide"] = horizontal / sink if sink > 0.05 else float("nan")
+            values["bank"] = bank(record, frame.positions)
+        elif record.kind == "kite":
+            values["line_angle"] = line_state(record, frame.positions)["elevation_deg"]
+            values["line_pull"] = float("nan")
+            if tri_force is not None:
+                triangles = np.concatenate([np.asarray(t) for t in record.tri_parts.values()]).astype(np.int64)
+                mass = float(model.particle_free_mass[np.unique(model.tri_indices_np[triangles])].sum())
+                air = 3.0 * tri_force[triangles].sum(axis=0)  # tri_force is each vertex's third
+                values["line_pull"] = float(np.linalg.norm(air - np.array([0.0, 0.0, GRAVITY * mass])))
+        elif record.kind == "parachute":
+            values["radius"] = projected_radius(record, frame.positions)
+        out.append(values)
+    return out
+
+
 class GroundContacts:
     """The first time each object touches the terrain, for the run summary.
 
@@ -140,17 +227,24 @@ class GroundContacts:
         self._top = float(model.terrain.heights.max()) + self.CONTACT_DISTANCE
         self.first: dict[str, float] = {}  # object name -> first time [s] it touched the terrain
 
-    def note(self, frame: Frame) -> None:
-        """Record the objects that touch the terrain in ``frame`` for the first time."""
-        if len(self.first) == len(self.model.objects) or not len(self._ids):
-            return
+    def touching(self, frame: Frame) -> np.ndarray:
+        """``[K]`` bool: which objects touch the terrain in ``frame`` (their grounded parts and nails aside)."""
+        out = np.zeros(len(self.model.objects), dtype=bool)
+        if not len(self._ids):
+            return out
         z = frame.positions[self._ids, 2]
         low = np.flatnonzero(z < self._top)  # only those can touch: a cheap test first
-        if not len(low):
+        if len(low):
+            p = frame.positions[self._ids[low]]
+            touching = low[p[:, 2] - self.model.terrain.height(p[:, 0], p[:, 1]) < self.CONTACT_DISTANCE]
+            out[self._owner[touching]] = True
+        return out
+
+    def note(self, frame: Frame) -> None:
+        """Record the objects that touch the terrain in ``frame`` for the first time."""
+        if len(self.first) == len(self.model.objects):
             return
-        p = frame.positions[self._ids[low]]
-        touching = low[p[:, 2] - self.model.terrain.height(p[:, 0], p[:, 1]) < self.CONTACT_DISTANCE]
-        for k in np.unique(self._owner[touching]):
+        for k in np.flatnonzero(self.touching(frame)):
             self.first.setdefault(self.model.objects[int(k)].name, float(frame.time))
 
     def by_time(self) -> tuple[tuple[str, float], ...]:

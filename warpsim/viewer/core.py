@@ -16,8 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import GRAVITY
-from ..diagnostics import Frame, object_metrics
+from ..diagnostics import Frame, object_figures
 from ..io.style import COLOURS
 from ..runner import BlowUpError, Simulation
 from .backend import Backend, DrawList, View
@@ -482,35 +481,22 @@ class Viewer:
 
 def object_lines(sim: Simulation, frame: Frame) -> list[str]:
     """One heads-up line per object: altitude and airspeed, and per kind its own figures (glider: sink rate,
-    glide ratio, bank; kite: line angle and pull; parachute: descent speed and radius), and the worst stretch."""
-    from ..objects.hang_glider import bank
-    from ..objects.kite import line_state
-    from ..objects.parachute import projected_radius
-
+    glide ratio, bank; kite: line angle and pull; parachute: descent speed and radius; see
+    :func:`warpsim.diagnostics.object_figures`), and the worst stretch."""
     model = sim.model
-    metrics = object_metrics(model, frame)
-    tri_force = None
+    kites = any(record.kind == "kite" for record in model.objects)
+    figures = object_figures(model, frame, sim.solver.tri_force.numpy() if kites else None)
     lines = []
-    for k, record in enumerate(model.objects):
-        v = metrics.velocity[k]
-        sink = -v[2]
-        text = f"{record.name}: altitude {metrics.altitude[k]:6.1f} m  airspeed {metrics.airspeed[k]:5.1f} m/s"
+    for record, f in zip(model.objects, figures, strict=True):
+        text = f"{record.name}: altitude {f['altitude']:6.1f} m  airspeed {f['airspeed']:5.1f} m/s"
         if record.kind == "hang-glider":
-            angle = bank(record, frame.positions)
-            glide = f"{np.linalg.norm(v[:2]) / sink:4.1f}" if sink > 0.05 else " -- "
-            side = "right" if angle > 0.5 else "left" if angle < -0.5 else ""
-            text += f"  sink {sink:5.2f} m/s  glide {glide}  bank {abs(angle):3.0f} deg {side}"
+            glide = f"{f['glide']:4.1f}" if math.isfinite(f["glide"]) else " -- "
+            side = "right" if f["bank"] > 0.5 else "left" if f["bank"] < -0.5 else ""
+            text += f"  sink {f['sink']:5.2f} m/s  glide {glide}  bank {abs(f['bank']):3.0f} deg {side}"
         elif record.kind == "kite":
-            line = line_state(record, frame.positions)
-            if tri_force is None:
-                tri_force = sim.solver.tri_force.numpy()
-            triangles = np.concatenate([np.asarray(t) for t in record.tri_parts.values()]).astype(np.int64)
-            kite_mass = float(model.particle_free_mass[np.unique(model.tri_indices_np[triangles])].sum())
-            weight = np.array([0.0, 0.0, GRAVITY * kite_mass])
-            pull = np.linalg.norm(3.0 * tri_force[triangles].sum(axis=0) - weight)
-            text += f"  line {line['elevation_deg']:4.1f} deg  pull ~{pull:5.1f} N"
+            text += f"  line {f['line_angle']:4.1f} deg  pull ~{f['line_pull']:5.1f} N"
         elif record.kind == "parachute":
-            text += f"  descent {sink:5.2f} m/s  radius {projected_radius(record, frame.positions):4.2f} m"
+            text += f"  descent {f['sink']:5.2f} m/s  radius {f['radius']:4.2f} m"
         lines.append(text)
     lines.append(f"worst stick stretch {100 * frame.worst_stretch:.2f}%")
     return lines

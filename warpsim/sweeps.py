@@ -1,0 +1,843 @@
+"""Sweeps: every combination of a few settings of one scene, run over every core and over machines with Dask.
+
+A *case* is one combination of the swept values (the cartesian product of the axes, first axis slowest). Cases
+are cut into *chunks*; a chunk runs as one :class:`~warpsim.runner.Simulation` whose worlds are its cases (the
+batched worlds of ``--worlds``, one launch for all), and each chunk is one Dask task. The cluster is a
+``LocalCluster`` of single-threaded worker processes, one per core, unless a running scheduler is given.
+
+Every case gives one row: its swept values and its metrics (:data:`METRICS`, from the same
+:func:`warpsim.diagnostics.object_figures` the viewer's heads-up display reads). Worlds never touch each other
+and each world's gusts are seeded by its own ``wind.gust_seed``, so a case's row is bit for bit the same
+whatever the chunk size, the number of workers or the order they finish in. A case that blows up stops being
+measured at that frame and is a row saying when and why; the other cases of its chunk go on.
+
+Rows are kept as they come: with an output file, every finished chunk is appended to a journal beside it
+(``OUT.partial``, JSON lines) and the output is written when the sweep ends, is interrupted (Ctrl-C) or fails;
+running the same sweep again with the same output runs only the cases it does not hold yet.
+
+This is the only module that imports Dask; pandas and pyarrow come with it (the ``[sweep]`` extra).
+"""
+
+from __future__ import annotations
+
+import copy
+import itertools
+import json
+import math
+import os
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .descriptor import VARIABLE_SECTIONS, DescriptorError, check_axis, merge, parse_vary, to_toml
+from .diagnostics import FIGURES, figure_names
+
+__all__ = ["METRICS", "Axis", "ChunkTask", "SweepError", "SweepPlan", "metrics_of", "run_chunk", "sweep"]
+
+EXTRA_HINT = "pip install -e '.[sweep]'"
+MAX_CASES = 1_000_000
+MAX_CHUNK = 64  # worlds per task when the chunk size is chosen automatically
+ONE_THREAD = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+
+
+class SweepError(ValueError):
+    """A sweep a user asked for cannot run as given (bad axes, metrics, window or output); one line says why."""
+
+
+def require(module: str):
+    """Import ``module`` of the ``[sweep]`` extra, or raise :class:`SweepError` saying how to install it."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        name = {"distributed": "Dask", "dask": "Dask", "pyarrow": "pyarrow", "pandas": "pandas"}.get(
+            module.split(".")[0], module
+        )
+        raise SweepError(f"sweeps need {name}: {EXTRA_HINT}") from None
+
+
+def _metric_table() -> dict[str, tuple[str, tuple[str, ...] | None, str]]:
+    table: dict[str, tuple[str, tuple[str, ...] | None, str]] = {}
+    for name, (unit, kinds, meaning) in FIGURES.items():
+        for reduce in ("mean", "min", "max"):
+            table[f"{name}_{reduce}"] = (unit, kinds, f"{reduce} over the window of the {meaning}")
+    table.update(
+        {
+            "airborne": ("-", None, "share of the window's frames in which the object does not touch the terrain"),
+            "ground_time": ("s", None, "first time the object touched the terrain (NaN: never), whole run"),
+            "worst_stretch": ("-", None, "largest |l - r|/r of the case's sticks over the whole run"),
+            "window_frames": ("-", None, "frames measured in the window (fewer when the case blew up in it)"),
+            "blew_up": ("-", None, "true when the case blew up (or could not be built); always in the table"),
+            "blowup_time": ("s", None, "when it blew up (NaN: it did not); always in the table"),
+            "blowup_reason": ("-", None, "what was seen ('' when it did not blow up); always in the table"),
+        }
+    )
+    return table
+
+
+METRICS = _metric_table()
+"""Every metric a sweep can report: name -> (unit, object kinds that have it (None: all), meaning). The
+window is ``--window START:STOP`` [s] of simulated time (default: the second half of the run); a frame is
+measured ``scene.fps`` times per simulated second. Means, minima and maxima skip frames where a figure is
+undefined (a glide ratio while climbing)."""
+ALWAYS = ("blew_up", "blowup_time", "blowup_reason")
+
+
+def metrics_of(kind: str, names: Sequence[str] | None = None) -> tuple[str, ...]:
+    """The metric columns of a sweep of ``kind`` objects: ``names`` checked (any order; the blow-up columns
+    are added), or every metric the kind has. Raises :class:`SweepError` for a name it does not have."""
+    have = tuple(n for n, (_, kinds, _) in METRICS.items() if kinds is None or kind in kinds)
+    if names is None or not len(names):
+        return have
+    for name in names:
+        if name not in have:
+            import difflib
+
+            close = difflib.get_close_matches(name, have, n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            raise SweepError(f"--metrics: a {kind} has no metric {name!r}{hint}; it has {', '.join(have)}")
+    chosen = set(names) | set(ALWAYS)
+    return tuple(n for n in have if n in chosen)
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One swept key: ``section.key`` takes each of ``values`` in turn (checked against the descriptor)."""
+
+    section: str
+    key: str
+    values: tuple
+
+    @property
+    def name(self) -> str:
+        """``section.key``, also the axis's column in the results."""
+        return f"{self.section}.{self.key}"
+
+
+def parse_axes(descriptor: dict, items: Sequence[str] | dict, where: str = "--vary") -> list[Axis]:
+    """The sweep's axes: the descriptor's ``[sweep]`` table, then ``items`` (``--vary`` texts
+    ``KEY=START:STOP:COUNT`` or ``KEY=V1,V2,...``, or a dict ``{"section.key": values or "START:STOP:COUNT"}``),
+    which replace a ``[sweep]`` axis of the same key. Raises :class:`~warpsim.descriptor.DescriptorError`."""
+    axes: dict[str, Axis] = {}
+    for section, keys in descriptor.get("sweep", {}).items():
+        for key, values in keys.items():
+            axes[f"{section}.{key}"] = Axis(section, key, tuple(values))
+    pairs: list[tuple[str, str, object, str]] = []
+    if isinstance(items, dict):
+        for name, values in items.items():
+            parts = name.split(".") if isinstance(name, str) else []
+            if len(parts) != 2 or not all(parts):
+                raise DescriptorError(f"sweep axis {name!r}: the key must be section.key, e.g. wind.speed")
+            pairs.append((parts[0], parts[1], values, f"sweep axis {name}"))
+    else:
+        for text in items:
+            section, key, values = parse_vary(text, None, where)
+            pairs.append((section, key, values, f"{where} {text}"))
+    for section, key, values, origin in pairs:
+        axes[f"{section}.{key}"] = Axis(section, key, tuple(check_axis(origin, descriptor, section, key, values)))
+    names = set(axes)
+    if {"wind.speed", "wind.velocity"} <= names:
+        raise DescriptorError(f"{where}: sweep wind.speed or wind.velocity, not both")
+    if not axes:
+        raise DescriptorError(f"{where}: nothing to sweep: give --vary KEY=VALUES (or a [sweep] table in the scene)")
+    return list(axes.values())
+
+
+def _plain(value):
+    """A swept value as plain JSON data (NumPy scalars and arrays, as pandas gives them back, included)."""
+    if isinstance(value, np.ndarray):
+        return [_plain(v) for v in value.tolist()]
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def case_key(values: Sequence) -> str:
+    """A case's identity: its swept values as canonical JSON (what resuming matches rows by)."""
+    return json.dumps([_plain(v) for v in values])
+
+
+@dataclass
+class ChunkTask:
+    """One Dask task: the cases ``cases`` (plan indices) run as the worlds of ``descriptor``.
+
+    Attributes:
+        descriptor: the chunk's validated descriptor, ``[worlds]`` holding each case's per-world values.
+        cases: plan indices of the cases, in world order. columns: their swept values, by axis name.
+        seconds: simulated time [s]. window: ``(start, stop)`` [s] the window metrics cover.
+        metrics: metric columns to report. device: Warp device. h5: recording to write, or None.
+    """
+
+    descriptor: dict
+    cases: list[int]
+    columns: list[dict]
+    seconds: float
+    window: tuple[float, float]
+    metrics: tuple[str, ...]
+    device: str = "cpu"
+    h5: str | None = None
+
+    def single(self, k: int) -> ChunkTask:
+        """The task of this chunk's ``k``-th case alone."""
+        worlds = {"count": 1}
+        for section, values in self.descriptor["worlds"].items():
+            if section != "count":
+                worlds[section] = {key: [per[k]] for key, per in values.items()}
+        descriptor = copy.deepcopy(self.descriptor)
+        descriptor["worlds"] = worlds
+        return ChunkTask(
+            descriptor, [self.cases[k]], [self.columns[k]], self.seconds, self.window, self.metrics, self.device
+        )
+
+
+class SweepPlan:
+    """The cases of a sweep and how they are cut into tasks.
+
+    Args:
+        descriptor: the scene's validated descriptor (without ``[worlds]``; its ``[sweep]`` is not read here).
+        axes: the swept keys (:func:`parse_axes`).
+        seconds: simulated time of every case [s] (default: the scene's).
+        window: ``(start, stop)`` [s] of the window metrics (default: the second half of the run).
+        metrics: metric names (default: all the object has; see :func:`metrics_of`).
+    """
+
+    def __init__(
+        self,
+        descriptor: dict,
+        axes: Sequence[Axis],
+        seconds: float | None = None,
+        window: tuple[float, float] | None = None,
+        metrics: Sequence[str] | None = None,
+    ):
+        if descriptor.get("worlds", {}).get("count", 1) != 1:
+            raise SweepError("a sweep makes its own worlds: remove [worlds] from the scene (use --vary instead)")
+        self.base = {k: copy.deepcopy(v) for k, v in descriptor.items() if k not in ("sweep",)}
+        self.kind = descriptor["scene"]["object"]
+        self.axes = list(axes)
+        self.seconds = float(seconds if seconds is not None else descriptor["scene"]["seconds"])
+        if not (self.seconds > 0 and math.isfinite(self.seconds)):
+            raise SweepError(f"--seconds must be a positive number, got {self.seconds}")
+        self.window = (self.seconds / 2, self.seconds) if window is None else (float(window[0]), float(window[1]))
+        start, stop = self.window
+        if not (0.0 <= start <= stop <= self.seconds):
+            raise SweepError(
+                f"--window {start:g}:{stop:g} must lie within the run, 0 <= START <= STOP <= {self.seconds:g} s"
+            )
+        self.metrics = metrics_of(self.kind, metrics)
+        count = math.prod(len(a.values) for a in self.axes)
+        if count > MAX_CASES:
+            raise SweepError(f"{count:,} cases is more than a sweep takes ({MAX_CASES:,}); sweep fewer values")
+        self.cases = list(itertools.product(*(a.values for a in self.axes)))
+        variable = (_object_section(self.kind), *VARIABLE_SECTIONS)
+        self._per_world = [a.section in variable for a in self.axes]
+
+    @property
+    def columns(self) -> list[str]:
+        """The result table's columns: the swept keys, then the metrics."""
+        return [a.name for a in self.axes] + list(self.metrics)
+
+    def key(self, index: int) -> str:
+        """The identity of case ``index`` (:func:`case_key`)."""
+        return case_key(self.cases[index])
+
+    def definition(self) -> dict:
+        """What must match for rows of an earlier run to count as rows of this sweep (the swept values aside:
+        a sweep may gain values and keep the rows it has)."""
+        return {
+            "scene": to_toml(self.base),
+            "seconds": self.seconds,
+            "window": list(self.window),
+            "axes": [a.name for a in self.axes],
+            "metrics": list(self.metrics),
+        }
+
+    def case_descriptor(self, index: int) -> dict:
+        """The descriptor of case ``index`` run alone (one world)."""
+        return self._chunk_descriptor([index])
+
+    def _chunk_descriptor(self, indices: Sequence[int]) -> dict:
+        shared: dict = {}
+        worlds: dict = {"count": len(indices)}
+        for a, (axis, per_world) in enumerate(zip(self.axes, self._per_world, strict=True)):
+            if per_world:
+                worlds.setdefault(axis.section, {})[axis.key] = [self.cases[i][a] for i in indices]
+            else:  # one value for the whole chunk: its cases share it (see chunks)
+                shared.setdefault(axis.section, {})[axis.key] = self.cases[indices[0]][a]
+        return merge("sweep", self.base, {**shared, "worlds": worlds})
+
+    def chunks(
+        self, size: int, skip: set[int] = frozenset(), device: str = "cpu", h5_dir: Path | None = None
+    ) -> list[ChunkTask]:
+        """The tasks of every case not in ``skip``, ``size`` cases each at most. Cases that differ in a key one
+        launch cannot vary between worlds (solver, air, terrain, ground) go to different chunks."""
+        groups: dict[tuple, list[int]] = {}
+        for i, values in enumerate(self.cases):
+            if i in skip:
+                continue
+            shared = tuple(case_key([v]) for v, per in zip(values, self._per_world, strict=True) if not per)
+            groups.setdefault(shared, []).append(i)
+        tasks = []
+        for members in groups.values():
+            for start in range(0, len(members), size):
+                indices = members[start : start + size]
+                columns = [{a.name: self.cases[i][k] for k, a in enumerate(self.axes)} for i in indices]
+                h5 = str(Path(h5_dir) / f"cases-{indices[0]:06d}-{indices[-1]:06d}.h5") if h5_dir else None
+                tasks.append(
+                    ChunkTask(
+                        self._chunk_descriptor(indices),
+                        indices,
+                        columns,
+                        self.seconds,
+                        self.window,
+                        self.metrics,
+                        device,
+                        h5,
+                    )
+                )
+        return tasks
+
+
+def _object_section(kind: str) -> str:
+    from .objects import registry
+
+    return registry.section(kind)
+
+
+# ---------------------------------------------------------------------------------------------------- one task
+
+
+class _Accumulator:
+    """Window means, minima and maxima of each world's figures, the share of frames airborne, the first ground
+    contact and the worst stretch, for ``count`` worlds (float64, frame order: the same sums for a case
+    whatever chunk it runs in)."""
+
+    def __init__(self, count: int, figures: Sequence[str]):
+        self.figures = list(figures)
+        self.sum = np.zeros((len(figures), count))
+        self.n = np.zeros((len(figures), count))
+        self.low = np.full((len(figures), count), np.inf)
+        self.high = np.full((len(figures), count), -np.inf)
+        self.frames = np.zeros(count, dtype=np.int64)
+        self.airborne = np.zeros(count, dtype=np.int64)
+        self.ground_time = np.full(count, np.nan)
+        self.worst = np.zeros(count)
+
+    def add(self, values: np.ndarray, live: np.ndarray, in_window: bool, touching: np.ndarray, t: float) -> None:
+        """Add one frame: ``values`` ``[F, count]`` figures, for the ``live`` worlds."""
+        first = live & touching & np.isnan(self.ground_time)
+        self.ground_time[first] = t
+        if not in_window:
+            return
+        self.frames[live] += 1
+        self.airborne[live & ~touching] += 1
+        ok = np.isfinite(values) & live[None, :]
+        self.sum += np.where(ok, values, 0.0)
+        self.n += ok
+        self.low = np.where(ok, np.minimum(self.low, values), self.low)
+        self.high = np.where(ok, np.maximum(self.high, values), self.high)
+
+    def row(self, k: int) -> dict:
+        """The metrics of world ``k``."""
+        out: dict = {}
+        for f, name in enumerate(self.figures):
+            n = self.n[f, k]
+            out[f"{name}_mean"] = self.sum[f, k] / n if n else math.nan
+            out[f"{name}_min"] = self.low[f, k] if n else math.nan
+            out[f"{name}_max"] = self.high[f, k] if n else math.nan
+        frames = int(self.frames[k])
+        out["airborne"] = self.airborne[k] / frames if frames else math.nan
+        out["ground_time"] = float(self.ground_time[k])
+        out["worst_stretch"] = float(self.worst[k])
+        out["window_frames"] = frames
+        return {key: float(v) if isinstance(v, np.floating) else v for key, v in out.items()}
+
+
+def _failed_rows(task: ChunkTask, reason: str) -> list[dict]:
+    rows = []
+    for columns in task.columns:
+        row = {name: math.nan for name in task.metrics}
+        row.update(columns, blew_up=True, blowup_time=0.0, blowup_reason=reason)
+        if "window_frames" in row:
+            row["window_frames"] = 0
+        rows.append(row)
+    return rows
+
+
+def run_chunk(task: ChunkTask) -> list[dict]:
+    """Run one chunk and return one row per case (swept values and metrics, see :data:`METRICS`), in the
+    order of ``task.cases``. What a Dask worker calls; also callable directly, in this process.
+
+    A chunk that cannot be built (a case whose values make an unsound object) is run case by case, so only the
+    faulty case is a row saying so; a case that blows up stops being measured at that frame.
+    """
+    from . import _warp
+
+    _warp.init()
+    from .diagnostics import GroundContacts, object_figures, world_blowups
+    from .runner import Simulation
+
+    try:
+        sim = Simulation(task.descriptor, device=task.device, where="sweep case")
+    except DescriptorError as err:
+        if len(task.cases) == 1:
+            return _failed_rows(task, f"not built: {err}")
+        return [row for k in range(len(task.cases)) for row in run_chunk(task.single(k))]
+    model = sim.model
+    count = model.world_count
+    figures = list(figure_names(sim.descriptor["scene"]["object"]))
+    acc = _Accumulator(count, figures)
+    contacts = GroundContacts(model)
+    stick_world = model.particle_world_np[model.stick_particles_np[:, 0]] if model.stick_count else np.zeros(0, int)
+    max_stretch = sim.settings.solver.max_stretch
+    needs_force = any(r.kind == "kite" for r in model.objects)
+    live = np.ones(count, dtype=bool)
+    blew = [(math.nan, "")] * count
+    recorder = _chunk_recorder(task, sim)
+    total = int(round(task.seconds / sim.dt))
+    spf = sim.steps_per_frame
+    start, stop = task.window
+    eps = 0.25 * sim.dt  # frame times are sums of dt: compare with a margin
+    index = 0
+    try:
+        frame = sim.frame(0)
+        while True:
+            problems = world_blowups(model, frame, max_stretch)
+            for w, reason in problems.items():
+                if live[w]:
+                    live[w] = False
+                    blew[w] = (frame.time, f"{reason} (at t = {frame.time:.4f} s)")
+            if len(frame.stretches):
+                per_world = np.zeros(count)
+                np.maximum.at(per_world, stick_world, np.nan_to_num(frame.stretches, nan=0.0))
+                acc.worst = np.where(live, np.maximum(acc.worst, per_world), acc.worst)
+            found = object_figures(model, frame, sim.solver.tri_force.numpy() if needs_force else None)
+            values = np.array([[f[name] for f in found] for name in figures], dtype=np.float64)
+            in_window = start - eps <= frame.time <= stop + eps
+            acc.add(values, live, in_window, contacts.touching(frame), frame.time)
+            if recorder is not None:
+                recorder.write(frame)
+            if sim.steps_taken >= total or not live.any():
+                break
+            sim.apply_schedule()
+            sim.step(min(spf, total - sim.steps_taken))
+            index += 1
+            frame = sim.frame(index)
+    finally:
+        if recorder is not None:
+            recorder.close()
+    rows = []
+    for k, columns in enumerate(task.columns):
+        row = {**columns, **acc.row(k)}
+        row["blew_up"] = not bool(live[k])
+        row["blowup_time"], row["blowup_reason"] = blew[k]
+        rows.append({name: row[name] for name in (*columns, *task.metrics)})
+    return rows
+
+
+def _chunk_recorder(task: ChunkTask, sim):
+    """The chunk's recording (``--h5-dir``), written afresh (a retried task starts it again), or None."""
+    if not task.h5:
+        return None
+    from .io.hdf5 import H5Recorder
+
+    path = Path(task.h5)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.unlink(missing_ok=True)
+    return H5Recorder(path, sim.model, sim.descriptor, sim.checkpoint, to_toml(sim.descriptor), "warpsim sweep")
+
+
+# ---------------------------------------------------------------------------------------------------- the rows
+
+
+class _Results:
+    """The rows of a sweep: those an earlier run of it left in ``out`` (and its journal), and those this run
+    adds. Without ``out`` they live in memory only."""
+
+    def __init__(self, out: Path | None, plan: SweepPlan, restart: bool = False):
+        self.out, self.plan = out, plan
+        self.rows: dict[str, dict] = {}
+        self.journal = None
+        if out is None:
+            return
+        self.format = _format_of(out)
+        if self.format == "parquet":
+            require("pyarrow")
+        self.partial = out.with_name(out.name + ".partial")
+        self.sidecar = out.with_name(out.name + ".json")
+        definition = plan.definition()
+        if restart:
+            for path in (self.partial, out, self.sidecar):
+                path.unlink(missing_ok=True)
+        if out.exists():
+            found, rows = self._read_output()
+            self._check(found, definition, out)
+            self._keep(rows)
+        if self.partial.exists():
+            found, rows = self._read_journal()
+            self._check(found, definition, self.partial)
+            self._keep(rows)
+        self.journal = open(self.partial, "a" if self.partial.exists() else "w", encoding="utf-8")  # noqa: SIM115
+        if self.journal.tell() == 0:
+            self._append({"definition": definition})
+
+    def _keep(self, rows: list[dict]) -> None:
+        names = [a.name for a in self.plan.axes]
+        for row in rows:
+            self.rows[case_key([row[n] for n in names])] = row
+
+    @staticmethod
+    def _check(found: dict | None, definition: dict, path: Path) -> None:
+        if found is None:
+            raise SweepError(f"{path} is not the output of a warpsim sweep; choose another --out")
+        for key in ("scene", "seconds", "window", "axes", "metrics"):
+            if found.get(key) != definition[key]:
+                what = {"scene": "the scene or its settings", "axes": "the swept keys"}.get(key, f"the {key}")
+                raise SweepError(
+                    f"{path} holds a sweep with other {what}; choose another --out, or --restart to replace it"
+                )
+
+    def _read_output(self) -> tuple[dict | None, list[dict]]:
+        pd = require("pandas")
+        try:
+            if self.format == "parquet":
+                import pyarrow.parquet as pq
+
+                table = pq.read_table(self.out)
+                meta = (table.schema.metadata or {}).get(b"warpsim.sweep")
+                frame = table.to_pandas()
+                found = json.loads(meta) if meta else None
+            else:
+                frame = pd.read_csv(self.out, float_precision="round_trip")
+                found = json.loads(self.sidecar.read_text(encoding="utf-8")) if self.sidecar.exists() else None
+        except (OSError, ValueError) as err:
+            raise SweepError(f"{self.out} cannot be read as a sweep's table ({err}); choose another --out") from None
+        if found is not None and "blowup_reason" in frame:
+            frame["blowup_reason"] = frame["blowup_reason"].fillna("").astype(str)
+        return found, [{k: _plain(v) for k, v in row.items()} for row in frame.to_dict("records")]
+
+    def _read_journal(self) -> tuple[dict | None, list[dict]]:
+        found, rows = None, []
+        with open(self.partial, encoding="utf-8") as journal:
+            for number, line in enumerate(journal):
+                try:
+                    item = json.loads(line)
+                except ValueError:  # a line cut by a crash: the rows before it are whole
+                    break
+                if number == 0:
+                    found = item.get("definition") if isinstance(item, dict) else None
+                elif isinstance(item, dict):
+                    rows.append(item)
+        return found, rows
+
+    def _append(self, item: dict) -> None:
+        self.journal.write(json.dumps(item) + "\n")
+        self.journal.flush()
+        os.fsync(self.journal.fileno())
+
+    def done(self, index: int) -> bool:
+        """True when case ``index`` of the plan has a row already."""
+        return self.plan.key(index) in self.rows
+
+    def add(self, rows: list[dict]) -> None:
+        """Keep ``rows`` (and journal them, so that a crash loses none)."""
+        for row in rows:
+            row = {k: _plain(v) for k, v in row.items()}
+            self._keep([row])
+            if self.journal is not None:
+                self._append(row)
+
+    def frame(self):
+        """The rows as a pandas DataFrame: the plan's cases in plan order, then rows of values no longer swept."""
+        pd = require("pandas")
+        order = {self.plan.key(i): i for i in range(len(self.plan.cases))}
+        keys = sorted(self.rows, key=lambda k: (k not in order, order.get(k, 0)))
+        table = pd.DataFrame([self.rows[k] for k in keys], columns=self.plan.columns)
+        if "window_frames" in table:
+            table["window_frames"] = table["window_frames"].astype("int64")
+        table["blew_up"] = table["blew_up"].astype(bool)
+        table.attrs["warpsim.sweep"] = self.plan.definition()
+        return table
+
+    def finish(self):
+        """Write the output (atomically: a temporary file renamed over it) and drop the journal; returns the
+        DataFrame."""
+        table = self.frame()
+        if self.journal is not None:
+            self.journal.close()
+            self.journal = None
+            tmp = self.out.with_name(f".{self.out.name}.tmp")
+            meta = json.dumps(self.plan.definition())
+            if self.format == "parquet":
+                import pyarrow as pa
+                import pyarrow.parquet as pq
+
+                arrow = pa.Table.from_pandas(table, preserve_index=False)
+                arrow = arrow.replace_schema_metadata({**(arrow.schema.metadata or {}), b"warpsim.sweep": meta})
+                pq.write_table(arrow, tmp)
+            else:
+                table.to_csv(tmp, index=False)
+                self.sidecar.write_text(meta, encoding="utf-8")
+            os.replace(tmp, self.out)
+            self.partial.unlink(missing_ok=True)
+        return table
+
+
+def _format_of(out: Path) -> str:
+    suffix = out.suffix.lower()
+    if suffix in (".parquet", ".pq"):
+        return "parquet"
+    if suffix == ".csv":
+        return "csv"
+    raise SweepError(f"--out {out}: write a .parquet (pandas, polars, DuckDB, Spark read it) or a .csv table")
+
+
+# ---------------------------------------------------------------------------------------------------- Dask
+
+
+def _ignore_interrupt_plugin():
+    """A worker plugin for the local cluster: Ctrl-C in the terminal reaches every process of its group, the
+    workers included; they ignore it, and the sweep itself stops them cleanly."""
+    from dask.distributed import WorkerPlugin
+
+    class IgnoreInterrupt(WorkerPlugin):
+        name = "warpsim-ignore-interrupt"
+
+        def setup(self, worker):
+            import signal
+            import threading
+
+            if threading.current_thread() is threading.main_thread():
+                signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+    return IgnoreInterrupt()
+
+
+def _warm_kernels(tasks: Sequence[ChunkTask], device: str) -> None:
+    """Compile (or load) the kernels once here, before the workers start, so that they all read Warp's cache
+    instead of compiling the same modules side by side: one world of each kind of chunk (a chunk kind differs
+    in solver, air, terrain or ground settings)."""
+    from . import _warp
+
+    _warp.init()
+    from .runner import Simulation
+
+    seen = set()
+    for task in tasks:
+        key = json.dumps({k: v for k, v in task.descriptor.items() if k not in ("worlds",) and k in _SHARED})
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            Simulation(task.single(0).descriptor, device=device)
+        except DescriptorError:  # a case that cannot be built: its row will say so
+            pass
+
+
+_SHARED = ("solver", "air", "terrain", "ground")
+
+
+@dataclass
+class SweepOutcome:
+    """What :func:`run_sweep` did. ``table``: the rows (pandas DataFrame); ``ran``: cases run now;
+    ``kept``: cases already done before; ``wall``: seconds; ``workers``: worker threads used;
+    ``interrupted``: stopped by Ctrl-C (the rows finished so far are kept)."""
+
+    table: object
+    ran: int
+    kept: int
+    wall: float
+    workers: int
+    interrupted: bool = False
+    failures: list = field(default_factory=list)
+
+
+def run_sweep(
+    plan: SweepPlan,
+    out: Path | None = None,
+    workers: int | None = None,
+    scheduler=None,
+    chunk: int | None = None,
+    device: str = "cpu",
+    h5_dir: Path | None = None,
+    restart: bool = False,
+    on_progress: Callable[[int, int, float], None] | None = None,
+) -> SweepOutcome:
+    """Run the cases of ``plan`` that ``out`` does not hold yet on a Dask cluster and keep their rows.
+
+    Args:
+        plan: the sweep. out: ``.parquet`` or ``.csv`` table (None: keep the rows in memory only).
+        workers: worker processes of the local cluster (default: one per core); not with ``scheduler``.
+        scheduler: address of a running Dask scheduler (``tcp://HOST:8786``) or a ``distributed.Client``.
+        chunk: cases per task (default: about four tasks per worker, at most :data:`MAX_CHUNK`).
+        device: Warp device of the workers. h5_dir: write one recording per chunk there.
+        restart: forget the rows ``out`` holds and run every case again.
+        on_progress: ``(cases done, cases to run, wall seconds)``, after every chunk.
+
+    Ctrl-C (``KeyboardInterrupt``) stops the sweep: the finished rows are written and the outcome says
+    ``interrupted``.
+    """
+    require("distributed")
+    results = _Results(out, plan, restart)
+    todo = [i for i in range(len(plan.cases)) if not results.done(i)]
+    started = time.perf_counter()
+    interrupted, failures = False, []
+    client = cluster = None
+    own_client, used = False, 0
+    try:
+        if todo:
+            client, own_client, used = _connect(scheduler, workers)
+            size = chunk or max(1, min(MAX_CHUNK, math.ceil(len(todo) / (4 * max(used, 1)))))
+            tasks = plan.chunks(size, set(range(len(plan.cases))) - set(todo), device, h5_dir)
+            if client is None:  # the local cluster: kernels compiled once, here, then the workers start
+                _warm_kernels(tasks, device)
+                client, cluster = _local_cluster(used)
+                own_client = True
+            _run_tasks(client, tasks, results, len(todo), started, on_progress)
+    except KeyboardInterrupt:
+        interrupted = True
+    except SweepError:
+        raise
+    except Exception as err:  # a task that failed for good (e.g. it killed its workers again and again)
+        failures.append(err)
+    finally:
+        if own_client:
+            _close(client, cluster)
+        table = results.finish()
+    ran = sum(1 for i in todo if results.done(i))
+    outcome = SweepOutcome(table, ran, len(plan.cases) - len(todo), time.perf_counter() - started, used, interrupted)
+    outcome.failures = failures
+    return outcome
+
+
+def _connect(scheduler, workers: int | None):
+    """``(client, whether this sweep made it, worker threads)`` for a running ``scheduler``; ``(None, False,
+    worker processes to start)`` for the local cluster."""
+    if scheduler is None:
+        if workers is not None:
+            return None, False, workers
+        return None, False, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    from dask.distributed import Client
+
+    if workers is not None:
+        raise SweepError("--workers sizes the local cluster; a --scheduler's cluster has the workers it has")
+    if isinstance(scheduler, Client):
+        return scheduler, False, sum(scheduler.nthreads().values())
+    try:
+        client = Client(scheduler, timeout="10s")
+    except (OSError, TimeoutError, ValueError) as err:
+        raise SweepError(f"--scheduler {scheduler}: cannot connect ({err})") from None
+    return client, True, sum(client.nthreads().values())
+
+
+def _local_cluster(count: int):
+    """A ``LocalCluster`` of ``count`` single-threaded worker processes (NumPy/BLAS on one thread each), and
+    its client."""
+    import logging
+
+    from dask.distributed import Client, LocalCluster
+
+    cluster = LocalCluster(
+        n_workers=count,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,
+        silence_logs=logging.ERROR,
+        env=ONE_THREAD,
+    )
+    client = Client(cluster)
+    client.register_plugin(_ignore_interrupt_plugin())
+    return client, cluster
+
+
+def _run_tasks(client, tasks: list[ChunkTask], results: _Results, total: int, started: float, on_progress) -> None:
+    import uuid
+
+    from dask.distributed import as_completed
+
+    token = uuid.uuid4().hex[:8]  # task keys unique on a shared scheduler
+    futures = [
+        client.submit(run_chunk, task, key=f"warpsim-cases-{task.cases[0]}-{task.cases[-1]}-{token}", retries=2)
+        for task in tasks
+    ]
+    done = 0
+    try:
+        for _, rows in as_completed(futures, with_results=True):
+            results.add(rows)
+            done += len(rows)
+            if on_progress is not None:
+                on_progress(done, total, time.perf_counter() - started)
+    finally:
+        client.cancel(futures)
+
+
+def _close(client, cluster) -> None:
+    """Close this sweep's client and local cluster (quietly: they may be half gone after Ctrl-C)."""
+    import contextlib
+
+    if client is not None:
+        with contextlib.suppress(Exception):
+            client.close(timeout=5)
+    if cluster is not None:
+        with contextlib.suppress(Exception):
+            cluster.close(timeout=10)
+
+
+# ---------------------------------------------------------------------------------------------------- the API
+
+
+def sweep(
+    scene: str | dict,
+    axes: dict | Sequence[str] = (),
+    *,
+    seconds: float | None = None,
+    window: tuple[float, float] | None = None,
+    metrics: Sequence[str] | None = None,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    scheduler=None,
+    chunk: int | None = None,
+    device: str = "cpu",
+    h5_dir: str | Path | None = None,
+    restart: bool = False,
+):
+    """Sweep a scene over every combination of ``axes`` and return one row per case (a pandas DataFrame).
+
+    Args:
+        scene: a built-in object name, a scene name or ``.toml`` path, or a validated descriptor (dict).
+        axes: ``{"section.key": [values] or "START:STOP:COUNT"}`` or ``--vary`` texts
+            (``"kite.tow_point=0.2:0.5:4"``); added to the scene's ``[sweep]`` table.
+        seconds: simulated time of every case [s] (default: the scene's).
+        window: ``(start, stop)`` [s] of simulated time the window metrics cover (default: the second half).
+        metrics: metric names (default: all, see :data:`METRICS`).
+        out: ``.parquet`` / ``.csv`` file that keeps the rows; cases it already holds are not run again.
+        workers, scheduler, chunk, device, h5_dir, restart: see :func:`run_sweep`.
+
+    Example: ``warpsim.sweep("kite", {"kite.tow_point": "0.2:0.5:4", "wind.speed": [4, 8, 12]}, seconds=20)``.
+    Raises :class:`SweepError` or :class:`~warpsim.descriptor.DescriptorError` for a sweep that cannot run, and
+    ``KeyboardInterrupt`` after keeping the finished rows when interrupted.
+    """
+    if isinstance(scene, str):
+        from .descriptor import resolve
+
+        descriptor = resolve(scene, _scene_dirs())[0]
+    else:
+        descriptor = scene
+    plan = SweepPlan(descriptor, parse_axes(descriptor, axes), seconds, window, metrics)
+    outcome = run_sweep(plan, Path(out) if out else None, workers, scheduler, chunk, device, h5_dir, restart)
+    if outcome.interrupted:
+        raise KeyboardInterrupt
+    if outcome.failures:
+        raise outcome.failures[0]
+    return outcome.table
+
+
+def _scene_dirs() -> list[Path]:
+    from .cli import scene_dirs
+
+    return scene_dirs()

@@ -32,6 +32,7 @@ _EXPORTS = {
     "State": "model",
     "WindConfig": "config",
     "make_solver": "solver",
+    "sweep": "sweeps",
 }
 
 __all__ = [*sorted(_EXPORTS), "__version__"]

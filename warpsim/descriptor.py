@@ -209,10 +209,30 @@ def _check_worlds(where: str, worlds, descriptor: dict) -> dict:
             if not isinstance(per_world, list) or len(per_world) != count:
                 raise DescriptorError(f"{where}: {name} must list one value per world ({count}), got {per_world!r}")
             checked = [_check_value(where, section, key, keys[key], v) for v in per_world]
-            if key == "speed" and min(checked) < 0.0:
-                raise DescriptorError(f"{where}: {name} must be >= 0 (a wind speed in m/s), got {min(checked)}")
+            if section == "wind" and key == "speed":
+                _check_speeds(where, name, descriptor, checked)
             out.setdefault(section, {})[key] = checked
     return out
+
+
+def _wind_direction(velocity) -> list[float]:
+    """The unit vector of ``velocity`` (+x when it is zero): what ``wind.speed`` scales."""
+    norm = sum(v * v for v in velocity) ** 0.5
+    return [v / norm for v in velocity] if norm > 0 else [1.0, 0.0, 0.0]
+
+
+def _check_speeds(where: str, name: str, descriptor: dict, speeds: list) -> None:
+    """Each wind speed [m/s] of ``speeds`` must be >= 0 and give a ``wind.velocity`` within its bounds."""
+    if min(speeds) < 0.0:
+        raise DescriptorError(f"{where}: {name} must be >= 0 (a wind speed in m/s), got {min(speeds)}")
+    direction = _wind_direction(descriptor["wind"]["velocity"])
+    limits = bounds("wind", "velocity")
+    for speed in speeds:
+        velocity = [speed * d for d in direction]
+        problem = next(filter(None, (limits.violation(v) for v in velocity)), None) if limits else None
+        if problem:
+            shown = ", ".join(f"{v:g}" for v in velocity)
+            raise DescriptorError(f"{where}: {name} = {speed:g} gives wind.velocity = [{shown}], which {problem}")
 
 
 def world_descriptor(descriptor: dict, world: int) -> dict:
@@ -223,9 +243,7 @@ def world_descriptor(descriptor: dict, world: int) -> dict:
             continue
         for key, per_world in values.items():
             if section == "wind" and key == "speed":
-                velocity = out["wind"]["velocity"]
-                norm = sum(v * v for v in velocity) ** 0.5
-                direction = [v / norm for v in velocity] if norm > 0 else [1.0, 0.0, 0.0]
+                direction = _wind_direction(out["wind"]["velocity"])
                 out["wind"]["velocity"] = [per_world[world] * v for v in direction]
             else:
                 out[section][key] = copy.deepcopy(per_world[world])
@@ -340,8 +358,8 @@ def check_axis(where: str, descriptor: dict, section: str, key: str, values) -> 
     if not isinstance(values, list) or not values:
         raise DescriptorError(f"{where}: {name} must list the values to sweep or be a range 'START:STOP:COUNT'")
     checked = [_check_value(where, section, key, keys[key], v) for v in values]
-    if key == "speed" and min(checked) < 0.0:
-        raise DescriptorError(f"{where}: {name} must be >= 0 (a wind speed in m/s), got {min(checked)}")
+    if section == "wind" and key == "speed":
+        _check_speeds(where, name, descriptor, checked)
     if len({repr(v) for v in checked}) != len(checked):
         raise DescriptorError(f"{where}: {name} lists a value twice ({values!r})")
     return checked

@@ -92,24 +92,33 @@ def _stretch_reason(model: Model, stick: int, stretch: float, max_stretch: float
 def world_blowups(model: Model, frame: Frame, max_stretch: float) -> dict[int, str]:
     """What is wrong in each world of ``frame`` that shows a blow-up, by world index (the worlds of a batch
     never touch each other, so one world's blow-up leaves the others sound): a non-finite position or
-    velocity, or a stick of that world stretched past ``max_stretch`` (dimensionless; 0 = no limit)."""
+    velocity, or a stick of that world stretched past ``max_stretch`` (dimensionless; 0 = no limit). Particles
+    and sticks are numbered within their world, so a world says the same whatever batch it runs in."""
     world = model.particle_world_np
+    first_particle = np.searchsorted(world, np.arange(model.world_count))  # worlds are built one after another
     bad = ~(np.isfinite(frame.positions).all(axis=1) & np.isfinite(frame.velocities).all(axis=1))
     problems: dict[int, str] = {}
     for w in np.unique(world[bad]):
         mine = np.flatnonzero(bad & (world == w))
-        problems[int(w)] = f"particle {mine[0]} has a non-finite position or velocity ({len(mine)} particles)"
+        problems[int(w)] = (
+            f"particle {mine[0] - first_particle[w]} has a non-finite position or velocity ({len(mine)} particles)"
+        )
     if max_stretch > 0.0 and len(frame.stretches):
         over = ~(frame.stretches <= max_stretch)  # NaN counts as too much
         if over.any():
+            stick_world = world[model.stick_particles_np[:, 0]]
+            first_stick = np.searchsorted(stick_world, np.arange(model.world_count))
             sticks = np.flatnonzero(over)
-            stick_world = world[model.stick_particles_np[sticks, 0]]
-            for w in np.unique(stick_world):
+            for w in np.unique(stick_world[sticks]):
                 if int(w) in problems:
                     continue
-                mine = sticks[stick_world == w]
+                mine = sticks[stick_world[sticks] == w]
                 k = int(mine[np.argmax(np.nan_to_num(frame.stretches[mine], nan=np.inf))])
-                problems[int(w)] = _stretch_reason(model, k, float(frame.stretches[k]), max_stretch)
+                a, b = (int(i) - first_particle[w] for i in model.stick_particles_np[k])
+                problems[int(w)] = (
+                    f"stick {k - first_stick[w]} (particles {a}-{b}) is stretched {100 * frame.stretches[k]:.1f}% "
+                    f"(limit solver.max_stretch = {100 * max_stretch:g}%)"
+                )
     return problems
 
 

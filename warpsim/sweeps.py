@@ -463,6 +463,8 @@ class _Results:
         self.out, self.plan = out, plan
         self.rows: dict[str, dict] = {}
         self.journal = None
+        self.restart, self.added = restart, 0
+        self.journal_size = 0  # bytes of whole lines in an earlier run's journal (a crash may cut the last)
         if out is None:
             return
         self.format = _format_of(out)
@@ -471,9 +473,8 @@ class _Results:
         self.partial = out.with_name(out.name + ".partial")
         self.sidecar = out.with_name(out.name + ".json")
         definition = plan.definition()
-        if restart:
-            for path in (self.partial, out, self.sidecar):
-                path.unlink(missing_ok=True)
+        if restart:  # the old rows are not read; the files are replaced once this run has rows of its own
+            return
         if out.exists():
             found, rows = self._read_output()
             self._check(found, definition, out)
@@ -482,9 +483,6 @@ class _Results:
             found, rows = self._read_journal()
             self._check(found, definition, self.partial)
             self._keep(rows)
-        self.journal = open(self.partial, "a" if self.partial.exists() else "w", encoding="utf-8")  # noqa: SIM115
-        if self.journal.tell() == 0:
-            self._append({"definition": definition})
 
     def _keep(self, rows: list[dict]) -> None:
         names = [a.name for a in self.plan.axes]
@@ -497,13 +495,14 @@ class _Results:
             raise SweepError(f"{path} is not the output of a warpsim sweep; choose another --out")
         for key in ("scene", "seconds", "window", "axes", "metrics"):
             if found.get(key) != definition[key]:
-                what = {"scene": "the scene or its settings", "axes": "the swept keys"}.get(key, f"the {key}")
+                what = {"scene": "scene or settings", "axes": "swept keys"}.get(key, f"--{key}")
                 raise SweepError(
-                    f"{path} holds a sweep with other {what}; choose another --out, or --restart to replace it"
+                    f"{path} holds a sweep whose {what} differ from this one's; choose another --out, or --restart "
+                    "to replace it"
                 )
 
     def _read_output(self) -> tuple[dict | None, list[dict]]:
-        pd = require("pandas")
+        require("pandas")
         try:
             if self.format == "parquet":
                 import pyarrow.parquet as pq
@@ -513,22 +512,26 @@ class _Results:
                 frame = table.to_pandas()
                 found = json.loads(meta) if meta else None
             else:
-                frame = pd.read_csv(self.out, float_precision="round_trip")
+                frame = read_csv(self.out)
                 found = json.loads(self.sidecar.read_text(encoding="utf-8")) if self.sidecar.exists() else None
         except (OSError, ValueError) as err:
             raise SweepError(f"{self.out} cannot be read as a sweep's table ({err}); choose another --out") from None
         if found is not None and "blowup_reason" in frame:
-            frame["blowup_reason"] = frame["blowup_reason"].fillna("").astype(str)
+            reasons = frame["blowup_reason"]
+            frame["blowup_reason"] = [r if isinstance(r, str) else "" for r in reasons]  # CSV: '' reads as NaN
         return found, [{k: _plain(v) for k, v in row.items()} for row in frame.to_dict("records")]
 
     def _read_journal(self) -> tuple[dict | None, list[dict]]:
         found, rows = None, []
-        with open(self.partial, encoding="utf-8") as journal:
+        with open(self.partial, "rb") as journal:
             for number, line in enumerate(journal):
                 try:
-                    item = json.loads(line)
-                except ValueError:  # a line cut by a crash: the rows before it are whole
+                    item = json.loads(line) if line.endswith(b"\n") else None
+                except ValueError:
+                    item = None
+                if item is None:  # a line cut by a crash: the rows before it are whole
                     break
+                self.journal_size += len(line)
                 if number == 0:
                     found = item.get("definition") if isinstance(item, dict) else None
                 elif isinstance(item, dict):
@@ -536,6 +539,14 @@ class _Results:
         return found, rows
 
     def _append(self, item: dict) -> None:
+        if self.journal is None:  # opened with the first rows: a sweep that never starts leaves no file
+            fresh = self.restart or not self.partial.exists()
+            self.journal = open(self.partial, "w" if fresh else "r+", encoding="utf-8")  # noqa: SIM115
+            if fresh:
+                self._append({"definition": self.plan.definition()})
+            else:
+                self.journal.truncate(self.journal_size)
+                self.journal.seek(self.journal_size)
         self.journal.write(json.dumps(item) + "\n")
         self.journal.flush()
         os.fsync(self.journal.fileno())
@@ -549,7 +560,8 @@ class _Results:
         for row in rows:
             row = {k: _plain(v) for k, v in row.items()}
             self._keep([row])
-            if self.journal is not None:
+            self.added += 1
+            if self.out is not None:
                 self._append(row)
 
     def frame(self):
@@ -571,6 +583,7 @@ class _Results:
         if self.journal is not None:
             self.journal.close()
             self.journal = None
+        if self.out is not None and (self.added or self.journal_size):  # else the output stays as it was
             tmp = self.out.with_name(f".{self.out.name}.tmp")
             meta = json.dumps(self.plan.definition())
             if self.format == "parquet":
@@ -586,6 +599,15 @@ class _Results:
             os.replace(tmp, self.out)
             self.partial.unlink(missing_ok=True)
         return table
+
+
+def read_csv(path):
+    """A sweep's CSV table as a DataFrame, every float read back to the bit it was written with (pandas 3 does
+    that by default; pandas 2 needs ``float_precision='round_trip'``)."""
+    pd = require("pandas")
+    if int(pd.__version__.split(".")[0]) < 3:
+        return pd.read_csv(path, float_precision="round_trip")
+    return pd.read_csv(path)
 
 
 def _format_of(out: Path) -> str:
@@ -701,10 +723,8 @@ def run_sweep(
             _run_tasks(client, tasks, results, len(todo), started, on_progress)
     except KeyboardInterrupt:
         interrupted = True
-    except SweepError:
-        raise
-    except Exception as err:  # a task that failed for good (e.g. it killed its workers again and again)
-        failures.append(err)
+    except _TaskFailedError as err:  # e.g. a task that killed its workers again and again
+        failures.append(err.__cause__)
     finally:
         if own_client:
             _close(client, cluster)
@@ -729,7 +749,7 @@ def _connect(scheduler, workers: int | None):
     if isinstance(scheduler, Client):
         return scheduler, False, sum(scheduler.nthreads().values())
     try:
-        client = Client(scheduler, timeout="10s")
+        client = Client(scheduler, timeout="5s")
     except (OSError, TimeoutError, ValueError) as err:
         raise SweepError(f"--scheduler {scheduler}: cannot connect ({err})") from None
     return client, True, sum(client.nthreads().values())
@@ -746,7 +766,7 @@ def _local_cluster(count: int):
         n_workers=count,
         threads_per_worker=1,
         processes=True,
-        dashboard_address=None,
+        dashboard_address="127.0.0.1:0",  # the HTTP server always starts: on a free port
         silence_logs=logging.ERROR,
         env=ONE_THREAD,
     )
@@ -767,13 +787,21 @@ def _run_tasks(client, tasks: list[ChunkTask], results: _Results, total: int, st
     ]
     done = 0
     try:
-        for _, rows in as_completed(futures, with_results=True):
+        for future in as_completed(futures):
+            try:
+                rows = future.result()
+            except Exception as err:
+                raise _TaskFailedError() from err
             results.add(rows)
             done += len(rows)
             if on_progress is not None:
                 on_progress(done, total, time.perf_counter() - started)
     finally:
         client.cancel(futures)
+
+
+class _TaskFailedError(Exception):
+    """A Dask task failed for good; its cause is the task's exception."""
 
 
 def _close(client, cluster) -> None:

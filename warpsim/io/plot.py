@@ -38,7 +38,9 @@ def read_table(path) -> object:
             _require("pyarrow")
             return pd.read_parquet(path)
         if path.suffix.lower() == ".csv":
-            return pd.read_csv(path, float_precision="round_trip")
+            from ..sweeps import read_csv
+
+            return read_csv(path)
     except (OSError, ValueError) as err:
         raise PlotError(f"{path}: cannot be read as a table ({err})") from None
     raise PlotError(f"{path}: a sweep's table is a .parquet or .csv file")
@@ -117,13 +119,13 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
     figure, axes = plt.subplots(figsize=(7.5, 5.0), dpi=110)
     try:
         if y is None:
-            groups = list(table.groupby(others, sort=True).groups.items()) if others else [((), table.index)]
+            groups = list(table.groupby(others, sort=True)) if others else [((), table)]
             if len(groups) > MAX_LINES:
                 raise PlotError(
                     f"{len(groups)} lines (one per combination of {', '.join(others)}): fix some with --where KEY=VALUE"
                 )
-            for name, index in groups:
-                part = table.loc[index].sort_values(x)
+            for name, part in groups:
+                part = part.sort_values(x)
                 name = name if isinstance(name, tuple) else (name,)
                 text = ", ".join(f"{k} = {_text(v)}" for k, v in zip(others, name, strict=True))
                 axes.plot(part[x], values.loc[part.index], marker="o", label=text or None)
@@ -138,8 +140,7 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
                     f"a heat map shows two keys; {', '.join(others)} also vary: fix them with --where KEY=VALUE"
                 )
             grid = values.groupby([table[y], table[x]]).mean().unstack(x)
-            cmap = plt.get_cmap("viridis").copy()
-            cmap.set_bad("lightgrey")
+            cmap = plt.get_cmap("viridis").with_extremes(bad="lightgrey")
             image = axes.imshow(np.ma.masked_invalid(grid.to_numpy(float)), origin="lower", aspect="auto", cmap=cmap)
             axes.set_xticks(range(len(grid.columns)), [_text(v) for v in grid.columns])
             axes.set_yticks(range(len(grid.index)), [_text(v) for v in grid.index])

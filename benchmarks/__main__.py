@@ -80,6 +80,16 @@ def table(rows: list[dict]) -> str:
             renderer = next(iter(r["scenes"].values()))["renderer"]
             lines.append(f"| viewer | `warpsim view` at {r['size']} on {renderer}: {scenes} |||||||||")
             continue
+        if r["case"] == "sweep-kites-64":
+            lines.append(
+                f"| sweep-kites-64 | `warpsim sweep` of {r['cases']} kite cases ({r['seconds_per_case']:g} s each, "
+                f"{r['tasks']} tasks): {r['workers_1_cases_per_s']:.2f} cases/s with 1 worker, "
+                f"{r['workers_2_cases_per_s']:.2f} with 2 ({r['speedup_2_workers']:.2f}x); the same chunks in one "
+                f"process {r['in_process_cases_per_s']:.2f} cases/s, so Dask costs {r['overhead_per_task_pct']:.1f}% "
+                f"({r['overhead_per_task_ms']:.0f} ms per task); cluster start "
+                f"{r['cluster_startup_s']['1']:.1f} s / {r['cluster_startup_s']['2']:.1f} s (1 / 2 workers) |||||||||"
+            )
+            continue
         if r["case"] == "build-scaling":
             sizes = ", ".join(f"{k}: {v:.1f} us" for k, v in r["us_per_particle"].items())
             lines.append(

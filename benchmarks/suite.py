@@ -10,6 +10,7 @@ compiles and captures, and repeat until at least ``min_time`` seconds of wall ti
 
 from __future__ import annotations
 
+import math
 import os
 import shutil
 import subprocess
@@ -268,6 +269,86 @@ def case_viewer(opts: Options) -> dict:
     return {"case": "viewer", "size": "1280x720", "scenes": json.loads(result.stdout.splitlines()[-1])}
 
 
+SWEEP_AXES = ("kite.tow_point=0.2:0.55:8", "wind.speed=4:11:8")  # 64 cases
+SWEEP_SECONDS, SWEEP_CHUNK = 8.0, 8
+
+
+def _warm_worker() -> None:
+    """Run on each Dask worker before timing: Warp started and the kite's kernels loaded (a one-time cost per
+    worker process, reported as the cluster's start-up)."""
+    from warpsim import _warp
+
+    _warp.init()
+    Simulation(scene("kite"))
+
+
+def case_sweep(opts: Options) -> dict:
+    """64-case kite sweep (8 tow points x 8 winds, 8 s each, 8 chunks of 8 worlds) on Dask with 1 and 2 local
+    workers: cases/s, against the same chunks run one after another in this process (task overhead); two
+    rounds, alternating, best of each"""
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        return {"case": "sweep-kites-64", "skipped": "needs Dask (pip install -e '.[sweep]')"}
+    import logging
+
+    import pandas as pd
+
+    from warpsim import sweeps
+
+    d = scene("kite")
+    plan = sweeps.SweepPlan(d, sweeps.parse_axes(d, list(SWEEP_AXES)), SWEEP_SECONDS)
+    tasks = plan.chunks(SWEEP_CHUNK, device=opts.device)
+    sweeps.run_chunk(tasks[0])  # kernels loaded, caches warm
+    best = {"in process": math.inf, 1: math.inf, 2: math.inf}
+    startup = {}
+    reference = None
+    clusters = {}
+    try:
+        for workers in (1, 2):
+            start = time.perf_counter()
+            cluster = LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address="127.0.0.1:0",
+                silence_logs=logging.ERROR,
+                env=sweeps.ONE_THREAD,
+            )
+            clusters[workers] = (cluster, Client(cluster))
+            clusters[workers][1].run(_warm_worker)
+            startup[str(workers)] = time.perf_counter() - start
+        for _ in range(2):
+            start = time.perf_counter()
+            rows = [row for task in tasks for row in sweeps.run_chunk(task)]
+            best["in process"] = min(best["in process"], time.perf_counter() - start)
+            reference = pd.DataFrame(rows, columns=plan.columns)
+            for workers, (_, client) in clusters.items():
+                start = time.perf_counter()
+                outcome = sweeps.run_sweep(plan, scheduler=client, chunk=SWEEP_CHUNK, device=opts.device)
+                best[workers] = min(best[workers], time.perf_counter() - start)
+                pd.testing.assert_frame_equal(outcome.table, reference, check_exact=True)  # the same rows
+    finally:
+        for cluster, client in clusters.values():
+            client.close()
+            cluster.close()
+    cases = len(plan.cases)
+    return {
+        "case": "sweep-kites-64",
+        "cases": cases,
+        "tasks": len(tasks),
+        "seconds_per_case": SWEEP_SECONDS,
+        "in_process_cases_per_s": cases / best["in process"],
+        "workers_1_cases_per_s": cases / best[1],
+        "workers_2_cases_per_s": cases / best[2],
+        "speedup_2_workers": best[1] / best[2],
+        "overhead_per_task_pct": 100.0 * (best[1] / best["in process"] - 1.0),
+        "overhead_per_task_ms": 1e3 * (best[1] - best["in process"]) / len(tasks),
+        "cluster_startup_s": startup,
+        "device": opts.device,
+    }
+
+
 BUILD_SIZES = (32, 64, 128, 256, 512)
 
 
@@ -300,4 +381,5 @@ CASES: dict[str, Callable[[Options], dict]] = {
     "startup": case_startup,
     "viewer": case_viewer,
     "build-scaling": case_build_scaling,
+    "sweep-kites-64": case_sweep,
 }

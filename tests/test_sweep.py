@@ -228,6 +228,21 @@ def test_a_grown_sweep_keeps_its_rows_and_another_sweep_is_refused(cluster, tmp_
         sweeps.run_sweep(other, out=out, scheduler=cluster)
 
 
+def test_a_journal_cut_by_a_crash_keeps_its_whole_rows(cluster, tmp_path, reference):
+    """What `kill -9` of `warpsim sweep` leaves: the journal's whole lines and half a line."""
+    import json
+
+    out = tmp_path / "s.parquet"
+    journal = tmp_path / "s.parquet.partial"
+    rows = reference.iloc[:2].to_dict("records")
+    lines = [json.dumps({"definition": _plan().definition()})] + [json.dumps(r) for r in rows]
+    journal.write_text("\n".join(lines) + '\n{"wind.gust_seed": 1, "kite.tow')
+    address = cluster.scheduler.address  # an address, as --scheduler gives it: the sweep makes its own client
+    outcome = sweeps.run_sweep(_plan(), out=out, scheduler=address)
+    assert (outcome.kept, outcome.ran) == (2, 4) and not journal.exists()
+    _same(pd.read_parquet(out), reference)
+
+
 def test_sweep_table_in_a_descriptor(tmp_path):
     scene = tmp_path / "kites.toml"
     scene.write_text('[scene]\nobject = "kite"\n\n[sweep]\nkite.tow_point = "0.25:0.35:3"\nwind.speed = [4, 8]\n')
@@ -385,3 +400,110 @@ def test_axes_from_any_text_are_checked_or_refused():
         assert len(axes) == 1 and len(axes[0].values) >= 1
 
     check()
+
+
+SWEEP_TOKENS = {
+    "scene": ["kite", "kite", "hang-glider", "flag", "kites.toml", "nope", "bad.toml", ""],
+    "vary": ["wind.speed=4,8", "kite.tow_point=0.2:0.4:2", "solver.iterations=20,30", "wind.speed=4:8", "x", "a.b=1"]
+    + ["kite.tow_point=0.3,0.3", "scene.fps=10,20", "wind.gust_seed=0:1:2", "flag.resolution=3,4", "wind.speed=-1,2"],
+    "number": ["0.05", "0.1", "0", "-1", "nan", "abc", ""],
+    "window": ["0:0.05", "0.02:0.04", "5:1", "x", "0.01:9"],
+    "metrics": ["altitude_mean", "glide_mean,bank_max", "nope", ",", "line_angle_mean,airborne"],
+    "count": ["1", "2", "0", "x"],
+    "path": ["out.parquet", "out.csv", "out.txt", "missing/out.parquet", "kites.toml", "", "table.parquet"],
+    "dir": ["recs", "kites.toml", ""],
+    "set": ["wind.gust_intensity=0.2", "kite.mass=-1", "nope=1", "solver.dt=0.02"],
+    "scheduler": ["tcp://127.0.0.1:9", "nonsense"],
+}
+SWEEP_FLAGS = [
+    ("--vary", "vary"),
+    ("--vary", "vary"),
+    ("--seconds", "number"),
+    ("--window", "window"),
+    ("--metrics", "metrics"),
+    ("--workers", "count"),
+    ("--chunk", "count"),
+    ("--out", "path"),
+    ("--h5-dir", "dir"),
+    ("--set", "set"),
+    ("--resume", None),
+    ("--restart", None),
+    ("--list-metrics", None),
+    ("--scheduler", "scheduler"),
+    ("--bogus", None),
+]
+
+
+def _in_process(client, tasks, results, total, started, on_progress):
+    """The sweep's tasks run here, one after another: the fuzz exercises everything but Dask itself."""
+    for task in tasks:
+        results.add(sweeps.run_chunk(task))
+
+
+def test_sweep_and_plot_command_lines_never_traceback(tmp_path, monkeypatch):
+    """Hostile `warpsim sweep` / `warpsim plot` command lines end with 0 or one error line and exit 2, and an
+    error leaves the folder as it was (the tasks run in this process: no cluster per example)."""
+    import contextlib
+    import io
+
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    monkeypatch.setattr(sweeps, "_run_tasks", _in_process)
+    monkeypatch.setattr(sweeps, "_local_cluster", lambda count: (None, None))
+    monkeypatch.setattr(sweeps, "_connect", lambda scheduler, workers: (None, False, workers or 1))
+    (tmp_path / "bad.toml").write_text("[scene]\nobject = 'kite'\n[kite]\nrope_length = -3\n")
+    (tmp_path / "kites.toml").write_text("[scene]\nobject = 'kite'\n[sweep]\nwind.speed = [4, 6]\n")
+    pd.DataFrame({"wind.speed": [4.0, 6.0], "altitude_mean": [1.0, 2.0], "blew_up": [False, True]}).to_parquet(
+        tmp_path / "table.parquet"
+    )
+
+    @st.composite
+    def command_lines(draw):
+        if draw(st.integers(0, 3)) == 0:
+            argv = ["plot", draw(st.sampled_from(["table.parquet", "kites.toml", "missing.csv"]))]
+            argv.append(draw(st.sampled_from(["p.png", "p.png", "p.txt", "missing/p.png"])))
+            argv += ["--x", "wind.speed", "--metric", "altitude_mean"] if draw(st.booleans()) else []
+            for flag in draw(st.lists(st.sampled_from(["--x", "--y", "--metric", "--where"]), max_size=4)):
+                argv += [flag, draw(st.sampled_from(["wind.speed", "altitude_mean", "blew_up", "x", "wind.speed=4"]))]
+            return argv
+        argv = ["sweep", draw(st.sampled_from(SWEEP_TOKENS["scene"])), "--seconds", "0.05"]
+        argv += ["--vary", "wind.speed=4,8", "--out", "out.parquet"] if draw(st.booleans()) else []
+        for flag, kind in draw(st.lists(st.sampled_from(SWEEP_FLAGS), max_size=5)):
+            argv.append(flag)
+            if kind is not None:
+                typed = draw(st.integers(0, 5)) == 0
+                argv.append(draw(st.text(max_size=6) if typed else st.sampled_from(SWEEP_TOKENS[kind])))
+        return argv
+
+    @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(argv=command_lines())
+    def check(argv):
+        before = {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()}
+        out, err = io.StringIO(), io.StringIO()
+        cwd = os.getcwd()
+        os.chdir(tmp_path)
+        try:
+            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+                try:
+                    code = main(argv)
+                except SystemExit as exit:
+                    code = exit.code
+        finally:
+            os.chdir(cwd)
+        errors = err.getvalue()
+        codes.append(code)
+        assert "Traceback" not in errors and code in (0, 2), (argv, code, errors)
+        if code == 2:
+            assert len(errors.strip().splitlines()) == 1 and "error:" in errors, (argv, errors)
+            assert {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()} == before, (argv, errors)
+        for made in ("out.parquet", "out.csv", "p.png"):  # each example starts from the same folder
+            (tmp_path / made).unlink(missing_ok=True)
+        (tmp_path / "out.csv.json").unlink(missing_ok=True)
+        import shutil
+
+        shutil.rmtree(tmp_path / "recs", ignore_errors=True)
+
+    codes: list = []
+    check()
+    assert codes.count(0) >= 5  # some sweeps and plots did run

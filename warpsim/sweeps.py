@@ -223,6 +223,7 @@ class SweepPlan:
         self.seconds = float(seconds if seconds is not None else descriptor["scene"]["seconds"])
         if not (self.seconds > 0 and math.isfinite(self.seconds)):
             raise SweepError(f"--seconds must be a positive number, got {self.seconds}")
+        self.base["scene"]["seconds"] = self.seconds  # the same definition whether --seconds or the scene says it
         self.window = (self.seconds / 2, self.seconds) if window is None else (float(window[0]), float(window[1]))
         start, stop = self.window
         if not (0.0 <= start <= stop <= self.seconds):

@@ -494,7 +494,7 @@ class _Results:
     def _check(found: dict | None, definition: dict, path: Path) -> None:
         if found is None:
             raise SweepError(f"{path} is not the output of a warpsim sweep; choose another --out")
-        for key in ("scene", "seconds", "window", "axes", "metrics"):
+        for key in ("seconds", "window", "axes", "metrics", "scene"):  # the most telling first
             if found.get(key) != definition[key]:
                 what = {"scene": "scene or settings", "axes": "swept keys"}.get(key, f"--{key}")
                 raise SweepError(

@@ -313,23 +313,9 @@ def test_plot_line_and_heat_map_from_the_table(tmp_path, reference):
     table = tmp_path / "s.parquet"
     reference.to_parquet(table)
     line, heat = tmp_path / "line.png", tmp_path / "heat.png"
+    heat_map = ["plot", str(table), str(heat), "--x", "kite.tow_point", "--y", "wind.gust_seed"]
     assert main(["plot", str(table), str(line), "--x", "kite.tow_point", "--metric", "line_angle_mean"]) == 0
-    assert (
-        main(
-            [
-                "plot",
-                str(table),
-                str(heat),
-                "--x",
-                "kite.tow_point",
-                "--y",
-                "wind.gust_seed",
-                "--metric",
-                "altitude_mean",
-            ]
-        )
-        == 0
-    )
+    assert main([*heat_map, "--metric", "altitude_mean"]) == 0
     pixels = _picture(line)
     assert pixels.shape[:2] == (550, 825)
     blue = (pixels[..., 2] > 150) & (pixels[..., 0] < 80)  # the first line (matplotlib's C0 blue)
@@ -341,40 +327,8 @@ def test_plot_line_and_heat_map_from_the_table(tmp_path, reference):
     wider = reference.assign(**{"wind.speed": 6.0})
     wider.loc[3:, "wind.speed"] = 8.0
     wider.to_parquet(table)
-    assert (
-        main(
-            [
-                "plot",
-                str(table),
-                str(heat),
-                "--x",
-                "kite.tow_point",
-                "--y",
-                "wind.gust_seed",
-                "--metric",
-                "altitude_mean",
-            ]
-        )
-        == 2
-    )
-    assert (
-        main(
-            [
-                "plot",
-                str(table),
-                str(heat),
-                "--x",
-                "kite.tow_point",
-                "--y",
-                "wind.gust_seed",
-                "--metric",
-                "altitude_mean",
-                "--where",
-                "wind.speed=8",
-            ]
-        )
-        == 0
-    )
+    assert main([*heat_map, "--metric", "altitude_mean"]) == 2
+    assert main([*heat_map, "--metric", "altitude_mean", "--where", "wind.speed=8"]) == 0
     assert main(["plot", str(table), str(line), "--x", "kite.tow_point", "--metric", "glide_mean"]) == 2
 
 

@@ -3,7 +3,8 @@
 Every error a user can cause ends with one line ``warpsim <command>: error: ...`` and exit code 2; a run that
 blows up (NaN/Inf, or a stick past ``solver.max_stretch``) ends with exit code 3 and keeps its outputs up to the
 last good frame; an output that cannot be written part-way (disk full, I/O error) ends with exit code 4 and one
-line naming the file and what it keeps; an interrupted run ends with 130.
+line naming the file and what it keeps; a sweep whose Dask task failed for good ends with 1 (its finished rows
+kept); an interrupted run ends with 130.
 """
 
 from __future__ import annotations
@@ -90,7 +91,8 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="SCENE is a built-in object name (see `warpsim list`), a scene name found in ./scenes, "
         "or a path to a .toml descriptor. Exit codes: 0 done, 2 bad input (one error line), 3 the simulation "
         "blew up (outputs kept up to the last good frame), 4 an output could not be written (disk full, I/O error; "
-        "one line says what it keeps), 130 interrupted (outputs kept).",
+        "one line says what it keeps), 1 a sweep's task failed for good (its finished rows kept), 130 interrupted "
+        "(outputs kept).",
     )
     parser.add_argument("--version", action="version", version=f"warpsim {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
@@ -233,20 +235,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--resume", action="store_true", help="require --out to hold rows of this sweep already")
     sweep.add_argument("--restart", action="store_true", help="forget the rows --out holds and run every case")
     sweep.add_argument("--quiet", action="store_true", help="print nothing but errors")
-    for flag, kind, what in (
-        ("--dt", _number("--dt"), "time step [s] (default: scene's, 0.01)"),
-        ("--iterations", _iterations, "constraint iterations per step (default 55)"),
-        ("--fps", _number("--fps"), "measured frames per simulated second (default: scene's)"),
-    ):
-        sweep.add_argument(flag, type=kind, help=what)
-    sweep.add_argument("--device", default="cpu", help="Warp device of the workers: cpu (default) or cuda[:N]")
-    sweep.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a descriptor value for every case, e.g. --set kite.mass=0.25 (repeatable)",
-    )
+    _scene_arguments(sweep, worlds=False)  # here --vary makes the sweep's axes
 
     plot = sub.add_parser(
         "plot",
@@ -331,9 +320,9 @@ def _names(text: str) -> list[str]:
     return names
 
 
-def _scene_arguments(parser) -> None:
+def _scene_arguments(parser, worlds: bool = True) -> None:
     """The options that change the scene a command simulates: time step, iterations, frame rate, device,
-    ``--set`` and the worlds."""
+    ``--set`` and (``worlds``) ``--worlds``/``--vary``."""
     parser.add_argument("--dt", type=_number("--dt"), help="time step [s] (default: scene's, 0.01)")
     parser.add_argument("--iterations", type=_iterations, help="constraint iterations per step (default 55)")
     parser.add_argument("--fps", type=_number("--fps"), help="output frames per simulated second")
@@ -345,7 +334,8 @@ def _scene_arguments(parser) -> None:
         metavar="KEY=VALUE",
         help="override a descriptor value, e.g. --set wind.velocity=[8,0,0] (repeatable)",
     )
-    _world_arguments(parser)
+    if worlds:
+        _world_arguments(parser)
 
 
 def _world_arguments(parser) -> None:

@@ -361,7 +361,10 @@ def check_axis(where: str, descriptor: dict, section: str, key: str, values) -> 
     if section == "wind" and key == "speed":
         _check_speeds(where, name, descriptor, checked)
     if len({repr(v) for v in checked}) != len(checked):
-        raise DescriptorError(f"{where}: {name} lists a value twice ({values!r})")
+        whole = " (a range with whole-number ends stays whole: write 4.0:11.0:64 for fractions)"
+        raise DescriptorError(
+            f"{where}: {name} lists a value twice ({values!r}){whole if isinstance(values[0], int) else ''}"
+        )
     return checked
 
 

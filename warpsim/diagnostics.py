@@ -169,7 +169,7 @@ FIGURES: dict[str, tuple[str, tuple[str, ...] | None, str]] = {
     "line_pull": ("N", ("kite",), "|air force on the kite + its weight|, the steady line tension"),
     "radius": ("m", ("parachute",), "mean horizontal distance of the canopy's rim from its centre"),
 }
-"""The figures :func:`object_figures` gives: name -> (unit, the object kinds that have it (None: all), meaning)."""
+"""The figures :class:`Figures` gives: name -> (unit, the object kinds that have it (None: all), meaning)."""
 
 
 def figure_names(kind: str) -> tuple[str, ...]:
@@ -177,38 +177,54 @@ def figure_names(kind: str) -> tuple[str, ...]:
     return tuple(name for name, (_, kinds, _) in FIGURES.items() if kinds is None or kind in kinds)
 
 
-def object_figures(model: Model, frame: Frame, tri_force: np.ndarray | None = None) -> list[dict[str, float]]:
-    """What a pilot or an observer reads off each object of ``frame``: one dict per object (in model order) of
-    the :data:`FIGURES` its kind has, as floats in their units. ``tri_force``: host ``[T, 3]`` air force per
-    triangle vertex [N] (the solver's ``tri_force``), needed for a kite's ``line_pull`` (NaN without it).
-    The heads-up display and the sweeps read their figures here, so each is computed one way."""
-    from .config import GRAVITY
-    from .objects.hang_glider import bank
-    from .objects.kite import line_state
-    from .objects.parachute import projected_radius
+class Figures:
+    """What a pilot or an observer reads off each object of a frame (:data:`FIGURES`). The heads-up display and
+    the sweeps read their figures here, so each is computed one way; what does not change between frames (a
+    kite's triangles and mass) is found once, here.
 
-    metrics = object_metrics(model, frame)
-    out = []
-    for k, record in enumerate(model.objects):
-        v = metrics.velocity[k]
-        sink = float(-v[2])
-        values = {"altitude": float(metrics.altitude[k]), "airspeed": float(metrics.airspeed[k]), "sink": sink}
-        if record.kind == "hang-glider":
-            horizontal = float(np.linalg.norm((v - frame.wind[record.world])[:2]))
-            values["glide"] = horizontal / sink if sink > 0.05 else float("nan")
-            values["bank"] = bank(record, frame.positions)
-        elif record.kind == "kite":
-            values["line_angle"] = line_state(record, frame.positions)["elevation_deg"]
-            values["line_pull"] = float("nan")
-            if tri_force is not None:
+    Call it with a frame and the solver's ``tri_force`` (device or host ``[T, 3]`` air force per triangle
+    vertex [N], copied to the host only when a kite needs it for ``line_pull``; NaN without it): one dict per
+    object, in model order, of the figures its kind has, as floats in their units.
+    """
+
+    def __init__(self, model: Model):
+        self.model = model
+        self._kites: dict[int, tuple[np.ndarray, float]] = {}  # object -> (its triangles, their mass [kg])
+        for k, record in enumerate(model.objects):
+            if record.kind == "kite":
                 triangles = np.concatenate([np.asarray(t) for t in record.tri_parts.values()]).astype(np.int64)
                 mass = float(model.particle_free_mass[np.unique(model.tri_indices_np[triangles])].sum())
-                air = 3.0 * tri_force[triangles].sum(axis=0)  # tri_force is each vertex's third
-                values["line_pull"] = float(np.linalg.norm(air - np.array([0.0, 0.0, GRAVITY * mass])))
-        elif record.kind == "parachute":
-            values["radius"] = projected_radius(record, frame.positions)
-        out.append(values)
-    return out
+                self._kites[k] = (triangles, mass)
+
+    def __call__(self, frame: Frame, tri_force=None) -> list[dict[str, float]]:
+        from .config import GRAVITY
+        from .objects.hang_glider import bank
+        from .objects.kite import line_elevation
+        from .objects.parachute import projected_radius
+
+        if self._kites and tri_force is not None and not isinstance(tri_force, np.ndarray):
+            tri_force = tri_force.numpy()
+        metrics = object_metrics(self.model, frame)
+        out = []
+        for k, record in enumerate(self.model.objects):
+            v = metrics.velocity[k]
+            sink = float(-v[2])
+            values = {"altitude": float(metrics.altitude[k]), "airspeed": float(metrics.airspeed[k]), "sink": sink}
+            if record.kind == "hang-glider":
+                horizontal = float(np.linalg.norm((v - frame.wind[record.world])[:2]))
+                values["glide"] = horizontal / sink if sink > 0.05 else float("nan")
+                values["bank"] = bank(record, frame.positions)
+            elif record.kind == "kite":
+                values["line_angle"] = line_elevation(record, frame.positions)
+                values["line_pull"] = float("nan")
+                if tri_force is not None:
+                    triangles, mass = self._kites[k]
+                    air = 3.0 * tri_force[triangles].sum(axis=0)  # tri_force is each vertex's third
+                    values["line_pull"] = float(np.linalg.norm(air - np.array([0.0, 0.0, GRAVITY * mass])))
+            elif record.kind == "parachute":
+                values["radius"] = projected_radius(record, frame.positions)
+            out.append(values)
+        return out
 
 
 class GroundContacts:

@@ -6,7 +6,7 @@ batched worlds of ``--worlds``, one launch for all), and each chunk is one Dask 
 ``LocalCluster`` of single-threaded worker processes, one per core, unless a running scheduler is given.
 
 Every case gives one row: its swept values and its metrics (:data:`METRICS`, from the same
-:func:`warpsim.diagnostics.object_figures` the viewer's heads-up display reads). Worlds never touch each other
+:class:`warpsim.diagnostics.Figures` the viewer's heads-up display reads). Worlds never touch each other
 and each world's gusts are seeded by its own ``wind.gust_seed``, so a case's row is bit for bit the same
 whatever the chunk size, the number of workers or the order they finish in. A case that blows up stops being
 measured at that frame and is a row saying when and why; the other cases of its chunk go on.
@@ -380,7 +380,7 @@ def run_chunk(task: ChunkTask) -> list[dict]:
     from . import _warp
 
     _warp.init()
-    from .diagnostics import GroundContacts, object_figures, world_blowups
+    from .diagnostics import Figures, GroundContacts, world_blowups
     from .runner import Simulation
 
     try:
@@ -396,7 +396,7 @@ def run_chunk(task: ChunkTask) -> list[dict]:
     contacts = GroundContacts(model)
     stick_world = model.particle_world_np[model.stick_particles_np[:, 0]] if model.stick_count else np.zeros(0, int)
     max_stretch = sim.settings.solver.max_stretch
-    needs_force = any(r.kind == "kite" for r in model.objects)
+    measure_figures = Figures(model)
     live = np.ones(count, dtype=bool)
     blew = [(math.nan, "")] * count
     recorder = _chunk_recorder(task, sim)
@@ -417,7 +417,7 @@ def run_chunk(task: ChunkTask) -> list[dict]:
                 per_world = np.zeros(count)
                 np.maximum.at(per_world, stick_world, np.nan_to_num(frame.stretches, nan=0.0))
                 acc.worst = np.where(live, np.maximum(acc.worst, per_world), acc.worst)
-            found = object_figures(model, frame, sim.solver.tri_force.numpy() if needs_force else None)
+            found = measure_figures(frame, sim.solver.tri_force)
             values = np.array([[f[name] for f in found] for name in figures], dtype=np.float64)
             in_window = start - eps <= frame.time <= stop + eps
             acc.add(values, live, in_window, contacts.touching(frame), frame.time)
@@ -652,7 +652,7 @@ def _warm_kernels(tasks: Sequence[ChunkTask], device: str) -> None:
 
     seen = set()
     for task in tasks:
-        key = json.dumps({k: v for k, v in task.descriptor.items() if k not in ("worlds",) and k in _SHARED})
+        key = json.dumps({k: v for k, v in task.descriptor.items() if k in _SHARED})
         if key in seen:
             continue
         seen.add(key)
@@ -731,9 +731,8 @@ def run_sweep(
             _close(client, cluster)
         table = results.finish()
     ran = sum(1 for i in todo if results.done(i))
-    outcome = SweepOutcome(table, ran, len(plan.cases) - len(todo), time.perf_counter() - started, used, interrupted)
-    outcome.failures = failures
-    return outcome
+    wall = time.perf_counter() - started
+    return SweepOutcome(table, ran, len(plan.cases) - len(todo), wall, used, interrupted, failures)
 
 
 def _connect(scheduler, workers: int | None):

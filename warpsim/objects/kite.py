@@ -203,11 +203,17 @@ def apply_controls(record: KiteRecord, targets: dict, values: dict) -> None:
         targets["nail_target"][record.anchor_nail] = (x, y, float(targets["terrain"].height(x, y)))
 
 
+def line_elevation(record: KiteRecord, q: np.ndarray) -> float:
+    """Elevation of the line above the horizontal [deg], from the anchor to the tow point."""
+    d = q[record.tow] - q[record.anchor_particle]
+    return float(np.degrees(np.arctan2(d[2], np.linalg.norm(d[:2]))))
+
+
 def line_state(record: KiteRecord, q: np.ndarray) -> dict:
     """Diagnostics: line elevation angle [deg] (anchor to tow point), kite height [m], tow-anchor distance [m]."""
     d = q[record.tow] - q[record.anchor_particle]
     return {
-        "elevation_deg": float(np.degrees(np.arctan2(d[2], np.linalg.norm(d[:2])))),
+        "elevation_deg": line_elevation(record, q),
         "height": float(q[record.parts["sail"]][:, 2].mean()),
         "distance": float(np.linalg.norm(d)),
         "tow": q[record.tow].copy(),

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..diagnostics import Frame, object_figures
+from ..diagnostics import Figures, Frame
 from ..io.style import COLOURS
 from ..runner import BlowUpError, Simulation
 from .backend import Backend, DrawList, View
@@ -131,6 +131,7 @@ class Viewer:
         self.kite = next((r for r in self.model.objects if r.kind == "kite"), None)  # the one W/A/S/D walks
         self.has_anchor = "anchor" in names and self.kite is not None
         self.draw_list = draw_list(self.model)
+        self.figures = Figures(self.model)
         self.initial = sim.checkpoint()
         self.frame: Frame = sim.start_frames()
         self.axes = {"pitch": 0.0, "roll": 0.0}
@@ -453,7 +454,7 @@ class Viewer:
             f"t = {self.sim.state.time:7.2f} s   {state}   {steps:,.0f} steps/s   "
             f"time stepping {100 * busy:.0f}% / drawing {100 - 100 * busy:.0f}%   camera {self.camera}"
         ]
-        lines += object_lines(self.sim, self.frame)[:8]
+        lines += object_lines(self.model, self.figures(self.frame, self.sim.solver.tri_force), self.frame)[:8]
         wind = self.frame.wind[0]  # blowing now (gusts included), in the first world
         heading = math.degrees(math.atan2(wind[1], wind[0]))
         where = " (world 0)" if self.model.world_count > 1 else ""
@@ -479,13 +480,10 @@ class Viewer:
         return []
 
 
-def object_lines(sim: Simulation, frame: Frame) -> list[str]:
-    """One heads-up line per object: altitude and airspeed, and per kind its own figures (glider: sink rate,
-    glide ratio, bank; kite: line angle and pull; parachute: descent speed and radius; see
-    :func:`warpsim.diagnostics.object_figures`), and the worst stretch."""
-    model = sim.model
-    kites = any(record.kind == "kite" for record in model.objects)
-    figures = object_figures(model, frame, sim.solver.tri_force.numpy() if kites else None)
+def object_lines(model, figures: list[dict], frame: Frame) -> list[str]:
+    """One heads-up line per object of ``model`` from its ``figures`` (:class:`warpsim.diagnostics.Figures`):
+    altitude and airspeed, and per kind its own (glider: sink rate, glide ratio, bank; kite: line angle and
+    pull; parachute: descent speed and radius), and the worst stretch of ``frame``."""
     lines = []
     for record, f in zip(model.objects, figures, strict=True):
         text = f"{record.name}: altitude {f['altitude']:6.1f} m  airspeed {f['airspeed']:5.1f} m/s"

@@ -9,6 +9,7 @@ import numpy as np
 import warp as wp
 
 from .config import AIR_DENSITY, GRAVITY
+from .kernels.aero import sail_coefficients
 from .model import Model, ObjectRecord
 from .terrain import Heightfield
 
@@ -63,6 +64,10 @@ def check_memory(particles: float, what: str) -> None:
         )
 
 
+DEFAULT_SAIL = sail_coefficients(2.0)
+"""``sail`` coefficients of a triangle whose object sets none (a sail of aspect ratio 2)."""
+
+
 class ModelBuilder:
     """Accumulates the pieces of a model on the host; :meth:`finalize` uploads them to a device.
 
@@ -81,6 +86,9 @@ class ModelBuilder:
         self.stick_weight: list[float] = []
         self.tri_indices: list[tuple[int, int, int]] = []
         self.tri_loading: list[float] = []
+        self.tri_sail: list[tuple[float, float, float, float]] = []
+        self.tri_span: list[tuple[int, int]] = []
+        self.drag_area: dict[int, float] = {}
         self.nail_particles: list[int] = []
         self._nailed: set[int] = set()  # the same, for constant-time membership tests
         self.nail_target: list[Sequence[float]] = []
@@ -150,7 +158,45 @@ class ModelBuilder:
             raise ValueError(f"triangle ({i}, {j}, {k}) needs three distinct particles among 0..{n - 1}")
         self.tri_indices.append((int(i), int(j), int(k)))
         self.tri_loading.append(_check_loading(loading))
+        self.tri_sail.append(DEFAULT_SAIL)
+        self.tri_span.append((-1, -1))
         return self.tri_count - 1
+
+    def set_triangle_sail(self, tri_ids, coefficients) -> None:
+        """Set the ``sail`` air model's coefficients of triangles ``tri_ids``: ``(lift slope [1/rad],
+        induced-drag factor, profile drag coefficient, stall angle [rad])``, as made by
+        :func:`warpsim.kernels.aero.sail_coefficients` for the sail they belong to (default: those of a sail
+        of aspect ratio 2)."""
+        coefficients = tuple(float(c) for c in coefficients)
+        if len(coefficients) != 4 or not all(np.isfinite(c) and c >= 0.0 for c in coefficients):
+            raise ValueError(f"sail coefficients must be 4 finite numbers >= 0, got {coefficients}")
+        for t in np.atleast_1d(np.asarray(tri_ids, dtype=np.int64)):
+            if not 0 <= t < self.tri_count:
+                raise ValueError(f"triangle {t} does not exist")
+            self.tri_sail[t] = coefficients
+
+    def set_triangle_span(self, tri_ids, ends) -> None:
+        """Give triangles ``tri_ids`` the leading edge they sit behind, as two particles ``ends`` (``[len, 2]`` or one
+        pair for all) from root to tip: under the ``sail`` air model their attached flow feels only the wind
+        across that edge (simple sweep theory). Without one a triangle feels the whole wind."""
+        tri_ids = np.atleast_1d(np.asarray(tri_ids, dtype=np.int64))
+        ends = np.broadcast_to(np.asarray(ends, dtype=np.int64), (len(tri_ids), 2))
+        for t, (a, b) in zip(tri_ids, ends, strict=True):
+            if not 0 <= t < self.tri_count:
+                raise ValueError(f"triangle {t} does not exist")
+            if not (0 <= a < self.particle_count and 0 <= b < self.particle_count) or a == b:
+                raise ValueError(f"a leading edge needs two distinct particles, got ({a}, {b})")
+            self.tri_span[t] = (int(a), int(b))
+
+    def set_drag_area(self, particle: int, area: float) -> None:
+        """Make ``particle`` a drag body of drag area ``C_D A`` = ``area`` [m^2] (a pilot, a frame's tubes): under
+        the ``sail`` air model it feels ``0.5 rho C_D A |w| w`` in the relative wind ``w``."""
+        area = float(area)
+        if not 0 <= particle < self.particle_count:
+            raise ValueError(f"particle {particle} does not exist")
+        if not (np.isfinite(area) and area >= 0.0):
+            raise ValueError(f"drag area must be finite and >= 0, got {area}")
+        self.drag_area[int(particle)] = self.drag_area.get(int(particle), 0.0) + area
 
     def set_triangle_loading(self, tri_ids, loading) -> None:
         """Set the chordwise loading factor of triangles ``tri_ids`` (dimensionless, >= 0).
@@ -372,6 +418,15 @@ class ModelBuilder:
         m.tri_indices_np = tris
         m.tri_indices = wp.array(tris, dtype=wp.vec3i, device=device)
         m.tri_loading = wp.array(np.array(self.tri_loading, dtype=np.float32), dtype=wp.float32, device=device)
+        sail = np.array(self.tri_sail, dtype=np.float32).reshape(-1, 4)
+        m.tri_sail = wp.array(sail, dtype=wp.vec4, device=device)
+        m.tri_span = wp.array(np.array(self.tri_span, dtype=np.int32).reshape(-1, 2), dtype=wp.vec2i, device=device)
+        drag = sorted((p, a) for p, a in self.drag_area.items() if a > 0.0)
+        m.drag_count = len(drag)
+        m.drag_particles_np = np.array([p for p, _ in drag], dtype=np.int32)
+        m.drag_area_np = np.array([a for _, a in drag], dtype=np.float64)
+        m.drag_particles = wp.array(m.drag_particles_np, dtype=wp.int32, device=device)
+        m.drag_area = wp.array(m.drag_area_np.astype(np.float32), dtype=wp.float32, device=device)
         start, ids = _csr(tris.reshape(-1), np.repeat(np.arange(len(tris), dtype=np.int32), 3), n)
         m.particle_tri_start = wp.array(start, dtype=wp.int32, device=device)
         m.particle_tri_ids = wp.array(ids, dtype=wp.int32, device=device)

@@ -201,7 +201,7 @@ class AirConfig(Checked):
     """``[air]``: how the air pushes on the triangles (see :mod:`warpsim.kernels.aero`).
 
     Attributes:
-        model: the air-force law, :class:`~warpsim.kernels.aero.AeroModel` (``paper``, ``plate``).
+        model: the air-force law, :class:`~warpsim.kernels.aero.AeroModel` (``paper``, ``plate``, ``sail``).
         scale: multiplier on the air force (1 = the model as written; 0 = no air).
         density: air density [kg/m^3] (the paper's 1.294217666).
     """

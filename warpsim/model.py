@@ -105,7 +105,21 @@ class Model:
     """``[T]`` vec3i triangle vertices; ``tri_indices_np`` is its host ``[T, 3]`` copy."""
     tri_indices_np: np.ndarray
     tri_loading: wp.array
-    """``[T]`` float32 chordwise loading factor (``plate`` air model; 1 = uniform)."""
+    """``[T]`` float32 chordwise loading factor (``plate`` and ``sail`` air models; 1 = uniform)."""
+    tri_sail: wp.array
+    """``[T]`` vec4 ``sail`` air model coefficients (lift slope [1/rad], induced-drag factor, profile drag
+    coefficient, stall angle [rad]; see :func:`warpsim.kernels.aero.sail_coefficients`)."""
+    tri_span: wp.array
+    """``[T]`` vec2i the two particles (root, tip) of the leading edge each triangle sits behind, ``(-1, -1)``
+    for none (``sail`` air model: simple sweep theory)."""
+    drag_count: int
+    """Number of drag bodies (particles with a drag area, ``sail`` air model only)."""
+    drag_particles: wp.array
+    """``[D]`` int32 particle of each drag body; ``drag_particles_np`` is its host copy."""
+    drag_particles_np: np.ndarray
+    drag_area: wp.array
+    """``[D]`` float32 drag area ``C_D A`` [m^2] of each drag body; ``drag_area_np`` its host float64 copy."""
+    drag_area_np: np.ndarray
     nail_particles: np.ndarray
     """Host ``[N]`` int32 particle of each nail."""
     nail_target0: np.ndarray
@@ -123,7 +137,7 @@ class Model:
 
     def __init__(self):
         self.device = None
-        self.particle_count = self.stick_count = self.tri_count = self.nail_count = 0
+        self.particle_count = self.stick_count = self.tri_count = self.nail_count = self.drag_count = 0
         self.world_count = 1
         self.gravity = wp.vec3(0.0, 0.0, -GRAVITY)
         self.air_density = AIR_DENSITY

@@ -16,7 +16,7 @@ import warp as wp
 
 from .config import AirConfig, GroundConfig, SolverConfig, WindConfig
 from .kernels import MODULES
-from .kernels.aero import triangle_air_force
+from .kernels.aero import body_drag, triangle_air_force
 from .kernels.collision import collide_heightfield
 from .kernels.constraints import make_projector
 from .kernels.springs import integrate_euler_springs
@@ -63,6 +63,7 @@ class _Solver:
         self.ground = ground or GroundConfig()
         self.use_graph = bool(use_graph)
         self.tri_force = wp.zeros(max(model.tri_count, 1), dtype=wp.vec3, device=model.device)
+        self.particle_air = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)  # drag bodies' drag
         self._graphs: dict = {}
 
     def _launch(self, state: State, control: Control, dt: float) -> None:
@@ -120,7 +121,8 @@ class SolverVerlet(_Solver):
     def _launch(self, state: State, control: Control, dt: float) -> None:
         m, cfg = self.model, self.config
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
-        integrate_verlet(m, state, control, self.tri_force, dt, cfg.damping)
+        body_drag(m, state, control, dt, self.air, self.wind, self.particle_air)
+        integrate_verlet(m, state, control, self.tri_force, self.particle_air, dt, cfg.damping)
         self.projector.project(state, control, cfg.iterations)
         collide_heightfield(m, state, self.ground.collision, self.ground.friction)
 
@@ -137,8 +139,17 @@ class SolverEuler(_Solver):
     def _launch(self, state: State, control: Control, dt: float) -> None:
         m, cfg = self.model, self.config
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
+        body_drag(m, state, control, dt, self.air, self.wind, self.particle_air)
         integrate_euler_springs(
-            m, state, control, self.tri_force, self.spring_force, dt, cfg.spring_stiffness, cfg.spring_damping
+            m,
+            state,
+            control,
+            self.tri_force,
+            self.particle_air,
+            self.spring_force,
+            dt,
+            cfg.spring_stiffness,
+            cfg.spring_damping,
         )
         collide_heightfield(m, state, self.ground.collision, self.ground.friction)
 

@@ -30,6 +30,7 @@ terrain by a power law ``(h / h_ref)^shear_exponent`` (exponent 0 = uniform wind
 from __future__ import annotations
 
 import enum
+import math
 
 import warp as wp
 
@@ -43,6 +44,90 @@ class AeroModel(enum.IntEnum):
 
     PAPER = 0
     PLATE = 1
+    SAIL = 2
+
+
+STALL_SHARPNESS = wp.constant(40.0)
+"""Sharpness ``M`` [1/rad] of the ``sail`` model's blend from attached to separated flow around the stall
+angle: half the way at the stall angle, 90 % of it 3.1 degrees later (Beard & McLain's blend uses 50)."""
+
+
+def sail_coefficients(
+    aspect_ratio: float,
+    sweep_deg: float = 0.0,
+    oswald: float = 0.8,
+    profile_drag: float = 0.03,
+    stall_deg: float = 18.0,
+) -> tuple[float, float, float, float]:
+    """The ``sail`` air model's per-triangle coefficients for a sail of ``aspect_ratio`` (span^2 / area) whose
+    half-chord line is swept back ``sweep_deg`` degrees: ``(lift slope [1/rad], induced-drag factor,
+    profile drag coefficient, stall angle [rad])``.
+
+    * Lift slope: the Helmbold-DATCOM formula for a thin wing of finite span,
+      ``a = 2 pi A / (2 + sqrt(A^2 (1 + tan^2 Lambda) + 4))`` (USAF DATCOM 4.1.3.2; Anderson, *Fundamentals of
+      Aerodynamics*, 5th ed., eq. 5.81 for the unswept case); it tends to thin-aerofoil theory's ``2 pi`` for a
+      long straight wing.
+    * Induced drag ``C_L^2 / (pi e A)`` with Oswald's span efficiency ``oswald`` (0.7-0.85 for real wings;
+      Raymer, *Aircraft Design*, 6th ed., 12.6).
+    * ``profile_drag``: the cloth's skin friction and form drag at zero lift (0.02-0.04 for single-surface
+      sails and membrane wings; Hoerner, *Fluid-Dynamic Drag*, 1965, ch. 2 and 14; Cook & Spottiswoode 2006).
+    * ``stall_deg``: the angle of attack where the flow separates and the law turns into the ``plate`` one.
+    """
+    a_r, sweep = float(aspect_ratio), math.radians(float(sweep_deg))
+    if not a_r > 0.0 or not 0.0 < oswald <= 1.0 or profile_drag < 0.0 or not 0.0 < stall_deg < 90.0:
+        raise ValueError(
+            f"sail coefficients need aspect ratio > 0, 0 < oswald <= 1, profile drag >= 0 and 0 < stall < 90 deg, "
+            f"got {aspect_ratio}, {oswald}, {profile_drag}, {stall_deg}"
+        )
+    slope = 2.0 * math.pi * a_r / (2.0 + math.sqrt(a_r * a_r * (1.0 + math.tan(sweep) ** 2) + 4.0))
+    return slope, 1.0 / (math.pi * oswald * a_r), float(profile_drag), math.radians(float(stall_deg))
+
+
+@wp.func
+def plate_normal_coefficient(sin_alpha: float) -> float:
+    """Hoerner & Borst's flat-plate normal-force coefficient at ``sin(alpha)`` (> 0)."""
+    return 1.0 / (0.222 + 0.283 / sin_alpha)
+
+
+@wp.func
+def sail_force(
+    n: wp.vec3, area: float, w_rel: wp.vec3, span: wp.vec3, air_density: float, loading: float, coef: wp.vec4
+) -> wp.vec3:
+    """``sail`` air force [N] on a flat triangle (unit normal ``n``, ``area`` [m^2]) in relative wind ``w_rel``
+    [m/s]: lift perpendicular to the wind and drag along it, with the coefficients ``coef`` of
+    :func:`sail_coefficients` and the chordwise ``loading`` factor. ``span`` is the unit direction of the
+    sail's leading edge at the triangle (zero: none); the attached flow feels only the wind across it
+    (simple sweep theory), which is what rolls a swept wing away from a sideslip."""
+    speed = wp.length(w_rel)
+    if speed == 0.0:
+        return wp.vec3(0.0)
+    w_hat = w_rel / speed
+    # attached flow: the wind across the leading edge, its angle of attack, lift slope and drag
+    w_n = w_rel - span * wp.dot(w_rel, span)
+    speed_n = wp.length(w_n)
+    force = w_hat * (coef[2] * speed * speed)  # profile drag
+    sin_n = 0.0
+    if speed_n > 1.0e-6 * speed:
+        wn_hat = w_n / speed_n
+        d = wp.dot(n, wn_hat)
+        sin_n = wp.min(wp.abs(d), 1.0)
+        cos_n = wp.sqrt(wp.max(1.0 - sin_n * sin_n, 0.0))
+        cl_att = coef[0] * wp.asin(sin_n)
+        lift_dir = wp.vec3(0.0)
+        if cos_n > 1.0e-6:
+            lift_dir = (n * wp.sign(d) - wn_hat * sin_n) / cos_n
+        attached = (lift_dir * cl_att + wn_hat * (coef[1] * cl_att * cl_att)) * (speed_n * speed_n)
+    else:
+        attached = wp.vec3(0.0)
+    # separated flow: the plate's normal force on the whole wind
+    wn = wp.dot(n, w_hat)
+    sin_a = wp.min(wp.abs(wn), 1.0)
+    separated = wp.vec3(0.0)
+    if sin_a > 1.0e-6:
+        separated = n * (wp.sign(wn) * plate_normal_coefficient(sin_a) * speed * speed)
+    sigma = 1.0 / (1.0 + wp.exp(-STALL_SHARPNESS * (wp.asin(sin_a) - coef[3])))
+    force += attached * (1.0 - sigma) + separated * sigma
+    return force * (0.5 * air_density * area * (loading + (1.0 - loading) * sin_a))
 
 
 @wp.func
@@ -77,6 +162,8 @@ def wind_at(wind: wp.vec3, height_above_ground: float, reference_height: float, 
 def _triangle_air_force(
     tri_indices: wp.array(dtype=wp.vec3i),
     tri_loading: wp.array(dtype=wp.float32),
+    tri_sail: wp.array(dtype=wp.vec4),
+    tri_span: wp.array(dtype=wp.vec2i),
     particle_world: wp.array(dtype=wp.int32),
     hf: HeightfieldData,
     particle_q: wp.array(dtype=wp.vec3),
@@ -106,8 +193,41 @@ def _triangle_air_force(
     centre = (a + b + c) / 3.0
     ground = terrain_height(hf, centre[0], centre[1])
     w = wind_at(wind[particle_world[idx[0]]], centre[2] - ground, shear_reference_height, shear_exponent)
-    force = normal_force(cross / cross_len, 0.5 * cross_len, w - velocity, air_density, aero_model, tri_loading[t])
+    n = cross / cross_len
+    if aero_model == AeroModel.SAIL:
+        ends = tri_span[t]
+        span = wp.vec3(0.0)
+        if ends[0] >= 0:
+            span = wp.normalize(particle_q[ends[1]] - particle_q[ends[0]])
+        force = sail_force(n, 0.5 * cross_len, w - velocity, span, air_density, tri_loading[t], tri_sail[t])
+    else:
+        force = normal_force(n, 0.5 * cross_len, w - velocity, air_density, aero_model, tri_loading[t])
     tri_force_out[t] = force * (aero_scale / 3.0)
+
+
+@wp.kernel
+def _body_drag(
+    drag_particles: wp.array(dtype=wp.int32),
+    drag_area: wp.array(dtype=wp.float32),
+    particle_world: wp.array(dtype=wp.int32),
+    hf: HeightfieldData,
+    particle_q: wp.array(dtype=wp.vec3),
+    particle_q_prev: wp.array(dtype=wp.vec3),
+    wind: wp.array(dtype=wp.vec3),
+    dt: float,
+    air_density: float,
+    aero_scale: float,
+    shear_exponent: float,
+    shear_reference_height: float,
+    particle_air_out: wp.array(dtype=wp.vec3),
+):
+    k = wp.tid()
+    i = drag_particles[k]
+    x = particle_q[i]
+    ground = terrain_height(hf, x[0], x[1])
+    w = wind_at(wind[particle_world[i]], x[2] - ground, shear_reference_height, shear_exponent)
+    w = w - (x - particle_q_prev[i]) / dt
+    particle_air_out[i] = w * (0.5 * air_density * wp.length(w) * drag_area[k] * aero_scale)
 
 
 @wp.func
@@ -142,6 +262,8 @@ def triangle_air_force(model, state, control, dt: float, air, wind, tri_force_ou
         inputs=[
             model.tri_indices,
             model.tri_loading,
+            model.tri_sail,
+            model.tri_span,
             model.particle_world,
             model.terrain_data,
             state.particle_q,
@@ -155,5 +277,33 @@ def triangle_air_force(model, state, control, dt: float, air, wind, tri_force_ou
             float(wind.reference_height),
         ],
         outputs=[tri_force_out],
+        device=model.device,
+    )
+
+
+def body_drag(model, state, control, dt: float, air, wind, particle_air_out: wp.array) -> None:
+    """Parasitic drag [N] of the model's drag bodies (a pilot, a frame: particles given a drag area ``C_D A``
+    [m^2]), ``0.5 rho C_D A |w| w`` in the relative wind ``w``, written into ``particle_air_out`` (``[P]``) at
+    their particles. Only the ``sail`` air model has drag bodies; the others leave the array at zero."""
+    if model.drag_count == 0 or int(air.model) != AeroModel.SAIL:
+        return
+    wp.launch(
+        _body_drag,
+        dim=model.drag_count,
+        inputs=[
+            model.drag_particles,
+            model.drag_area,
+            model.particle_world,
+            model.terrain_data,
+            state.particle_q,
+            state.particle_q_prev,
+            control.wind,
+            float(dt),
+            float(model.air_density),
+            float(air.scale),
+            float(wind.shear_exponent),
+            float(wind.reference_height),
+        ],
+        outputs=[particle_air_out],
         device=model.device,
     )

@@ -53,6 +53,7 @@ def _integrate_euler(
     particle_stick_refs: wp.array(dtype=wp.int32),
     nail_target: wp.array(dtype=wp.vec3),
     tri_force: wp.array(dtype=wp.vec3),
+    particle_air: wp.array(dtype=wp.vec3),
     spring_force: wp.array(dtype=wp.vec3),
     gravity: wp.vec3,
     dt: float,
@@ -68,7 +69,7 @@ def _integrate_euler(
     if inv_mass == 0.0:
         particle_q_prev_out[i] = x
         return
-    force = gather_air_force(i, particle_tri_start, particle_tri_ids, tri_force)
+    force = gather_air_force(i, particle_tri_start, particle_tri_ids, tri_force) + particle_air[i]
     force += gather_stick_values(i, particle_stick_start, particle_stick_refs, spring_force)
     velocity = (x - particle_q_prev_out[i]) / dt
     x_new = x + velocity * dt
@@ -78,9 +79,18 @@ def _integrate_euler(
 
 
 def integrate_euler_springs(
-    model, state, control, tri_force: wp.array, spring_force: wp.array, dt: float, stiffness: float, damping: float
+    model,
+    state,
+    control,
+    tri_force: wp.array,
+    particle_air: wp.array,
+    spring_force: wp.array,
+    dt: float,
+    stiffness: float,
+    damping: float,
 ) -> None:
-    """One explicit-Euler mass-spring step of ``dt`` seconds (in place); scratch arrays owned by the caller."""
+    """One explicit-Euler mass-spring step of ``dt`` seconds (in place) under the triangles' air forces
+    ``tri_force`` and the drag bodies' ``particle_air`` [N]; scratch arrays owned by the caller."""
     if model.stick_count:
         wp.launch(
             _spring_forces,
@@ -109,6 +119,7 @@ def integrate_euler_springs(
             model.particle_stick_refs,
             control.nail_target,
             tri_force,
+            particle_air,
             spring_force,
             model.gravity,
             float(dt),

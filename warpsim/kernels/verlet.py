@@ -2,7 +2,8 @@
 
 ``x_new = x + (1 - damping) * (x - x_prev) + a * dt^2``, then ``x_prev = x``. (The paper's Fig. 5
 prints ``2 * (x - x_prev)``; the correct step is the one above with damping 0, as on slide 5.)
-``a`` is gravity plus the air force of the particle's triangles divided by its mass. Nailed
+``a`` is gravity plus the air force of the particle's triangles (and its own drag, for a drag body)
+divided by its mass. Nailed
 particles ignore forces and are placed on their nail.
 """
 
@@ -24,6 +25,7 @@ def _integrate_verlet(
     particle_tri_ids: wp.array(dtype=wp.int32),
     nail_target: wp.array(dtype=wp.vec3),
     tri_force: wp.array(dtype=wp.vec3),
+    particle_air: wp.array(dtype=wp.vec3),
     gravity: wp.vec3,
     dt: float,
     damping: float,
@@ -39,13 +41,16 @@ def _integrate_verlet(
     inv_mass = particle_inv_mass[i]
     if inv_mass == 0.0:
         return
-    force = gather_air_force(i, particle_tri_start, particle_tri_ids, tri_force)
+    force = gather_air_force(i, particle_tri_start, particle_tri_ids, tri_force) + particle_air[i]
     acceleration = gravity + force * inv_mass
     particle_q_out[i] = x + (x - x_prev) * (1.0 - damping) + acceleration * (dt * dt)
 
 
-def integrate_verlet(model, state, control, tri_force: wp.array, dt: float, damping: float) -> None:
-    """Advance ``state`` by one Verlet step of ``dt`` seconds (in place)."""
+def integrate_verlet(
+    model, state, control, tri_force: wp.array, particle_air: wp.array, dt: float, damping: float
+) -> None:
+    """Advance ``state`` by one Verlet step of ``dt`` seconds (in place) under the triangles' air forces
+    ``tri_force`` and the drag bodies' ``particle_air`` [N]."""
     wp.launch(
         _integrate_verlet,
         dim=model.particle_count,
@@ -56,6 +61,7 @@ def integrate_verlet(model, state, control, tri_force: wp.array, dt: float, damp
             model.particle_tri_ids,
             control.nail_target,
             tri_force,
+            particle_air,
             model.gravity,
             float(dt),
             float(damping),

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..builder import ModelBuilder
+from ..kernels.aero import sail_coefficients
 
 
 def body_axes(heading_deg: float, nose_up_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -118,3 +119,35 @@ def chordwise_loading(
     loading *= area.sum() / (area * loading).sum()
     builder.set_triangle_loading(tris, loading)
     return loading
+
+
+def delta_sail_aero(
+    builder: ModelBuilder,
+    tris,
+    rows: list[list[int]],
+    nose,
+    left,
+    span: float,
+    area: float,
+    oswald: float,
+    profile_drag: float,
+    stall_deg: float,
+) -> None:
+    """Give a subdivided delta sail's triangles their ``sail`` air-model coefficients and leading edges.
+
+    The coefficients are those of a wing of ``span`` [m] and ``area`` [m^2] (:func:`sail_coefficients`, unswept:
+    the sweep acts through the leading edges). Each half of the sail sits behind its own leading edge (nose to
+    tip); the triangles centred on the keel get the tip-to-tip line.
+    """
+    tris = np.asarray(tris, dtype=np.int64)
+    builder.set_triangle_sail(tris, sail_coefficients(span**2 / area, 0.0, oswald, profile_drag, stall_deg))
+    n = len(rows) - 1
+    centres = np.array(builder.particle_q)[np.array(builder.tri_indices)[tris]].mean(axis=1)
+    side = (centres - np.asarray(nose)) @ np.asarray(left)
+    tol = 1e-6 * span
+    ends = np.where(
+        (side > tol)[:, None],
+        (rows[0][0], rows[n][0]),
+        np.where((side < -tol)[:, None], (rows[0][0], rows[n][n]), (rows[n][n], rows[n][0])),
+    )
+    builder.set_triangle_span(tris, ends)

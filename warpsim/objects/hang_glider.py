@@ -18,10 +18,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..builder import ModelBuilder
-from ..config import NON_NEGATIVE, POSITIVE, Bounds, Checked, number
+from ..config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
 from ..model import ObjectRecord
 from ..terrain import Heightfield
-from .delta import add_rigid_frame, body_axes, chordwise_loading
+from .delta import add_rigid_frame, body_axes, chordwise_loading, delta_sail_aero
 
 PAPER_COUNTS = {"particles": 49, "sticks": 198, "triangles": 64}
 
@@ -61,6 +61,30 @@ class HangGliderConfig(Checked):
             loading, centre of pressure near the quarter chord; see :mod:`warpsim.kernels.aero`). Off:
             uniform load, centre of pressure at the area centroid, and the glider has almost no pitch
             stiffness.
+        suspension: ``sticks`` (the paper: the pilot on seven control sticks to the frame) or ``strap`` (a real
+            glider's: a hang strap from a hang point on the keel, and two arms holding a rigid control bar;
+            the controls set the arms' lengths and the pilot swings on the strap).
+        hang_point: ``strap``: the hang point along the keel, fraction of the chord from the nose (it sets the
+            centre of gravity, so the trim speed).
+        bar_forward: ``strap``: the control bar ahead of the hang point [m]. bar_width: its width [m].
+        control_frame_mass: ``strap``: mass of the hang point and control bar particles [kg] (added to the glider).
+        pilot_drag_area: ``sail`` air model: the pilot's drag area ``C_D A`` [m^2] (prone in a pod harness,
+            about 0.15-0.25; Dees, AIAA 2010-9300 drag build-up).
+        frame_drag_area: ``sail`` air model, ``strap``: drag area [m^2] of the control frame, wires and kingpost.
+        dihedral: the wings rise from the keel by this angle [deg] (sweep and dihedral roll a wing away from a
+            sideslip: with 0 the flex wing turns ever tighter, with 3 or more it answers weight shift the
+            wrong way; 2 gives a steady turn that levels off when released).
+        keel_pocket: hold the cloth on both sides of the keel tube to it (a sail's keel pocket), so the sail
+            cannot fold along the keel between keel particles.
+        washout_struts: share of each half of the trailing edge, from the tip, held rigid at its washout by
+            struts (tip rods, sprogs) tied to the frame (0 = none): a tensioned sail would flatten it otherwise.
+        sail_tension: the cloth's sticks are this much shorter than the sail as built (a sail tensioned on its
+            frame, as a crossbar or VG does); a taut sail billows less, so its triangles spread less in angle of
+            attack. The cloth's reported stretch includes it.
+        oswald: ``sail`` air model: span efficiency of the induced drag
+            (:func:`~warpsim.kernels.aero.sail_coefficients`).
+        profile_drag: ``sail`` air model: the sail's zero-lift drag coefficient.
+        stall_angle: ``sail`` air model: angle of attack [deg] where a triangle's flow separates.
     """
 
     divisions: int = number(8, Bounds(2, 256))
@@ -83,6 +107,22 @@ class HangGliderConfig(Checked):
     virtual_mass_fraction: float = number(0.3, Bounds(0.0, 0.85, low_open=True))
     frame_weight: float = number(6.0, POSITIVE)
     chord_loading: bool = True
+    suspension: str = choice("sticks", ("sticks", "strap"))
+    hang_point: float = number(0.55, Bounds(0.0, 1.0))
+    bar_forward: float = number(0.6, NON_NEGATIVE)
+    bar_width: float = number(1.4, POSITIVE)
+    control_frame_mass: float = number(4.0, POSITIVE)
+    pilot_drag_area: float = number(0.2, NON_NEGATIVE)
+    frame_drag_area: float = number(0.1, NON_NEGATIVE)
+    battens: bool = False
+    dihedral: float = number(0.0, Bounds(-30.0, 30.0))
+    keel_pocket: bool = False
+    washout_struts: float = number(0.0, Bounds(0.0, 1.0))
+    sail_tension: float = number(0.0, Bounds(0.0, 0.2))
+    batten_weight: float = number(1.0, POSITIVE)
+    oswald: float = number(0.8, Bounds(0.0, 1.0, low_open=True))
+    profile_drag: float = number(0.025, NON_NEGATIVE)
+    stall_angle: float = number(18.0, Bounds(0.0, 90.0, low_open=True, high_open=True))
 
 
 @dataclass(kw_only=True)
@@ -109,6 +149,7 @@ class HangGliderRecord(ObjectRecord):
     pilot_neutral_frame: np.ndarray
     pitch_travel: float
     roll_travel: float
+    hang_point_frame: np.ndarray | None = None
 
 
 def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Heightfield) -> HangGliderRecord:
@@ -137,7 +178,8 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
         d = points - nose
         y = np.abs(d @ left)
         behind_edge = np.maximum(-cfg.chord * y / semi - d @ fwd, 0.0)
-        return points + np.outer(behind_edge * np.tan(washout_rad * y / semi), up)
+        raised = behind_edge * np.tan(washout_rad * y / semi) + y * np.tan(np.radians(cfg.dihedral))
+        return points + np.outer(raised, up)
 
     p0 = builder.particle_count
     rows, sail_sticks, tris = builder.add_subdivided_triangle(
@@ -146,12 +188,45 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
     sail = np.arange(p0, p0 + sail_count)
     if cfg.chord_loading:
         chordwise_loading(builder, tris, nose, fwd, left, cfg.chord, semi)
+    delta_sail_aero(
+        builder,
+        tris,
+        rows,
+        nose,
+        left,
+        cfg.span,
+        0.5 * cfg.span * cfg.chord,
+        cfg.oswald,
+        cfg.profile_drag,
+        cfg.stall_angle,
+    )
 
     centre = (nose + tip_l + tip_r) / 3.0
     frame = add_rigid_frame(
         builder, rows, sail_sticks, centre, cfg.frame_height * up, (1, 0, -1), virtual_mass, cfg.frame_weight, vel
     )
     virtual, keel = frame.virtual, frame.keel
+    frame_ties = []
+    if cfg.washout_struts > 0.0:
+        # washout struts (tip rods, "sprogs"): the trailing edge's outer parts held rigid at their twist, so a
+        # tensioned sail keeps its washout; each is tied to the virtual particles, its tip and the keel's end
+        reach = int(np.floor(cfg.washout_struts * n / 2.0))
+        tail = rows[n][n // 2]
+        for j in range(1, reach + 1):
+            for p, tip in ((rows[n][j], rows[n][0]), (rows[n][n - j], rows[n][n])):
+                frame_ties += [builder.add_stick(p, a, weight=cfg.frame_weight) for a in (*frame.virtual, tip, tail)]
+    if cfg.keel_pocket:
+        # the sail's pocket along the keel: the cloth particles either side of the keel tube between two keel
+        # particles (odd rows) held to it, so the sail cannot fold along the keel
+        for i in range(1, n, 2):
+            for p in (rows[i][(i - 1) // 2], rows[i][(i + 1) // 2]):
+                frame_ties += [
+                    builder.add_stick(p, a, weight=cfg.frame_weight)
+                    for a in (*frame.virtual, rows[i - 1][(i - 1) // 2], rows[i + 1][(i + 1) // 2])
+                ]
+    if cfg.sail_tension > 0.0:
+        for st in np.setdiff1d(sail_sticks, frame.sticks):
+            builder.stick_rest[st] *= 1.0 - cfg.sail_tension
     frame_set = set(frame.points)
     cloth = [p for p in sail if p not in frame_set]
     frame_mass = cfg.frame_mass_fraction * cfg.glider_mass
@@ -160,29 +235,29 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
     for p in cloth:
         builder.particle_mass[p] = (cfg.glider_mass - frame_mass - 3.0 * virtual_mass) / len(cloth)
 
-    # pilot and control sticks
-    neutral = nose - cfg.pilot_station * cfg.chord * fwd - cfg.hang_depth * up
-    pilot = builder.add_particle(neutral, cfg.pilot_mass, vel)
-    q = n // 3
-    forward_points = [rows[0][0], rows[q][0], rows[q][q]]
-    b = (2 * n) // 3
-    aft_points = [rows[n][n // 2], rows[b][0], rows[b][b], virtual[2]]
-    control = [builder.add_stick(pilot, p) for p in forward_points + aft_points]
-
-    positions = np.array(builder.particle_q)
-    attach = positions[forward_points + aft_points]
+    if cfg.suspension == "strap":
+        pilot, control, attach, neutral, hang, strap_ties, extra = _hang_strap(
+            builder, cfg, rows, frame, nose, fwd, left, up, vel
+        )
+        frame_ties += strap_ties
+        control_forward, strap_groups = len(control), {"strap": np.array([extra.pop("strap")])}
+    else:
+        pilot, control, attach, neutral = _paper_sticks(builder, cfg, rows, virtual, nose, fwd, up, vel)
+        hang, extra, control_forward, strap_groups = None, {}, 3, {}
+    builder.set_drag_area(pilot, cfg.pilot_drag_area)
     particles = np.arange(p0, builder.particle_count)
     return builder.add_object(
         HangGliderRecord(
             name="hang_glider",
             kind="hang-glider",
             particles=particles,
-            parts={"sail": sail, "virtual": np.array(virtual), "pilot": np.array([pilot])},
+            parts={"sail": sail, "virtual": np.array(virtual), "pilot": np.array([pilot]), **extra},
             tri_parts={"sail": tris},
             stick_groups={
                 "sail": np.setdiff1d(sail_sticks, frame.sticks),
-                "frame": np.array(frame.sticks),
+                "frame": np.array(frame.sticks + frame_ties),
                 "control": np.array(control),
+                **strap_groups,
             },
             paper_counts=PAPER_COUNTS,
             nose=rows[0][0],
@@ -190,13 +265,69 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
             tips=(rows[n][0], rows[n][n]),
             pilot=pilot,
             control_sticks=np.array(control),
-            control_forward_count=len(forward_points),
+            control_forward_count=control_forward,
             pilot_attach_frame=_to_frame(attach, nose, fwd, left, up),
             pilot_neutral_frame=_to_frame(neutral[None], nose, fwd, left, up)[0],
+            hang_point_frame=None if hang is None else _to_frame(hang[None], nose, fwd, left, up)[0],
             pitch_travel=cfg.pitch_travel,
             roll_travel=cfg.roll_travel,
         )
     )
+
+
+def _paper_sticks(builder: ModelBuilder, cfg: HangGliderConfig, rows, virtual, nose, fwd, up, vel):
+    """The paper's pilot (Fig. 14): one particle on seven control sticks, three to forward frame points and four
+    to aft ones. Returns the pilot, the control sticks, their frame points [m] and the pilot's neutral point."""
+    n = len(rows) - 1
+    neutral = nose - cfg.pilot_station * cfg.chord * fwd - cfg.hang_depth * up
+    pilot = builder.add_particle(neutral, cfg.pilot_mass, vel)
+    q, b = n // 3, (2 * n) // 3
+    points = [rows[0][0], rows[q][0], rows[q][q], rows[n][n // 2], rows[b][0], rows[b][b], virtual[2]]
+    control = [builder.add_stick(pilot, p) for p in points]
+    return pilot, control, np.array(builder.particle_q)[points], neutral
+
+
+def _hang_strap(builder: ModelBuilder, cfg: HangGliderConfig, rows, frame, nose, fwd, left, up, vel):
+    """A real glider's suspension: a hang point on the keel, a control frame (A-frame) under it, and the pilot
+    hanging from the hang point on a strap, holding the base bar with two arms.
+
+    The hang point and the two ends of the base bar are frame particles, each tied by sticks of the frame's
+    weight to the virtual particles, the keel and the leading edges (the down tubes and flying wires), so the
+    control frame is rigid with the sail. The strap keeps the pilot ``hang_depth`` below the hang point; the
+    arms' rest lengths are the controls (:func:`control_rest_lengths`): pushing or pulling the bar swings the
+    pilot forward, back or sideways on the strap. Returns the pilot, the two arm sticks, the base bar's ends
+    [m], the pilot's neutral point [m], the hang point [m], the new frame sticks and the new parts (with the
+    strap's stick under ``"strap"``).
+    """
+    n = len(rows) - 1
+    w = cfg.frame_weight
+    q = np.array(builder.particle_q)
+    keel = frame.keel
+    keel_pos = q[keel]
+    station = cfg.hang_point * cfg.chord
+    hang = nose - station * fwd
+    # the keel particles either side of the hang point, and the leading-edge particles of the nearest row
+    along = (nose - keel_pos) @ fwd
+    behind = int(np.clip(np.searchsorted(along, station), 1, len(keel) - 1))
+    row = int(np.clip(round(cfg.hang_point * n), 1, n))
+    anchors = [*frame.virtual, keel[behind - 1], keel[behind], rows[row][0], rows[row][-1]]
+    part_mass = 0.5 * cfg.control_frame_mass
+    h = builder.add_particle(hang, part_mass, vel)
+    # a tie to a keel particle the hang point sits on would have no length: skip it (the others hold it)
+    ties = [builder.add_stick(h, a, weight=w) for a in anchors if np.linalg.norm(q[a] - hang) > 1e-3 * cfg.chord]
+    bar_centre = hang + cfg.bar_forward * fwd - cfg.hang_depth * up
+    bar = [builder.add_particle(bar_centre + s * 0.5 * cfg.bar_width * left, 0.5 * part_mass, vel) for s in (1.0, -1.0)]
+    for end, side in zip(bar, (rows[row][0], rows[row][-1]), strict=True):
+        ties += [builder.add_stick(end, a, weight=w) for a in (h, *frame.virtual, keel[0], keel[-1], side)]
+    ties.append(builder.add_stick(bar[0], bar[1], weight=w))
+    for p in (h, *bar):
+        builder.set_drag_area(p, cfg.frame_drag_area / 3.0)
+    neutral = hang - cfg.hang_depth * up
+    pilot = builder.add_particle(neutral, cfg.pilot_mass, vel)
+    strap = builder.add_stick(h, pilot)
+    arms = [builder.add_stick(pilot, end) for end in bar]
+    extra = {"control_frame": np.array([h, *bar]), "strap": strap}
+    return pilot, arms, np.array(builder.particle_q)[bar], neutral, hang, ties, extra
 
 
 def _to_frame(points: np.ndarray, origin, fwd, left, up) -> np.ndarray:
@@ -209,12 +340,17 @@ def control_rest_lengths(record: HangGliderRecord, pitch: float, roll: float) ->
 
     The pilot's target sits ``pitch * pitch_travel`` forward and ``roll * roll_travel`` to the right of
     the neutral point (glider frame at build time); each control stick's rest length is the distance
-    from that target to its frame point.
+    from that target to its frame point. On a hang strap the target is then put back on the strap's sphere
+    around the hang point (the pilot swings; the strap does not stretch).
     """
     for name, value in (("pitch", pitch), ("roll", roll)):
         if not -1.0 <= value <= 1.0:
             raise ValueError(f"{name} must be in [-1, 1], got {value}")
     target = record.pilot_neutral_frame + np.array([pitch * record.pitch_travel, -roll * record.roll_travel, 0.0])
+    if record.hang_point_frame is not None:
+        strap = np.linalg.norm(record.pilot_neutral_frame - record.hang_point_frame)
+        d = target - record.hang_point_frame
+        target = record.hang_point_frame + d * (strap / np.linalg.norm(d))
     return np.linalg.norm(record.pilot_attach_frame - target, axis=1)
 
 

@@ -19,10 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..builder import ModelBuilder
-from ..config import POSITIVE, Bounds, Checked, number
+from ..config import NON_NEGATIVE, POSITIVE, Bounds, Checked, number
 from ..model import ObjectRecord
 from ..terrain import Heightfield
-from .delta import add_rigid_frame, add_spar_braces, body_axes
+from .delta import add_rigid_frame, add_spar_braces, body_axes, delta_sail_aero
 
 PAPER_COUNTS = {"particles": 152, "sticks": 458, "triangles": 221}
 
@@ -56,6 +56,8 @@ class KiteConfig(Checked):
         attack: start angle of the sail to the horizontal [deg].
         dihedral: the wings rise from the spine by this angle [deg] towards the sail's back (downwind)
             side, as a delta kite's sail sets in the wind; it gives the kite its roll and yaw stability.
+        profile_drag: ``sail`` air model: the sail's zero-lift drag coefficient
+            (:func:`~warpsim.kernels.aero.sail_coefficients`).
     """
 
     divisions: int = number(13, Bounds(3, 256))
@@ -78,6 +80,7 @@ class KiteConfig(Checked):
     elevation: float = number(10.0, Bounds(0.0, 90.0))
     attack: float = number(40.0, Bounds(0.0, 90.0))
     dihedral: float = number(20.0, Bounds(-45.0, 45.0))
+    profile_drag: float = number(0.03, NON_NEGATIVE)
 
 
 @dataclass(kw_only=True)
@@ -130,6 +133,9 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
 
     rows, sail_sticks, sail_tris = builder.add_subdivided_triangle(
         nose, tip_l, tip_r, n, per_particle * sail_count, shape=dihedral
+    )
+    delta_sail_aero(
+        builder, sail_tris, rows, nose, left, cfg.span, 0.5 * cfg.span * cfg.spine, 0.8, cfg.profile_drag, 18.0
     )
     keel_top = [rows[r][r // 2] for r in range(2, 3 + 2 * kd, 2)]
     top_front, top_back = (np.array(builder.particle_q[p]) for p in (keel_top[0], keel_top[-1]))

@@ -114,12 +114,10 @@ class HangGliderConfig(Checked):
     control_frame_mass: float = number(4.0, POSITIVE)
     pilot_drag_area: float = number(0.2, NON_NEGATIVE)
     frame_drag_area: float = number(0.1, NON_NEGATIVE)
-    battens: bool = False
     dihedral: float = number(0.0, Bounds(-30.0, 30.0))
     keel_pocket: bool = False
     washout_struts: float = number(0.0, Bounds(0.0, 1.0))
     sail_tension: float = number(0.0, Bounds(0.0, 0.2))
-    batten_weight: float = number(1.0, POSITIVE)
     oswald: float = number(0.8, Bounds(0.0, 1.0, low_open=True))
     profile_drag: float = number(0.025, NON_NEGATIVE)
     stall_angle: float = number(18.0, Bounds(0.0, 90.0, low_open=True, high_open=True))

@@ -115,11 +115,9 @@ class Model:
     drag_count: int
     """Number of drag bodies (particles with a drag area, ``sail`` air model only)."""
     drag_particles: wp.array
-    """``[D]`` int32 particle of each drag body; ``drag_particles_np`` is its host copy."""
-    drag_particles_np: np.ndarray
+    """``[D]`` int32 particle of each drag body."""
     drag_area: wp.array
-    """``[D]`` float32 drag area ``C_D A`` [m^2] of each drag body; ``drag_area_np`` its host float64 copy."""
-    drag_area_np: np.ndarray
+    """``[D]`` float32 drag area ``C_D A`` [m^2] of each drag body."""
     nail_particles: np.ndarray
     """Host ``[N]`` int32 particle of each nail."""
     nail_target0: np.ndarray

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from warpsim.kernels.aero import AeroModel
+from warpsim.kernels.aero import STALL_SHARPNESS, AeroModel
 from warpsim.kernels.collision import CollisionMode
 from warpsim.kernels.constraints import chebyshev_weights
 from warpsim.runner import Simulation
@@ -41,6 +41,11 @@ class NumpyVerlet:
         self.tris = m.tri_indices.numpy().reshape(-1, 3)[: m.tri_count]
         self.tri_loading = m.tri_loading.numpy()[: m.tri_count]
         self.tri_world = m.particle_world_np[self.tris[:, 0]] if m.tri_count else np.zeros(0, dtype=np.int32)
+        self.tri_sail = m.tri_sail.numpy()[: m.tri_count]
+        self.tri_span = m.tri_span.numpy()[: m.tri_count]
+        self.particle_world = m.particle_world_np
+        self.drag_particles = m.drag_particles.numpy()[: m.drag_count] if m.drag_count else np.zeros(0, np.int32)
+        self.drag_area = m.drag_area.numpy()[: m.drag_count] if m.drag_count else np.zeros(0, F32)
         self.air = solver.air
         self.wind_profile = solver.wind
         self.ground = solver.ground
@@ -109,6 +114,10 @@ class NumpyVerlet:
             wind = wind * ((h / F32(shear.reference_height)) ** F32(shear.shear_exponent))[:, None]
         w = wind - velocity
         wn = np.einsum("ij,ij->i", n, w)
+        if self.air.model == AeroModel.SAIL:
+            force = self._sail(n, area, w, q) * F32(self.air.scale / 3.0)
+            force = np.where(ok[:, None], force, F32(0.0))
+            return self._sum_per_particle(t.ravel(), np.repeat(force, 3, axis=0))
         if self.air.model == AeroModel.PAPER:
             mag = self.air_density * wn * np.abs(wn) * area
         else:
@@ -120,6 +129,60 @@ class NumpyVerlet:
             mag = np.where(live, F32(0.5) * self.air_density * speed * speed * area * c_n * np.sign(wn), F32(0.0))
         force = np.where(ok[:, None], n * mag[:, None], F32(0.0)) * F32(self.air.scale / 3.0)
         return self._sum_per_particle(t.ravel(), np.repeat(force, 3, axis=0))
+
+    def _sail(self, n, area, w, q) -> np.ndarray:
+        """``sail`` air force [N] per triangle (before the 1/3 share), as :func:`warpsim.kernels.aero.sail_force`."""
+        one = F32(1.0)
+        cl_slope, induced, cd0, stall = (self.tri_sail[:, k] for k in range(4))
+        span = np.zeros_like(w)
+        has = self.tri_span[:, 0] >= 0
+        edge = q[self.tri_span[has, 1]] - q[self.tri_span[has, 0]]
+        span[has] = edge / np.linalg.norm(edge, axis=1, keepdims=True)
+        speed = np.linalg.norm(w, axis=1)
+        live = speed > 0
+        w_hat = w / np.where(live, speed, one)[:, None]
+        force = w_hat * (cd0 * speed * speed)[:, None]
+        # attached flow on the wind across the leading edge
+        w_n = w - span * np.einsum("ij,ij->i", w, span)[:, None]
+        speed_n = np.linalg.norm(w_n, axis=1)
+        across = speed_n > F32(1e-6) * speed
+        wn_hat = w_n / np.where(across, speed_n, one)[:, None]
+        d = np.einsum("ij,ij->i", n, wn_hat)
+        sin_n = np.minimum(np.abs(d), one)
+        cos_n = np.sqrt(np.maximum(one - sin_n * sin_n, F32(0.0)))
+        cl = cl_slope * np.arcsin(sin_n)
+        tilted = cos_n > F32(1e-6)
+        lift_dir = (n * np.sign(d)[:, None] - wn_hat * sin_n[:, None]) / np.where(tilted, cos_n, one)[:, None]
+        lift_dir = np.where(tilted[:, None], lift_dir, F32(0.0))
+        attached = (lift_dir * cl[:, None] + wn_hat * (induced * cl * cl)[:, None]) * (speed_n * speed_n)[:, None]
+        attached = np.where(across[:, None], attached, F32(0.0))
+        # separated flow: the plate's normal force, blended in past the stall
+        wn = np.einsum("ij,ij->i", n, w_hat)
+        sin_a = np.minimum(np.abs(wn), one)
+        plate = one / (F32(0.222) + F32(0.283) / np.where(sin_a > F32(1e-6), sin_a, one))
+        separated = n * (np.sign(wn) * plate * speed * speed)[:, None]
+        separated = np.where((sin_a > F32(1e-6))[:, None], separated, F32(0.0))
+        sigma = one / (one + np.exp(-F32(STALL_SHARPNESS) * (np.arcsin(sin_a) - stall)))
+        force = force + attached * (one - sigma)[:, None] + separated * sigma[:, None]
+        scale = F32(0.5) * self.air_density * area * (self.tri_loading + (one - self.tri_loading) * sin_a)
+        return np.where(live[:, None], force * scale[:, None], F32(0.0)).astype(F32)
+
+    def body_drag(self) -> np.ndarray:
+        """The drag bodies' drag [N] per particle ``[n, 3]`` (``sail`` air only), as the ``body_drag`` kernel."""
+        out = np.zeros((self.n, 3), dtype=F32)
+        if self.air.model != AeroModel.SAIL or len(self.drag_particles) == 0:
+            return out
+        i = self.drag_particles
+        x = self.q[i]
+        w = self.wind[self.particle_world[i]]
+        shear = self.wind_profile
+        if shear.shear_exponent != 0.0:
+            h = np.maximum(x[:, 2] - self.height(x[:, 0], x[:, 1]), F32(0.1))
+            w = w * ((h / F32(shear.reference_height)) ** F32(shear.shear_exponent))[:, None]
+        w = w - (x - self.q_prev[i]) / self.dt
+        speed = np.linalg.norm(w, axis=1)
+        out[i] = w * (F32(0.5) * self.air_density * speed * self.drag_area * F32(self.air.scale))[:, None]
+        return out
 
     def verlet(self, force: np.ndarray) -> None:
         """Move every free particle by Verlet; nailed ones to their nails."""
@@ -183,6 +246,6 @@ class NumpyVerlet:
 
     def step(self) -> None:
         """One step of ``dt``: air force, Verlet, constraints, terrain (the paper's order)."""
-        self.verlet(self.air_force())
+        self.verlet(self.air_force() + self.body_drag())
         self.project()
         self.collide()

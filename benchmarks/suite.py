@@ -104,7 +104,7 @@ def case_object(name: str) -> Callable[[Options], dict]:
             _compare(row, "paper (2 GHz Pentium 4)", PAPER_HANG_GLIDER_STEPS_PER_S)
         return row
 
-    run.__doc__ = f"the paper's {name} at its default settings"
+    run.__doc__ = f"the {name} at its default settings (the flying design where it has one)"
     return run
 
 

@@ -74,11 +74,17 @@ def test_moving_plate_in_still_air_is_braked(device):
 
 def _glider_centre_of_pressure(device, alpha_deg: float, chord_loading: bool) -> tuple[float, float]:
     """Chord fraction of the flat (no washout) glider sail's centre of pressure, and its total normal force [N]."""
-    from warpsim.objects.hang_glider import HangGliderConfig, build_hang_glider
+    from warpsim.objects.hang_glider import PRESETS, HangGliderConfig, build_hang_glider
 
     b = ws.ModelBuilder()
-    cfg = HangGliderConfig(
-        nose_up=0.0, washout=0.0, position=(0.0, 0.0), altitude=50.0, speed=0.0, chord_loading=chord_loading
+    cfg = HangGliderConfig(  # the paper's flat sail: the flying design's 2 degrees of dihedral tilt its normals
+        **PRESETS["paper"]["hang_glider"],
+        nose_up=0.0,
+        washout=0.0,
+        position=(0.0, 0.0),
+        altitude=50.0,
+        speed=0.0,
+        chord_loading=chord_loading,
     )  # at rest in the wind: the wind is the relative wind
     rec = build_hang_glider(b, cfg, ws.Heightfield.flat())
     m = b.finalize(device)

@@ -2,7 +2,8 @@
 
 Bands from real flex wings and single-line delta kites (README, hang glider): a hands-off glide ratio of at
 least 8 at 9-13 m/s, steady; bar in faster, bar out slower; weight shift turns and releasing it levels; a
-delta kite's line 45-70 degrees above the ground at the anchor.
+delta kite's line 45-70 degrees above the ground at the anchor. The turn against the coordinated-turn closed
+form, the phugoid's damping and the stall recovery are validation rows (tests/test_validation.py).
 """
 
 import math
@@ -11,41 +12,16 @@ import numpy as np
 import pytest
 import warp as wp
 
+from benchmarks.validation.cases import fly as _fly
+from benchmarks.validation.cases import glide as _glide
+from benchmarks.validation.cases import turn_rate
+from benchmarks.validation.cases import window as _window
 from warpsim.descriptor import resolve
 from warpsim.kernels.aero import sail_coefficients, sail_force
-from warpsim.objects.hang_glider import flight_state
 from warpsim.runner import Simulation
 
 
-def _fly(scene: str, seconds: float, controls=()):
-    """Fly ``scene`` for ``seconds``, setting ``controls`` ``(time, values)`` on the way; the flight state
-    every 0.1 s."""
-    sim = Simulation(resolve(scene)[0])
-    rec = sim.model.objects[0]
-    steps = int(round(0.1 / sim.dt))
-    history = []
-    for i in range(int(round(seconds * 10))):
-        for when, values in controls:
-            if abs(i * 0.1 - when) < 1e-6:
-                sim.set_controls(**values)
-        sim.step(steps)
-        f = flight_state(rec, sim.state.positions(), sim.state.particle_q_prev.numpy(), sim.dt, (0, 0, 0))
-        f["t"] = (i + 1) * 0.1
-        history.append(f)
-    return history
-
-
-def _window(history, t0, t1):
-    return [f for f in history if t0 - 1e-9 <= f["t"] <= t1 + 1e-9]
-
-
-def _glide(frames):
-    """Horizontal distance over height lost, and the mean airspeed [m/s], over ``frames`` (0.1 s apart)."""
-    distance = sum(float(np.hypot(*f["velocity"][:2])) * 0.1 for f in frames[1:])
-    return distance / (frames[0]["altitude"] - frames[-1]["altitude"]), float(np.mean([f["airspeed"] for f in frames]))
-
-
-@pytest.mark.parametrize("scene", ["scenes/hang_glider_flex.toml", "scenes/hang_glider_intermediate.toml"])
+@pytest.mark.parametrize("scene", ["scenes/hang_glider.toml", "scenes/hang_glider_intermediate.toml"])
 def test_hands_off_glider_trims_steady_at_a_glide_of_eight(scene):
     # measured (2-core CPU): flex 8.10 at 12.15 m/s (11.75-12.56), intermediate 8.19 at 12.79 m/s; bank 0.1 deg
     frames = _window(_fly(scene, 60.0), 10.0, 60.0)
@@ -58,7 +34,7 @@ def test_hands_off_glider_trims_steady_at_a_glide_of_eight(scene):
 
 def test_bar_in_flies_faster_and_bar_out_slower():
     # measured: trim 12.15 m/s; bar in (pitch +1) 15.8, bar half out (pitch -0.5) 11.1 over 25-30 s
-    scene = "scenes/hang_glider_flex.toml"
+    scene = "scenes/hang_glider.toml"
     speed = {
         pitch: _glide(_window(_fly(scene, 30.0, [(20.0, {"pitch": pitch})]), 25.0, 30.0))[1]
         for pitch in (0.0, 1.0, -0.5)
@@ -70,10 +46,9 @@ def test_bar_in_flies_faster_and_bar_out_slower():
 def test_weight_shift_turns_that_way_and_levels_when_released(roll):
     # measured: roll +0.5 banks 12-24 deg right and turns right at 13 deg/s; released at 50 s the bank falls
     # from 20.8 (52 s) to 12.2 deg (75 s)
-    history = _fly("scenes/hang_glider_flex.toml", 75.0, [(20.0, {"roll": roll}), (50.0, {"roll": 0.0})])
+    history = _fly("scenes/hang_glider.toml", 75.0, [(20.0, {"roll": roll}), (50.0, {"roll": 0.0})])
     turn = _window(history, 35.0, 50.0)
-    heading = np.unwrap([math.atan2(f["velocity"][1], f["velocity"][0]) for f in turn])
-    rate = math.degrees(heading[-1] - heading[0]) / (turn[-1]["t"] - turn[0]["t"])
+    rate = turn_rate(turn)
     banks = np.array([f["bank_deg"] for f in turn])
     # bank > 0: right tip lower; roll > 0 moves the pilot right; heading falls when turning right
     assert (roll * banks > 5.0).all() and roll * rate < -5.0, (banks.min(), banks.max(), rate)
@@ -91,7 +66,7 @@ def _line_at_anchor(sim) -> float:
     return math.degrees(math.atan2(d[2], math.hypot(d[0], d[1])))
 
 
-@pytest.mark.parametrize("scene", ["scenes/kite_sail.toml", "scenes/kite_sport.toml"])
+@pytest.mark.parametrize("scene", ["kite", "scenes/kite_sport.toml"])
 def test_sail_kite_line_stands_at_45_to_70_degrees(scene):
     # measured: 55.8 (the paper's kite) and 56.1 degrees (sport kite), steady to 0.2 degrees over 20-40 s
     sim = Simulation(resolve(scene)[0])
@@ -106,7 +81,7 @@ def test_sail_kite_line_stands_at_45_to_70_degrees(scene):
 
 def test_sail_kite_rides_the_gusts():
     # measured: airborne in every frame of 120 s (lowest sail particle 0.5 m above the terrain or more)
-    sim = Simulation(resolve("scenes/kite_gusty_sail.toml")[0])
+    sim = Simulation(resolve("scenes/kite_gusty.toml")[0])
     rec = sim.model.objects[0]
     sail = rec.parts["sail"]
     airborne = []
@@ -165,7 +140,7 @@ def test_sweep_cuts_the_lift_of_a_slipping_wing_half():
 
 
 def test_pilot_drag_body_feels_half_rho_cda_v_squared():
-    d = resolve("scenes/hang_glider_flex.toml")[0]
+    d = resolve("scenes/hang_glider.toml")[0]
     sim = Simulation(d)
     rec = sim.model.objects[0]
     v = (sim.state.positions()[rec.pilot] - sim.state.particle_q_prev.numpy()[rec.pilot]) / sim.dt  # still air

@@ -15,7 +15,9 @@ from warpsim.runner import Simulation
         # (np.bincount vs stick-order atomics), which used to round away: up to 2 ulps after 3 steps
         ("hang-glider", {}, 3, 1e-4),
         ("hang-glider", {"air": {"model": "plate"}}, 3, 1e-4),
+        ("hang-glider", {"hang_glider": {"design": "paper"}}, 3, 1e-4),
         ("kite", {}, 3, 1e-5),
+        ("kite", {"kite": {"design": "paper"}}, 3, 1e-5),
         ("parachute", {}, 3, 3e-4),  # it starts at 400 m, where a float32 ulp is 3e-5 m
         ("flag", {"wind": {"shear_exponent": 0.14}, "solver": {"damping": 0.01}}, 50, 1e-4),
     ],

@@ -84,8 +84,8 @@ def _one_error_line(err: list[str], *words: str) -> str:
 
 def _reference_positions(seconds: float, tmp_path: Path, scene="kite") -> np.ndarray:
     """Positions of an uninterrupted run of ``seconds``."""
-    ref = tmp_path / f"ref{seconds:.2f}.h5"
-    assert main(["run", scene, "--seconds", f"{seconds:.2f}", "--h5", str(ref), "--quiet"]) == 0
+    ref = tmp_path / f"ref{seconds:.6g}.h5"
+    assert main(["run", scene, "--seconds", f"{seconds:.6g}", "--h5", str(ref), "--quiet"]) == 0
     with Recording(ref) as r:
         return r.positions()
 
@@ -142,11 +142,12 @@ def test_killed_run_reads_converts_and_resumes_bit_for_bit(seed, tmp_path):
     assert code == 0 and err == []
     stage = Usd.Stage.Open(str(tmp_path / "k.usda"))
     assert len(UsdGeom.Mesh(stage.GetPrimAtPath("/World/kite/sail")).GetPointsAttr().GetTimeSamples()) == frames
-    assert main(["run", "--resume", str(rec), "--seconds", "0.3", "--quiet"]) == 0
+    # the kite's frames are 35 ms apart (7 steps of 5 ms): 0.35 s is 10 more frames
+    assert main(["run", "--resume", str(rec), "--seconds", "0.35", "--quiet"]) == 0
     with h5py.File(rec, "r") as f:  # the resume cleared the flags
         resumed = f["positions"][:]
     assert resumed.shape[0] == frames + 10
-    np.testing.assert_array_equal(resumed, _reference_positions(t + 0.3, tmp_path))
+    np.testing.assert_array_equal(resumed, _reference_positions(t + 0.35, tmp_path))
 
 
 def test_stale_temporaries_of_a_killed_export_are_removed(tmp_path):

@@ -25,7 +25,10 @@ from warpsim.runner import Simulation
 @pytest.mark.parametrize("kind", list(registry.OBJECTS))
 def test_python_api_and_descriptor_defaults_are_the_same(kind):
     d = defaults(kind)
-    scene_defaults = registry.OBJECTS[kind].scene_defaults
+    spec = registry.OBJECTS[kind]
+    # an object with designs: its default design's preset is part of its defaults (e.g. the air model)
+    preset = spec.presets.get(getattr(spec.config(), "design", None), {})
+    scene_defaults = {s: {**spec.scene_defaults.get(s, {}), **preset.get(s, {})} for s in config.SECTIONS}
     for section, cls in config.SECTIONS.items():
         expected = {**config.as_section(cls()), **scene_defaults.get(section, {})}
         if section == "scene":
@@ -35,7 +38,7 @@ def test_python_api_and_descriptor_defaults_are_the_same(kind):
     sim = Simulation(d)
     solver_defaults = {**config.as_section(config.SolverConfig()), **scene_defaults.get("solver", {})}
     assert config.as_section(sim.solver.config) == solver_defaults
-    assert sim.solver.air == config.AirConfig() and sim.solver.ground == config.GroundConfig()
+    assert sim.solver.air == config.AirConfig(**scene_defaults["air"]) and sim.solver.ground == config.GroundConfig()
 
 
 def test_python_solvers_default_to_the_descriptor_settings():
@@ -153,3 +156,23 @@ def test_kernels_compare_enums_by_member_not_by_number():
                 numbers = [n for n in (node.left, *node.comparators) if isinstance(n, ast.Constant)]
                 enum_like = [n for n in names if n.endswith(("mode", "model"))]
                 assert not (enum_like and numbers), f"{func.__name__} compares {enum_like} with a number"
+
+
+def test_a_design_is_a_preset_and_keys_beside_it_win(capsys):
+    """``hang_glider.design = "paper"`` brings back the paper's glider (its suspension, flat untensioned sail and
+    air law) in one --set; keys given beside it win; setting the flying design again restores the defaults."""
+    flying = defaults("hang-glider")
+    paper = merge("test", flying, {"hang_glider": {"design": "paper"}})
+    assert paper["air"]["model"] == "paper" and paper["hang_glider"]["suspension"] == "sticks"
+    assert paper["hang_glider"]["sail_tension"] == 0.0 and not paper["hang_glider"]["keel_pocket"]
+    mixed = merge("test", flying, {"hang_glider": {"sail_tension": 0.02, "design": "paper"}, "air": {"model": "plate"}})
+    assert mixed["hang_glider"]["sail_tension"] == 0.02 and mixed["air"]["model"] == "plate"
+    assert merge("test", paper, {"hang_glider": {"design": "flying"}}) == flying
+    kite = merge("test", defaults("kite"), {"kite": {"design": "paper"}})
+    assert (kite["air"]["model"], kite["solver"]["dt"], kite["kite"]["tow_point"]) == ("paper", 0.01, 0.35)
+    with pytest.raises(DescriptorError, match="design cannot differ between worlds"):
+        merge("test", flying, {"worlds": {"count": 2, "hang_glider": {"design": ["flying", "paper"]}}})
+    from warpsim.cli import main
+
+    assert main(["info", "hang-glider", "--set", "hang_glider.design=paper"]) == 0
+    assert "particles 49, sticks 180, triangles 64" in capsys.readouterr().out  # the paper's 49 particles

@@ -7,7 +7,7 @@ import sys
 import time
 
 from warpsim.cli import EXIT_BLOWUP, build_parser, main
-from warpsim.descriptor import defaults
+from warpsim.descriptor import defaults, merge
 from warpsim.objects import registry
 from warpsim.runner import Simulation
 
@@ -58,8 +58,8 @@ def test_euler_blow_up_summary_and_hint(capsys):
 
 
 def test_terrain_contact_is_named_with_its_time():
-    """The built-in hang glider (paper air) dives into the procedural terrain: the summary says when."""
-    summary = Simulation(defaults("hang-glider")).run(15.0)
+    """The paper's hang glider (paper air) dives into the procedural terrain: the summary says when."""
+    summary = Simulation(merge("test", defaults("hang-glider"), {"hang_glider": {"design": "paper"}})).run(15.0)
     ((name, t),) = summary.ground_contacts
     assert name == "hang_glider" and 10.0 < t < 13.0
     assert f"hang_glider touched the terrain at t = {t:.2f} s" in summary.text()

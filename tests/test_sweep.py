@@ -400,7 +400,7 @@ def test_sweep_and_plot_command_lines_never_traceback(tmp_path, monkeypatch):
     import contextlib
     import io
 
-    from hypothesis import HealthCheck, given, settings
+    from hypothesis import HealthCheck, example, given, settings
     from hypothesis import strategies as st
 
     monkeypatch.setattr(sweeps, "_run_tasks", _in_process)
@@ -430,7 +430,16 @@ def test_sweep_and_plot_command_lines_never_traceback(tmp_path, monkeypatch):
                 argv.append(draw(st.text(max_size=6) if typed else st.sampled_from(SWEEP_TOKENS[kind])))
         return argv
 
+    good = ["sweep", "kite", "--seconds", "0.05", "--vary", "wind.speed=4,8", "--out", "out.parquet"]
+    plot = ["plot", "table.parquet", "p.png", "--x", "wind.speed", "--metric", "altitude_mean"]
+
+    # explicit examples that must run (exit 0), so the count below does not hang on what the random draws give
     @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @example(argv=good)
+    @example(argv=[*good, "--restart"])
+    @example(argv=[*good, "--metrics", "altitude_mean", "--window", "0:0.05"])
+    @example(argv=plot)
+    @example(argv=[*plot, "--where", "wind.speed=4"])
     @given(argv=command_lines())
     def check(argv):
         before = {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()}
@@ -460,4 +469,4 @@ def test_sweep_and_plot_command_lines_never_traceback(tmp_path, monkeypatch):
 
     codes: list = []
     check()
-    assert codes.count(0) >= 5  # some sweeps and plots did run
+    assert codes.count(0) >= 5  # some sweeps and plots did run (the explicit examples at least)

@@ -47,9 +47,17 @@ def test_mass_splitting_restores_the_force_balance():
     assert not chute["parachute descent"].ok
 
 
-def test_glider_rows_report_the_model_limit():
-    rows = _rows("hang-glider")  # each outside its band: a flat sail cannot glide like a real glider
+def test_paper_glider_rows_report_the_model_limit():
+    rows = _rows("hang-glider")  # each outside its band: the paper's flat sail cannot glide like a real glider
     assert len(rows) == 4 and all(r.model_limit for r in rows.values())
+
+
+def test_flying_glider_and_kite_rows_pass_with_no_model_limit():
+    """The flying design against real flex wings and closed forms (glide, trim, the coordinated turn, Lanchester's
+    phugoid damping, stall recovery) and the kites' line angle: every row inside its band, none excused."""
+    rows = {**_rows("flying-glider"), **_rows("kite-angle")}
+    assert len(rows) == 7
+    assert all(r.ok and not r.model_limit for r in rows.values()), [r for r in rows.values() if not r.ok]
 
 
 def test_elliptic_integral():

@@ -84,6 +84,7 @@ class ModelBuilder:
         self.stick_particles: list[tuple[int, int]] = []
         self.stick_rest: list[float] = []
         self.stick_weight: list[float] = []
+        self.stick_pretension: list[float] = []
         self.tri_indices: list[tuple[int, int, int]] = []
         self.tri_loading: list[float] = []
         self.tri_sail: list[tuple[float, float, float, float]] = []
@@ -145,7 +146,18 @@ class ModelBuilder:
         self.stick_particles.append((int(i), int(j)))
         self.stick_rest.append(float(rest))
         self.stick_weight.append(float(weight))
+        self.stick_pretension.append(0.0)
         return self.stick_count - 1
+
+    def pretension(self, sticks, share: float) -> None:
+        """Make ``sticks`` ``share`` (0 <= share < 1) shorter than they are: a cloth tensioned on its frame pulls
+        to this length. Their stretch is still reported against the length as built
+        (:attr:`~warpsim.model.Model.stick_pretension`)."""
+        if not 0.0 <= share < 1.0:
+            raise ValueError(f"pretension must be in [0, 1), got {share}")
+        for st in sticks:
+            self.stick_rest[st] *= 1.0 - share
+            self.stick_pretension[st] = 1.0 - (1.0 - self.stick_pretension[st]) * (1.0 - share)
 
     def add_triangle(self, i: int, j: int, k: int, loading: float = 1.0) -> int:
         """Add an aerodynamic triangle (i, j, k); returns its index.
@@ -406,6 +418,7 @@ class ModelBuilder:
         m.stick_rest = wp.array(np.array(self.stick_rest, dtype=np.float32), dtype=wp.float32, device=device)
         weight = np.array(self.stick_weight, dtype=np.float32)
         m.stick_weight = wp.array(weight, dtype=wp.float32, device=device)
+        m.stick_pretension = np.array(self.stick_pretension, dtype=np.float64)
         weight_sum = np.zeros(n, dtype=np.float64)
         np.add.at(weight_sum, sticks.reshape(-1), np.repeat(weight.astype(np.float64), 2))
         m.particle_stick_weight = weight_sum

@@ -84,8 +84,15 @@ def defaults(kind: str = "flag") -> dict[str, dict[str, Any]]:
     d[registry.section(kind)] = as_section(registry.OBJECTS[kind].config())
     for section, values in registry.OBJECTS[kind].scene_defaults.items():
         d[section].update(copy.deepcopy(values))
+    _apply_preset(d, kind, d[registry.section(kind)].get("design"))
     d["controls"] = []
     return d
+
+
+def _apply_preset(descriptor: dict, kind: str, design) -> None:
+    """Write the values of object ``kind``'s ``design`` preset (if it has one) into ``descriptor``."""
+    for section, values in registry.OBJECTS[kind].presets.get(design, {}).items():
+        descriptor[section].update(copy.deepcopy(values))
 
 
 def _suggest(word: str, options) -> str:
@@ -141,6 +148,14 @@ def merge(where: str, base: dict, override: dict) -> dict:
     """Validate ``override`` (parsed TOML) against ``base`` (a full descriptor) and merge it in."""
     out = copy.deepcopy(base)
     worlds = sweep = None
+    kind = out["scene"]["object"]
+    own = override.get(registry.section(kind))
+    if isinstance(own, dict) and "design" in own and "design" in out[registry.section(kind)]:
+        # a design is a preset of other keys: apply it first, so the override's own keys win
+        design = _check_value(
+            where, registry.section(kind), "design", out[registry.section(kind)]["design"], own["design"]
+        )
+        _apply_preset(out, kind, design)
     for section, values in override.items():
         if section == "controls":
             out["controls"] = _check_controls(where, values, out["scene"]["object"])
@@ -199,6 +214,11 @@ def _check_worlds(where: str, worlds, descriptor: dict) -> dict:
             )
         if not isinstance(values, dict):
             raise DescriptorError(f"{where}: worlds.{section} must name a key, e.g. worlds.wind.speed = [4.0, 8.0]")
+        if "design" in values and section == variable[0]:
+            raise DescriptorError(
+                f"{where}: worlds.{section}.design cannot differ between worlds (a design also sets the air model, "
+                "which every world shares); vary the keys it sets instead, or run each design as its own scene"
+            )
         keys = {**descriptor[section], **({"speed": 0.0} if section == "wind" else {})}
         for key, per_world in values.items():
             name = f"worlds.{section}.{key}"

@@ -101,6 +101,10 @@ class Model:
     """``[S]`` float32 rest lengths [m] as built (``Control.stick_rest`` starts from them)."""
     stick_weight: wp.array
     """``[S]`` float32 weight of each stick in the per-particle average (1 = the paper)."""
+    stick_pretension: np.ndarray
+    """Host ``[S]`` float64 share by which a stick's rest length is shorter than it was built (a tensioned sail;
+    0 for most sticks). A pretensioned stick anywhere between its rest length and its length as built,
+    ``rest / (1 - pretension)``, shows no stretch (:meth:`stick_stretch`)."""
     tri_indices: wp.array
     """``[T]`` vec3i triangle vertices; ``tri_indices_np`` is its host ``[T, 3]`` copy."""
     tri_indices_np: np.ndarray
@@ -192,9 +196,15 @@ class Model:
         return np.linalg.norm(positions[ends[:, 1]] - positions[ends[:, 0]], axis=1)
 
     def stick_stretch(self, positions: np.ndarray, rest: np.ndarray | None = None) -> np.ndarray:
-        """Relative stretch ``(l - r)/r`` of every stick (dimensionless)."""
+        """Relative stretch ``(l - r)/r`` of every stick (dimensionless), ``r`` its rest length (``rest``, or the
+        model's as built). A pretensioned stick (:attr:`stick_pretension`) is measured against the nearer end of
+        its band: its stretch is ``l / (r / (1 - pretension)) - 1`` past its length as built, ``l / r - 1``
+        below its rest length and 0 between (a tensioned sail between its pulled and its built size)."""
         rest = self.stick_rest.numpy() if rest is None else rest
-        return self.stick_lengths(positions) / np.maximum(rest, 1e-12) - 1.0
+        rest = np.maximum(rest, 1e-12)
+        lengths = self.stick_lengths(positions)
+        past_built = lengths / (rest / (1.0 - self.stick_pretension)) - 1.0
+        return np.where(past_built > 0.0, past_built, np.minimum(lengths / rest - 1.0, 0.0))
 
     def __repr__(self) -> str:
         return (

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -23,6 +24,8 @@ from warpsim.model import AIR_DENSITY, GRAVITY
 from warpsim.runner import BlowUpError, Simulation
 from warpsim.solver import SolverVerlet
 from warpsim.terrain import Heightfield
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @dataclass
@@ -381,10 +384,15 @@ def kite_line(mass_splitting: bool = False) -> list[Row]:
 
 
 def hang_glider() -> list[Row]:
-    """Glide ratio and trim speed (pitch 0) under both air models against real flex-wing hang gliders."""
+    """The paper's glider (``design = "paper"``): glide ratio and trim speed (pitch 0) under the paper's and the
+    plate air law against real flex-wing hang gliders (the flying design: :func:`flying_glider`)."""
     rows = []
     for model in ("paper", "plate"):
-        d = descriptor.merge("validation", descriptor.defaults("hang-glider"), {"air": {"model": model}})
+        d = descriptor.merge(
+            "validation",
+            descriptor.defaults("hang-glider"),
+            {"hang_glider": {"design": "paper"}, "air": {"model": model}},
+        )
         sim = Simulation(d)
         track = []  # (time [s], centre [m], airspeed [m/s]) of the glider, from the recorder's own metrics
 
@@ -404,8 +412,8 @@ def hang_glider() -> list[Row]:
         speed = float(np.mean([v for _, _, v in late]))
         rows.append(
             Row(
-                f"glider glide ({model})",
-                f"glide ratio of the glider at pitch 0, aero = {model}, 5-10 s of flight",
+                f"paper glider glide ({model})",
+                f"glide ratio of the paper's glider at pitch 0, aero = {model}, 5-10 s of flight",
                 "10-17",
                 "flex-wing hang gliders: best glide about 15:1 (e.g. jpxfly.com, 'Hang gliding championship'); "
                 "lower at trim",
@@ -420,8 +428,8 @@ def hang_glider() -> list[Row]:
         )
         rows.append(
             Row(
-                f"glider trim speed ({model})",
-                f"mean airspeed at pitch 0, aero = {model}, 5-10 s",
+                f"paper glider trim speed ({model})",
+                f"mean airspeed of the paper's glider at pitch 0, aero = {model}, 5-10 s",
                 "8-12 m/s",
                 "hands-off trim of flex-wing gliders, about 30-43 km/h (manufacturers' owner manuals, e.g. Wills "
                 "Wing; approximate)",
@@ -435,6 +443,179 @@ def hang_glider() -> list[Row]:
     return rows
 
 
+def fly(scene: str, seconds: float, controls=(), every: float = 0.1) -> list[dict]:
+    """Fly the hang glider of ``scene`` (a built-in name or a scene file) for ``seconds`` [s], setting
+    ``controls`` ``(time [s], {name: value})`` on the way; its :func:`flight_state` every ``every`` seconds,
+    each with its time ``t`` [s]."""
+    from warpsim.objects.hang_glider import flight_state
+
+    sim = Simulation(descriptor.resolve(scene)[0])
+    record = sim.model.objects[0]
+    steps = int(round(every / sim.dt))
+    history = []
+    for i in range(int(round(seconds / every))):
+        for when, values in controls:
+            if abs(i * every - when) < 1e-6:
+                sim.set_controls(**values)
+        sim.step(steps)
+        state = flight_state(record, sim.state.positions(), sim.state.particle_q_prev.numpy(), sim.dt, (0, 0, 0))
+        state["t"] = (i + 1) * every
+        history.append(state)
+    return history
+
+
+def window(history: list[dict], t0: float, t1: float) -> list[dict]:
+    """The flight states of ``history`` from ``t0`` to ``t1`` [s], both included."""
+    return [f for f in history if t0 - 1e-9 <= f["t"] <= t1 + 1e-9]
+
+
+def glide(frames: list[dict]) -> tuple[float, float]:
+    """Horizontal distance flown over height lost, and the mean airspeed [m/s], over consecutive ``frames``."""
+    every = frames[1]["t"] - frames[0]["t"]
+    distance = sum(float(np.hypot(*f["velocity"][:2])) * every for f in frames[1:])
+    return distance / (frames[0]["altitude"] - frames[-1]["altitude"]), float(np.mean([f["airspeed"] for f in frames]))
+
+
+def turn_rate(frames: list[dict]) -> float:
+    """Mean rate of change of the flight path's heading over ``frames`` [deg/s] (positive: turning left)."""
+    heading = np.unwrap([math.atan2(f["velocity"][1], f["velocity"][0]) for f in frames])
+    return math.degrees(heading[-1] - heading[0]) / (frames[-1]["t"] - frames[0]["t"])
+
+
+def flying_glider() -> list[Row]:
+    """The default (flying) hang glider against real flex wings and flight-mechanics closed forms."""
+    trim = fly("hang-glider", 60.0)
+    ratio, speed = glide(window(trim, 10.0, 60.0))
+    speeds = np.array([f["airspeed"] for f in window(trim, 10.0, 60.0)])
+    rows = [
+        Row(
+            "glider glide (flying design)",
+            "glide ratio of the built-in hang glider hands off (pitch 0), still air, 10-60 s",
+            ">= 8",
+            "single-surface flex wings glide about 8-10:1 at trim, modern topless ones about 15:1 at best "
+            "(issue 18's band; Wikipedia, 'Hang gliding: performance'; approximate)",
+            f"{ratio:.2f}",
+            ">= 8",
+            ratio >= 8.0,
+            note=f"sink {speed / ratio:.2f} m/s",
+        ),
+        Row(
+            "glider trim speed (flying design)",
+            "mean airspeed hands off, 10-60 s, and its spread",
+            "9-13 m/s, steady within ±10 %",
+            "hands-off trim of flex wings, about 32-47 km/h (issue 18's band; owner manuals, e.g. Wills Wing, "
+            "give about 30-43 km/h; approximate)",
+            f"{speed:.2f} m/s ({speeds.min():.2f}-{speeds.max():.2f})",
+            "9-13 m/s, ±10 %",
+            9.0 <= speed <= 13.0 and np.abs(speeds / speed - 1.0).max() <= 0.1,
+            note=f"{3.6 * speed:.1f} km/h",
+        ),
+    ]
+    # weight shift: roll held at 0.5 from 20 s; a steady banked turn is coordinated: rate = g tan(bank) / V
+    turning = window(fly("hang-glider", 50.0, [(20.0, {"roll": 0.5})]), 35.0, 50.0)
+    bank = float(np.mean([f["bank_deg"] for f in turning]))
+    airspeed = float(np.mean([f["airspeed"] for f in turning]))
+    rate = -turn_rate(turning)  # bank > 0 (right wing down) turns right: heading falls
+    expected = math.degrees(GRAVITY * math.tan(math.radians(bank)) / airspeed)
+    sink = (turning[0]["altitude"] - turning[-1]["altitude"]) / (turning[-1]["t"] - turning[0]["t"])
+    rows.append(
+        Row(
+            "glider weight-shift turn",
+            f"turn rate with roll 0.5 held, 35-50 s: bank {bank:.1f}°, airspeed {airspeed:.1f} m/s",
+            f"{expected:.1f} °/s",
+            "coordinated turn: rate = g tan(bank) / airspeed (level-turn force balance, any flight-mechanics text)",
+            f"{rate:.1f} °/s",
+            "within ±15 %",
+            abs(rate / expected - 1.0) <= 0.15,
+            note=f"sink {sink:.2f} m/s in the turn; bank {min(f['bank_deg'] for f in turning):.0f}-"
+            f"{max(f['bank_deg'] for f in turning):.0f}°",
+        )
+    )
+    # phugoid: a 2 s pulse of bar in (pitch 0.3) from trim, then hands off; troughs of the airspeed
+    pulse = window(fly("hang-glider", 60.0, [(20.0, {"pitch": 0.3}), (22.0, {"pitch": 0.0})]), 23.0, 60.0)
+    dv = np.array([f["airspeed"] for f in pulse]) - speed
+    troughs = [i for i in range(1, len(dv) - 1) if dv[i] < dv[i - 1] and dv[i] <= dv[i + 1] and dv[i] < -0.2]
+    period = (pulse[troughs[-1]]["t"] - pulse[troughs[0]]["t"]) / (len(troughs) - 1)
+    decrement = math.log(dv[troughs[0]] / dv[troughs[-1]]) / (len(troughs) - 1)
+    zeta = decrement / math.hypot(2.0 * math.pi, decrement)
+    lanchester = 1.0 / (math.sqrt(2.0) * ratio)
+    rows.append(
+        Row(
+            "glider phugoid damping",
+            "damping ratio of the airspeed's oscillation after a 2 s pulse of bar in (pitch 0.3), hands off",
+            f"{lanchester:.3f}",
+            "Lanchester's phugoid: damping ratio 1 / (sqrt(2) L/D) (e.g. Etkin & Reid, Dynamics of Flight, 4.4), "
+            "L/D the measured glide ratio",
+            f"{zeta:.3f}",
+            "within ±30 %",
+            abs(zeta / lanchester - 1.0) <= 0.3,
+            note=f"period {period:.1f} s against Lanchester's pi sqrt(2) V / g = "
+            f"{math.pi * math.sqrt(2.0) * speed / GRAVITY:.1f} s (which assumes a constant angle of attack)",
+        )
+    )
+    # stall: full bar out from 20 s, released at 30 s; recovered = flying speed (9 m/s) again, no tumble
+    stall = fly("hang-glider", 70.0, [(20.0, {"pitch": -1.0}), (30.0, {"pitch": 0.0})])
+    held = window(stall, 20.0, 30.0)
+    after = window(stall, 30.1, 70.0)
+    back = next((f["t"] - 30.0 for f in after if f["airspeed"] >= 9.0), float("inf"))
+    pitch = [abs(f["pitch_deg"]) for f in after]
+    settled = np.array([f["airspeed"] for f in window(stall, 60.0, 70.0)])  # 30-40 s after the release
+    swing = np.array([f["airspeed"] for f in window(stall, 32.0, 45.0)])
+    low, nose_up = min(f["airspeed"] for f in held), max(f["pitch_deg"] for f in held)
+    nose_down = -min(f["pitch_deg"] for f in after)
+    rows.append(
+        Row(
+            "glider stall recovery",
+            "full bar out (pitch -1) for 10 s, then released: time to fly at 9 m/s again",
+            "<= 5 s",
+            "issue 18: a flex wing recovers by itself from a stall when the bar is released (HGMA-certified "
+            "wings are pitch stable)",
+            f"{back:.1f} s",
+            "<= 5 s, and no tumble (|pitch| < 60°)",
+            back <= 5.0 and max(pitch) < 60.0,
+            note=f"held out: airspeed down to {low:.1f} m/s, nose up to {nose_up:.0f}°; after the release the nose "
+            f"drops to {nose_down:.0f}° below the horizon and a lightly damped phugoid follows (airspeed "
+            f"{swing.min():.1f}-{swing.max():.1f} m/s over 32-45 s, {settled.min():.1f}-{settled.max():.1f} m/s "
+            "30-40 s after the release)",
+        )
+    )
+    return rows
+
+
+def kite_angle() -> list[Row]:
+    """The line's elevation at the anchor of the default kite and the sport kite in a steady 6 m/s wind."""
+    rows = []
+    for scene, name in (
+        ("kite", "kite line at the anchor"),
+        ("scenes/kite_sport.toml", "sport kite line at the anchor"),
+    ):
+        sim = Simulation(descriptor.resolve(str(ROOT / scene) if scene.endswith(".toml") else scene)[0])
+        record = sim.model.objects[0]
+        ends = sim.model.stick_particles_np[record.stick_groups["rope"][-1]]
+        above = int(ends[ends != record.anchor_particle][0])
+        angles = []
+        sim.run(20.0)
+
+        def sample(frame, angles=angles, above=above, anchor=record.anchor_particle):
+            d = frame.positions[above] - frame.positions[anchor]
+            angles.append(math.degrees(math.atan2(d[2], math.hypot(d[0], d[1]))))
+
+        sim.run(20.0, on_frame=sample)
+        rows.append(
+            Row(
+                name,
+                "elevation of the line where it leaves the anchor, 6 m/s steady wind, 20-40 s",
+                "45-70°",
+                "single-line delta kites fly high on their line (issue 18's band; approximate, no measured data "
+                "in the stored sources)",
+                f"{np.mean(angles):.1f}° ({min(angles):.1f}-{max(angles):.1f})",
+                "45-70°, steady within 5°",
+                45.0 <= min(angles) and max(angles) <= 70.0 and max(angles) - min(angles) < 5.0,
+            )
+        )
+    return rows
+
+
 CASES: dict[str, Callable[[], list[Row]]] = {
     "free-fall": free_fall,
     "pendulum": pendulum,
@@ -443,4 +624,6 @@ CASES: dict[str, Callable[[], list[Row]]] = {
     "parachute": lambda: parachute(False) + parachute(True),
     "kite": lambda: kite_line(False) + kite_line(True),
     "hang-glider": hang_glider,
+    "flying-glider": flying_glider,
+    "kite-angle": kite_angle,
 }

@@ -28,9 +28,14 @@ PAPER_COUNTS = {"particles": 49, "sticks": 198, "triangles": 64}
 
 @dataclass(kw_only=True)
 class HangGliderConfig(Checked):
-    """Parameters of the hang glider (defaults: the paper's model, a 10 m, ~14 m^2 glider).
+    """Parameters of the hang glider (defaults: a 10 m, ~14 m^2 flex wing of the paper's size that flies).
 
     Attributes:
+        design: ``flying`` (the default: the pilot on a hang strap holding a control bar, a tensioned sail with
+            washout struts, a keel pocket and 2 degrees of dihedral, under the ``sail`` air model) or ``paper``
+            (Section 6: the pilot on seven control sticks, an untensioned flat sail, the paper's air law). In a
+            scene or with ``--set`` it is a preset (:data:`PRESETS`): it sets those keys and ``air.model``, and
+            keys given beside it win. The builder itself reads only the individual keys.
         divisions: sail subdivisions per side (paper: 8).
         span: tip-to-tip distance [m].
         chord: nose to trailing-edge distance along the keel [m].
@@ -80,13 +85,14 @@ class HangGliderConfig(Checked):
             struts (tip rods, sprogs) tied to the frame (0 = none): a tensioned sail would flatten it otherwise.
         sail_tension: the cloth's sticks are this much shorter than the sail as built (a sail tensioned on its
             frame, as a crossbar or VG does); a taut sail billows less, so its triangles spread less in angle of
-            attack. The cloth's reported stretch includes it.
+            attack. Stretch is reported against the sail as built (:meth:`~warpsim.builder.ModelBuilder.pretension`).
         oswald: ``sail`` air model: span efficiency of the induced drag
             (:func:`~warpsim.kernels.aero.sail_coefficients`).
         profile_drag: ``sail`` air model: the sail's zero-lift drag coefficient.
         stall_angle: ``sail`` air model: angle of attack [deg] where a triangle's flow separates.
     """
 
+    design: str = choice("flying", ("flying", "paper"))
     divisions: int = number(8, Bounds(2, 256))
     span: float = number(10.0, POSITIVE)
     chord: float = number(2.8, POSITIVE)
@@ -107,20 +113,35 @@ class HangGliderConfig(Checked):
     virtual_mass_fraction: float = number(0.3, Bounds(0.0, 0.85, low_open=True))
     frame_weight: float = number(6.0, POSITIVE)
     chord_loading: bool = True
-    suspension: str = choice("sticks", ("sticks", "strap"))
+    suspension: str = choice("strap", ("sticks", "strap"))
     hang_point: float = number(0.55, Bounds(0.0, 1.0))
     bar_forward: float = number(0.6, NON_NEGATIVE)
     bar_width: float = number(1.4, POSITIVE)
     control_frame_mass: float = number(4.0, POSITIVE)
     pilot_drag_area: float = number(0.2, NON_NEGATIVE)
     frame_drag_area: float = number(0.1, NON_NEGATIVE)
-    dihedral: float = number(0.0, Bounds(-30.0, 30.0))
-    keel_pocket: bool = False
-    washout_struts: float = number(0.0, Bounds(0.0, 1.0))
-    sail_tension: float = number(0.0, Bounds(0.0, 0.2))
+    dihedral: float = number(2.0, Bounds(-30.0, 30.0))
+    keel_pocket: bool = True
+    washout_struts: float = number(0.5, Bounds(0.0, 1.0))
+    sail_tension: float = number(0.03, Bounds(0.0, 0.2))
     oswald: float = number(0.8, Bounds(0.0, 1.0, low_open=True))
     profile_drag: float = number(0.025, NON_NEGATIVE)
     stall_angle: float = number(18.0, Bounds(0.0, 90.0, low_open=True, high_open=True))
+
+
+# The keys a design sets (README, hang glider): the paper's glider differs from the flying one only in these.
+_PAPER_GLIDER = {
+    "suspension": "sticks",
+    "keel_pocket": False,
+    "washout_struts": 0.0,
+    "sail_tension": 0.0,
+    "dihedral": 0.0,
+}
+PRESETS = {
+    "flying": {"air": {"model": "sail"}, "hang_glider": {k: getattr(HangGliderConfig(), k) for k in _PAPER_GLIDER}},
+    "paper": {"air": {"model": "paper"}, "hang_glider": _PAPER_GLIDER},
+}
+"""``hang_glider.design`` presets: ``{design: {section: {key: value}}}`` (see :class:`HangGliderConfig`)."""
 
 
 @dataclass(kw_only=True)
@@ -205,26 +226,39 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
     )
     virtual, keel = frame.virtual, frame.keel
     frame_ties = []
+    existing = {frozenset(ends): st for st, ends in enumerate(builder.stick_particles)}
+
+    def tie(p: int, a: int) -> None:
+        """Hold particle ``p`` to ``a`` as part of the frame: a new frame stick, or, where a stick already
+        joins them (a cloth stick, a frame tie), that stick made a frame stick (frame weight, not tensioned)
+        rather than a second stick with another rest length beside it."""
+        st = existing.get(frozenset((p, a)))
+        if st is None:
+            st = existing[frozenset((p, a))] = builder.add_stick(p, a, weight=cfg.frame_weight)
+        else:
+            builder.stick_weight[st] = max(builder.stick_weight[st], cfg.frame_weight)
+        frame_ties.append(st)
+
     if cfg.washout_struts > 0.0:
         # washout struts (tip rods, "sprogs"): the trailing edge's outer parts held rigid at their twist, so a
         # tensioned sail keeps its washout; each is tied to the virtual particles, its tip and the keel's end
         reach = int(np.floor(cfg.washout_struts * n / 2.0))
-        tail = rows[n][n // 2]
+        tail = keel[-1]  # the keel's end: on the trailing edge when the divisions are even, a row ahead if odd
         for j in range(1, reach + 1):
             for p, tip in ((rows[n][j], rows[n][0]), (rows[n][n - j], rows[n][n])):
-                frame_ties += [builder.add_stick(p, a, weight=cfg.frame_weight) for a in (*frame.virtual, tip, tail)]
+                for a in (*frame.virtual, tip, tail):
+                    tie(p, a)
     if cfg.keel_pocket:
         # the sail's pocket along the keel: the cloth particles either side of the keel tube between two keel
         # particles (odd rows) held to it, so the sail cannot fold along the keel
         for i in range(1, n, 2):
             for p in (rows[i][(i - 1) // 2], rows[i][(i + 1) // 2]):
-                frame_ties += [
-                    builder.add_stick(p, a, weight=cfg.frame_weight)
-                    for a in (*frame.virtual, rows[i - 1][(i - 1) // 2], rows[i + 1][(i + 1) // 2])
-                ]
+                for a in (*frame.virtual, rows[i - 1][(i - 1) // 2], rows[i + 1][(i + 1) // 2]):
+                    tie(p, a)
     if cfg.sail_tension > 0.0:
-        for st in np.setdiff1d(sail_sticks, frame.sticks):
-            builder.stick_rest[st] *= 1.0 - cfg.sail_tension
+        builder.pretension(
+            np.setdiff1d(sail_sticks, np.concatenate([frame.sticks, frame_ties]).astype(int)), cfg.sail_tension
+        )
     frame_set = set(frame.points)
     cloth = [p for p in sail if p not in frame_set]
     frame_mass = cfg.frame_mass_fraction * cfg.glider_mass
@@ -253,7 +287,7 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
             tri_parts={"sail": tris},
             stick_groups={
                 "sail": np.setdiff1d(sail_sticks, frame.sticks),
-                "frame": np.array(frame.sticks + frame_ties),
+                "frame": np.unique(frame.sticks + frame_ties),
                 "control": np.array(control),
                 **strap_groups,
             },
@@ -311,8 +345,9 @@ def _hang_strap(builder: ModelBuilder, cfg: HangGliderConfig, rows, frame, nose,
     anchors = [*frame.virtual, keel[behind - 1], keel[behind], rows[row][0], rows[row][-1]]
     part_mass = 0.5 * cfg.control_frame_mass
     h = builder.add_particle(hang, part_mass, vel)
-    # a tie to a keel particle the hang point sits on would have no length: skip it (the others hold it)
-    ties = [builder.add_stick(h, a, weight=w) for a in anchors if np.linalg.norm(q[a] - hang) > 1e-3 * cfg.chord]
+    # a tie to a keel particle the hang point (nearly) sits on would be a stick of (almost) no length, whose
+    # relative stretch means nothing: skip ties shorter than a quarter of a row (the others hold it)
+    ties = [builder.add_stick(h, a, weight=w) for a in anchors if np.linalg.norm(q[a] - hang) > 0.25 * cfg.chord / n]
     bar_centre = hang + cfg.bar_forward * fwd - cfg.hang_depth * up
     bar = [builder.add_particle(bar_centre + s * 0.5 * cfg.bar_width * left, 0.5 * part_mass, vel) for s in (1.0, -1.0)]
     for end, side in zip(bar, (rows[row][0], rows[row][-1]), strict=True):

@@ -24,6 +24,9 @@ class ObjectSpec:
         apply_controls: ``apply_controls(record, targets, values)`` writes what the controls in force
             (``values``: every control set so far but ``wind``) change into ``targets`` (host copies of
             ``stick_rest`` and ``nail_target``, and the ``terrain``).
+        presets: for an object with a ``design`` key, the values each design gives to keys of any section
+            (``{design: {section: {key: value}}}``). The default design's preset is part of the defaults;
+            setting ``design`` in a scene or with ``--set`` applies its preset first, then the scene's own keys.
     """
 
     config: type
@@ -32,6 +35,7 @@ class ObjectSpec:
     summary: str = ""
     controls: tuple[str, ...] = ()
     apply_controls: Callable | None = None
+    presets: dict = field(default_factory=dict)
 
 
 OBJECTS: dict[str, ObjectSpec] = {
@@ -51,9 +55,10 @@ OBJECTS: dict[str, ObjectSpec] = {
             "terrain": {"kind": "procedural"},
             "solver": {"mass_splitting": True},
         },
-        summary="triangular sail, rigid frame, pilot on control sticks (paper Section 6); steer with pitch/roll",
+        summary="flex wing with a strap-hung pilot on a control bar (design = paper: Section 6); steer with pitch/roll",
         controls=("pitch", "roll"),
         apply_controls=hang_glider.apply_controls,
+        presets=hang_glider.PRESETS,
     ),
     "kite": ObjectSpec(
         config=kite.KiteConfig,
@@ -64,6 +69,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         summary="delta kite with keel on a particle rope; move the ground end with anchor (paper Section 7)",
         controls=("anchor",),
         apply_controls=kite.apply_controls,
+        presets=kite.PRESETS,
     ),
     "parachute": ObjectSpec(
         config=parachute.ParachuteConfig,

@@ -153,8 +153,8 @@ class ModelBuilder:
         """Make ``sticks`` ``share`` (0 <= share < 1) shorter than they are: a cloth tensioned on its frame pulls
         to this length. Their stretch is still reported against the length as built
         (:attr:`~warpsim.model.Model.stick_pretension`)."""
-        if not 0.0 <= share < 1.0:
-            raise ValueError(f"pretension must be in [0, 1), got {share}")
+        if not -1.0 < share < 1.0:
+            raise ValueError(f"pretension must be in (-1, 1), got {share}")
         for st in sticks:
             self.stick_rest[st] *= 1.0 - share
             self.stick_pretension[st] = 1.0 - (1.0 - self.stick_pretension[st]) * (1.0 - share)

@@ -202,9 +202,11 @@ class Model:
         below its rest length and 0 between (a tensioned sail between its pulled and its built size)."""
         rest = self.stick_rest.numpy() if rest is None else rest
         rest = np.maximum(rest, 1e-12)
+        built = rest / (1.0 - self.stick_pretension)
+        low, high = np.minimum(rest, built), np.maximum(rest, built)
         lengths = self.stick_lengths(positions)
-        past_built = lengths / (rest / (1.0 - self.stick_pretension)) - 1.0
-        return np.where(past_built > 0.0, past_built, np.minimum(lengths / rest - 1.0, 0.0))
+        past_high = lengths / high - 1.0
+        return np.where(past_high > 0.0, past_high, np.minimum(lengths / low - 1.0, 0.0))
 
     def __repr__(self) -> str:
         return (

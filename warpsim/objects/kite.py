@@ -32,11 +32,11 @@ class KiteConfig(Checked):
     """Parameters of the delta kite (defaults: the paper's resolution, a 1.8 m, 0.8 m^2, 200 g kite).
 
     Attributes:
-        design: ``flying`` (the default: towed from 45 % of the keel, the keel's edges reinforced, under the
-            ``sail`` air model with a 5 ms step, it flies as a real delta does) or ``paper`` (Section 7: towed
-            from 35 %, the paper's air law and 10 ms step). In a scene or with ``--set`` it is a preset
-            (:data:`PRESETS`): it sets those keys, ``air.model`` and ``solver.dt``, and keys given beside it win.
-            The builder itself reads only the individual keys.
+        design: ``flying`` (the default: towed from 45 % of the keel, the keel's edges reinforced, the sail
+            cut with 3 % billow, under the ``sail`` air model with a 5 ms step, it flies as a real delta does)
+            or ``paper`` (Section 7: towed from 35 %, the paper's air law and 10 ms step). In a scene or with
+            ``--set`` it is a preset (:data:`PRESETS`): it sets those keys, ``air.model`` and ``solver.dt``, and
+            keys given beside it win. The builder itself reads only the individual keys.
         divisions: main-sail subdivisions per side (paper: 14 particles per side -> 13).
         keel_divisions: keel subdivisions per side (paper: 6 particles per side -> 5); the keel's top
             edge spans ``2 * keel_divisions`` sail rows from row 2, so it must fit in ``divisions``.
@@ -66,6 +66,11 @@ class KiteConfig(Checked):
             cloth sticks near the tow point by ~9 % in steady flight under the ``sail`` air model.
         profile_drag: ``sail`` air model: the sail's zero-lift drag coefficient
             (:func:`~warpsim.kernels.aero.sail_coefficients`).
+        stall_angle: ``sail`` air model: angle of attack [deg] where a triangle's flow separates.
+        billow: the sail's cloth sticks are this much longer than the sail as built (a delta's sail is cut
+            with billow, so it sets cambered between its spars; not in the paper). With 0.03 the kite flies
+            on through a lull to 4 m/s and rides kite_gusty.toml's gusts; with 0 a 5 m/s lull brings it
+            down (README, kite).
     """
 
     design: str = choice("flying", ("flying", "paper"))
@@ -91,6 +96,8 @@ class KiteConfig(Checked):
     dihedral: float = number(20.0, Bounds(-45.0, 45.0))
     keel_edges: bool = True
     profile_drag: float = number(0.03, NON_NEGATIVE)
+    stall_angle: float = number(18.0, Bounds(0.0, 90.0, low_open=True, high_open=True))
+    billow: float = number(0.03, Bounds(0.0, 0.2))
 
 
 PRESETS = {
@@ -99,9 +106,13 @@ PRESETS = {
     "flying": {
         "air": {"model": "sail"},
         "solver": {"dt": 0.005},
-        "kite": {k: getattr(KiteConfig(), k) for k in ("tow_point", "keel_edges")},
+        "kite": {k: getattr(KiteConfig(), k) for k in ("tow_point", "keel_edges", "billow")},
     },
-    "paper": {"air": {"model": "paper"}, "solver": {"dt": 0.01}, "kite": {"tow_point": 0.35, "keel_edges": False}},
+    "paper": {
+        "air": {"model": "paper"},
+        "solver": {"dt": 0.01},
+        "kite": {"tow_point": 0.35, "keel_edges": False, "billow": 0.0},
+    },
 }
 """``kite.design`` presets: ``{design: {section: {key: value}}}`` (see :class:`KiteConfig`)."""
 
@@ -158,7 +169,16 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
         nose, tip_l, tip_r, n, per_particle * sail_count, shape=dihedral
     )
     delta_sail_aero(
-        builder, sail_tris, rows, nose, left, cfg.span, 0.5 * cfg.span * cfg.spine, 0.8, cfg.profile_drag, 18.0
+        builder,
+        sail_tris,
+        rows,
+        nose,
+        left,
+        cfg.span,
+        0.5 * cfg.span * cfg.spine,
+        0.8,
+        cfg.profile_drag,
+        cfg.stall_angle,
     )
     keel_top = [rows[r][r // 2] for r in range(2, 3 + 2 * kd, 2)]
     top_front, top_back = (np.array(builder.particle_q[p]) for p in (keel_top[0], keel_top[-1]))
@@ -198,6 +218,8 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
             ]
         )
 
+    if cfg.billow > 0.0:
+        builder.pretension(np.setdiff1d(sail_sticks, spars.sticks), -cfg.billow)
     # rope: from the tow point down to the anchor; the first sticks count double
     count = int(cfg.rope_particles)
     rope, rope_sticks = builder.add_rope(tow, anchor, count, cfg.rope_mass, first=tow_particle)

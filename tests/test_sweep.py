@@ -83,6 +83,15 @@ def test_plan_is_the_cartesian_product_and_chunks_group_shared_keys():
     tasks = mixed.chunks(64)
     assert [t.cases for t in tasks] == [[0, 1], [2, 3]]
     assert [t.descriptor["solver"]["iterations"] for t in tasks] == [30, 55]
+    # so does a design, which sets the air model and the step: each chunk is built with its own preset
+    designs = sweeps.SweepPlan(d, sweeps.parse_axes(d, ["kite.design=paper,flying", "wind.speed=4,8"]), 1.0)
+    tasks = designs.chunks(64)
+    assert [t.cases for t in tasks] == [[0, 1], [2, 3]]
+    assert [(t.descriptor["air"]["model"], t.descriptor["solver"]["dt"]) for t in tasks] == [
+        ("paper", 0.01),
+        ("sail", 0.005),
+    ]
+    assert designs.case_descriptor(0)["kite"]["tow_point"] == 0.35
 
 
 def test_each_case_measures_what_a_single_run_of_it_shows(reference):

@@ -236,7 +236,8 @@ class SweepPlan:
             raise SweepError(f"{count:,} cases is more than a sweep takes ({MAX_CASES:,}); sweep fewer values")
         self.cases = list(itertools.product(*(a.values for a in self.axes)))
         variable = (_object_section(self.kind), *VARIABLE_SECTIONS)
-        self._per_world = [a.section in variable for a in self.axes]
+        # an object's design also sets shared sections (air, solver): like them, it splits the chunks
+        self._per_world = [a.section in variable and a.key != "design" for a in self.axes]
 
     @property
     def columns(self) -> list[str]:

@@ -19,6 +19,7 @@ import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import warp as wp
@@ -223,6 +224,39 @@ def case_newton(size: int) -> Callable[[Options], dict]:
     return run
 
 
+def case_c_reference(name: str) -> Callable[[Options], dict]:
+    def run(opts: Options) -> dict:
+        from . import c_reference
+
+        case = f"c-reference-{name}"
+        if c_reference.compiler() is None:
+            return {"case": case, "skipped": "no C compiler (cc, gcc or clang) on the PATH"}
+        desc = flag(int(name.split("-")[1])) if name.startswith("flag-") else scene(name)
+        row = measure(case, desc, opts)
+        sim = Simulation(desc, device="cpu")
+        with tempfile.TemporaryDirectory() as tmp:
+            program = c_reference.build(Path(tmp))
+            q = c_reference.run(program, sim, 3)[1]  # does the C do the same work? 3 steps, before chaos
+            steps, seconds = 1, 0.0
+            while seconds < opts.min_time:  # as time_steps does: grow the run until it lasts min_time
+                steps *= 4 if seconds < opts.min_time / 8 else 2
+                seconds = c_reference.run(program, sim, steps)[0]
+            spent = c_reference.run(program, sim, steps, parts=True)[2]
+        sim.step(3)
+        total = sum(spent.values())
+        # the C steps the same model, so warpsim/C per stick is warpsim/C per step (the ratio)
+        return _compare(
+            row,
+            f"plain C, single thread (cc {' '.join(c_reference.FLAGS)}), the same step",
+            steps / seconds,
+            c_profile=", ".join(f"{part} {100 * t / total:.0f} %" for part, t in spent.items()),
+            c_differs_after_3_steps_m=float(np.abs(q - sim.state.positions()).max()),
+        )
+
+    run.__doc__ = f"warpsim against the same step in plain C on the {name} (skipped without a C compiler)"
+    return run
+
+
 def case_startup(opts: Options) -> dict:
     """`warpsim run hang-glider --seconds 1` in a fresh process: empty kernel cache (cold), then warm"""
     times = {}
@@ -378,6 +412,7 @@ CASES: dict[str, Callable[[Options], dict]] = {
     "numpy-hang-glider": case_numpy("hang-glider"),
     "numpy-flag-256": case_numpy("flag-256"),
     **{f"newton-flag-{n}": case_newton(n) for n in FLAG_SIZES},
+    **{f"c-reference-{n}": case_c_reference(n) for n in ("hang-glider", "flag-32", "flag-256")},
     "startup": case_startup,
     "viewer": case_viewer,
     "build-scaling": case_build_scaling,

@@ -257,6 +257,27 @@ def case_c_reference(name: str) -> Callable[[Options], dict]:
     return run
 
 
+def case_run_vs_raw(name: str) -> Callable[[Options], dict]:
+    def run(opts: Options) -> dict:
+        desc = scene(name)
+        row = measure(f"run-{name}", desc, opts)  # raw stepping: the baseline here
+        sim = Simulation(desc, device=opts.device)
+        sim.run(1.0)  # warm-up: compile, capture, first frames
+        seconds, rate = 1.0, 0.0
+        while True:  # what `warpsim run` does per frame (diagnostics, blow-up check, contacts), no outputs
+            summary = sim.run(seconds)
+            if summary.wall_time >= opts.min_time:
+                rate = summary.steps / summary.wall_time
+                break
+            seconds *= 2.0
+        raw = row["steps_per_s"]
+        row.update(steps_per_s=rate, ms_per_step=1e3 / rate, realtime_factor=rate * sim.dt)
+        return _compare(row, "raw stepping of the same scene (its benchmark row); target ratio >= 0.9", raw)
+
+    run.__doc__ = f"Simulation.run (frames, diagnostics, checks) against raw stepping on the {name}"
+    return run
+
+
 def case_startup(opts: Options) -> dict:
     """`warpsim run hang-glider --seconds 1` in a fresh process: empty kernel cache (cold), then warm"""
     times = {}
@@ -413,6 +434,7 @@ CASES: dict[str, Callable[[Options], dict]] = {
     "numpy-flag-256": case_numpy("flag-256"),
     **{f"newton-flag-{n}": case_newton(n) for n in FLAG_SIZES},
     **{f"c-reference-{n}": case_c_reference(n) for n in ("hang-glider", "flag-32", "flag-256")},
+    **{f"run-{n}": case_run_vs_raw(n) for n in ("hang-glider", "kite", "parachute")},
     "startup": case_startup,
     "viewer": case_viewer,
     "build-scaling": case_build_scaling,

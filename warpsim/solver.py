@@ -15,7 +15,7 @@ import dataclasses
 import warp as wp
 
 from .config import AirConfig, GroundConfig, SolverConfig, WindConfig
-from .kernels import MODULES
+from .kernels import MODULES, aero, collision, constraints, springs, verlet
 from .kernels.aero import body_drag, triangle_air_force
 from .kernels.collision import collide_heightfield
 from .kernels.constraints import make_projector
@@ -69,9 +69,13 @@ class _Solver:
     def _launch(self, state: State, control: Control, dt: float) -> None:
         raise NotImplementedError
 
+    modules: tuple = MODULES
+    """The kernel modules this solver launches (:meth:`load_kernels` loads only these)."""
+
     def load_kernels(self) -> None:
-        """Load every kernel module on the model's device, compiling those not in Warp's cache (seconds)."""
-        for module in MODULES:
+        """Load the solver's kernel modules on the model's device, compiling those not in Warp's cache
+        (seconds on a cold cache: a module it does not launch is not compiled)."""
+        for module in self.modules:
             wp.load_module(module, device=self.model.device)
 
     def prepare(self, state: State, control: Control, dt: float):
@@ -113,6 +117,8 @@ class SolverVerlet(_Solver):
     None = fused on the CPU, gather on CUDA.
     """
 
+    modules = (aero, collision, constraints, verlet)
+
     def __init__(self, model: Model, config: SolverConfig | None = None, *, constraint_scheme=None, **kwargs):
         super().__init__(model, config, **kwargs)
         self.projector = make_projector(model, self.config, constraint_scheme)
@@ -131,6 +137,8 @@ class SolverEuler(_Solver):
     """The paper's comparison: explicit Euler on a mass-spring network (every stick is a spring of
     ``spring_stiffness`` [N/m] and ``spring_damping`` [N s/m] from its :class:`~warpsim.config.SolverConfig`;
     arguments as for :class:`SolverVerlet`, without a constraint scheme)."""
+
+    modules = (aero, collision, springs)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, **kwargs):
         super().__init__(model, config, **kwargs)

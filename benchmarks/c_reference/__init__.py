@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from warpsim.kernels.aero import AeroModel
+from warpsim.kernels.aero import STALL_SHARPNESS, AeroModel
 from warpsim.kernels.collision import CollisionMode
 from warpsim.runner import Simulation
 
@@ -57,8 +57,6 @@ def export(sim: Simulation, path: Path) -> None:
     ny, nx = ref.heights.shape
     ints = [n, len(ref.ends), len(ref.tris), len(ref.drag_particles), len(ref.omegas), ny, nx]
     ints += [laws[ref.air.model], 0 if ref.ground.collision == CollisionMode.NORMAL else 1, len(ref.nail_target)]
-    from warpsim.kernels.aero import STALL_SHARPNESS
-
     floats = [ref.dt, ref.air_density, ref.air.scale, ref.relaxation, ref.damping, *ref.gravity, ref.ground.friction]
     floats += [*ref.origin[:2], *ref.cell[:2], STALL_SHARPNESS]
     arrays = [

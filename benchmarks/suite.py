@@ -257,22 +257,28 @@ def case_c_reference(name: str) -> Callable[[Options], dict]:
     return run
 
 
-def case_run_vs_raw(name: str) -> Callable[[Options], dict]:
+def case_run_vs_raw(name: str, rounds: int = 3) -> Callable[[Options], dict]:
     def run(opts: Options) -> dict:
         desc = scene(name)
-        row = measure(f"run-{name}", desc, opts)  # raw stepping: the baseline here
+        row = measure(f"run-{name}", desc, opts)  # raw stepping (first round)
+        raw_rates = [row["steps_per_s"]]
         sim = Simulation(desc, device=opts.device)
         sim.run(1.0)  # warm-up: compile, capture, first frames
-        seconds, rate = 1.0, 0.0
-        while True:  # what `warpsim run` does per frame (diagnostics, blow-up check, contacts), no outputs
-            summary = sim.run(seconds)
-            if summary.wall_time >= opts.min_time:
-                rate = summary.steps / summary.wall_time
-                break
+        seconds = 1.0
+        while sim.run(seconds).wall_time < opts.min_time:  # what `warpsim run` does per frame, no outputs
             seconds *= 2.0
-        raw = row["steps_per_s"]
+        run_rates = []
+        # this machine's rate drifts by a third over minutes: alternate the two, best of each
+        for k in range(rounds):
+            summary = sim.run(seconds)
+            run_rates.append(summary.steps / summary.wall_time)
+            if k < rounds - 1:
+                raw_rates.append(measure(f"run-{name}", desc, opts)["steps_per_s"])
+        rate, raw = max(run_rates), max(raw_rates)
         row.update(steps_per_s=rate, ms_per_step=1e3 / rate, realtime_factor=rate * sim.dt)
-        return _compare(row, "raw stepping of the same scene (its benchmark row); target ratio >= 0.9", raw)
+        return _compare(
+            row, f"raw stepping of the same scene, best of {rounds} alternating rounds; target ratio >= 0.9", raw
+        )
 
     run.__doc__ = f"Simulation.run (frames, diagnostics, checks) against raw stepping on the {name}"
     return run

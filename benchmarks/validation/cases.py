@@ -21,6 +21,7 @@ from warpsim.config import AirConfig
 from warpsim.diagnostics import object_metrics
 from warpsim.kernels.aero import AeroModel
 from warpsim.model import AIR_DENSITY, GRAVITY
+from warpsim.objects.kite import anchor_elevation
 from warpsim.runner import BlowUpError, Simulation
 from warpsim.solver import SolverVerlet
 from warpsim.terrain import Heightfield
@@ -591,16 +592,9 @@ def kite_angle() -> list[Row]:
     ):
         sim = Simulation(descriptor.resolve(str(ROOT / scene) if scene.endswith(".toml") else scene)[0])
         record = sim.model.objects[0]
-        ends = sim.model.stick_particles_np[record.stick_groups["rope"][-1]]
-        above = int(ends[ends != record.anchor_particle][0])
         angles = []
         sim.run(20.0)
-
-        def sample(frame, angles=angles, above=above, anchor=record.anchor_particle):
-            d = frame.positions[above] - frame.positions[anchor]
-            angles.append(math.degrees(math.atan2(d[2], math.hypot(d[0], d[1]))))
-
-        sim.run(20.0, on_frame=sample)
+        sim.run(20.0, on_frame=lambda frame, r=record, a=angles: a.append(anchor_elevation(r, frame.positions)))
         rows.append(
             Row(
                 name,

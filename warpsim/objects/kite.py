@@ -273,6 +273,14 @@ def line_elevation(record: KiteRecord, q: np.ndarray) -> float:
     return float(np.degrees(np.arctan2(d[2], np.linalg.norm(d[:2]))))
 
 
+def anchor_elevation(record: KiteRecord, q: np.ndarray) -> float:
+    """Elevation of the line above the horizontal [deg] where it leaves the anchor (its last stick)."""
+    rope = record.parts["rope"]
+    above = rope[-2] if len(rope) >= 2 else record.tow
+    d = q[above] - q[record.anchor_particle]
+    return float(np.degrees(np.arctan2(d[2], np.linalg.norm(d[:2]))))
+
+
 def line_state(record: KiteRecord, q: np.ndarray) -> dict:
     """Diagnostics: line elevation angle [deg] (anchor to tow point), kite height [m], tow-anchor distance [m]."""
     d = q[record.tow] - q[record.anchor_particle]

@@ -1,62 +1,123 @@
 """What a frame shows: positions, stretch, energy, per-object metrics, blow-ups and terrain contacts.
 
 One module for every reader of a running or recorded scene (the runner's blow-up check, the HDF5 recorder's
-diagnostics, the command line's summary), so that a metric is computed one way only. Host-side NumPy, once
-per output frame.
+diagnostics, the command line's summary), so that a metric is computed one way only. The checks every frame
+needs come from the device (:mod:`warpsim.kernels.frame`); the rest is host-side NumPy, on the frames that ask.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import functools
+from dataclasses import dataclass
 
 import numpy as np
 
 from .model import Control, Model, State
 
 
-@dataclass
+class FrameSource:
+    """Where the frames of one simulation read the state: its model, state and control, and its step ``dt`` [s].
+    :meth:`copy` takes the host copies a frame keeps (on the CPU device through views made once, so that a copy
+    costs what NumPy's copy does)."""
+
+    def __init__(self, model: Model, state: State, control: Control, dt: float):
+        self.model, self.state, self.control, self.dt = model, state, control, dt
+        arrays = (state.particle_q, state.particle_q_prev, control.stick_rest, control.wind)
+        self._views = tuple(a.numpy() for a in arrays) if model.device.is_cpu else None
+
+    def copy(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Host copies of ``(positions [P, 3], previous positions [P, 3], rest lengths [S], wind [W, 3])``."""
+        if self._views is not None:
+            return tuple(v.copy() for v in self._views)
+        s, c = self.state, self.control
+        return s.particle_q.numpy(), s.particle_q_prev.numpy(), c.stick_rest.numpy(), c.wind.numpy()
+
+
 class Frame:
     """One output frame of a run.
+
+    What the device reported after the frame's steps is here at once; what needs the state on the host is read on
+    first use (a run that only checks its frames copies no positions). A frame reads the simulation's arrays
+    until the simulation moves on: :class:`~warpsim.runner.Simulation` copies what a frame still held by someone
+    needs (:meth:`fetch`) before it steps, restores or sets controls again.
 
     Attributes:
         index: frame number (0 = the initial state). time: simulated time [s].
         steps: solver steps taken since the scene started.
+        worst_stretch: largest ``|l - r|/r`` over all sticks (dimensionless, float32 from the device; NaN when
+            some position or velocity is not finite).
+        finite: every position and velocity is finite.
+        world_stretch: host ``[W]`` worst stick stretch of each world (finite sticks only).
+        world_nonfinite: host ``[W]`` number of particles of each world with a non-finite position or velocity.
+        clearance: host ``[K]`` lowest height [m] above the terrain of each object's particles that can touch it
+            (:class:`GroundContacts`), ``1e30`` for an object with none.
+        controls: the controls in force while the frame's last steps ran, by name (what
+            :meth:`warpsim.runner.Simulation.set_controls` takes; empty when none was set).
+
+    Read on first use:
         positions: host ``[P, 3]`` positions [m].
         velocities: host ``[P, 3]`` velocities ``(x - x_prev)/dt`` [m/s].
         wind: host ``[W, 3]`` wind of each world at the reference height [m/s].
-        worst_stretch: largest ``|l - r|/r`` over all sticks (dimensionless).
-        worst_stick: index of that stick (-1 when there are no sticks).
+        stretches: host ``[S]`` ``|l - r|/r`` of every stick (dimensionless, float64 from the host copy; NaN where
+            a position is not finite).
+        worst_stick: index of the stick of largest stretch (-1 when there are no sticks).
         kinetic_energy: total kinetic energy [J] of the free particles.
-        controls: the controls in force while the frame's last steps ran, by name (what
-            :meth:`warpsim.runner.Simulation.set_controls` takes; empty when none was set).
-        stretches: host ``[S]`` ``|l - r|/r`` of every stick (dimensionless; NaN where a position is not finite).
     """
 
-    index: int
-    time: float
-    steps: int
-    positions: np.ndarray
-    velocities: np.ndarray
-    wind: np.ndarray
-    worst_stretch: float
-    worst_stick: int
-    kinetic_energy: float
-    controls: dict = field(default_factory=dict)
-    stretches: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    def __init__(
+        self,
+        index: int,
+        time: float,
+        steps: int,
+        report: tuple[np.ndarray, np.ndarray, np.ndarray],
+        source: FrameSource,
+        controls: dict | None = None,
+    ):
+        self.index, self.time, self.steps = index, time, steps
+        self.world_stretch, self.world_nonfinite, self.clearance = report
+        self.finite = not self.world_nonfinite.any()
+        self.worst_stretch = float(self.world_stretch.max()) if self.finite else float("nan")
+        self.controls = {} if controls is None else controls
+        self._source = source
+        self._host = None
 
+    def fetch(self) -> None:
+        """Copy the state this frame shows to the host now (once; later reads use the copy)."""
+        if self._host is None:
+            self._host = self._source.copy()
 
-def measure(model: Model, state: State, control: Control, dt: float, index: int, steps: int) -> Frame:
-    """The :class:`Frame` ``index`` of ``state`` after ``steps`` steps of ``dt`` [s] (rest lengths and wind from
-    ``control``). A blown-up state gives NaN or Inf values, which :func:`find_blowup` reports."""
-    q = state.positions()
-    with np.errstate(invalid="ignore", over="ignore"):
-        stretches = np.abs(model.stick_stretch(q, control.stick_rest.numpy()))
-        worst_stick = int(np.argmax(stretches)) if len(stretches) else -1  # argmax finds a NaN first
-        stretch = float(stretches[worst_stick]) if len(stretches) else 0.0
-        v = state.velocities(dt)
-        energy = float(0.5 * np.sum(model.particle_free_mass * np.einsum("ij,ij->i", v, v)))
-    wind = control.wind.numpy().copy()
-    return Frame(index, state.time, steps, q, v, wind, stretch, worst_stick, energy, stretches=stretches)
+    def _arrays(self):
+        self.fetch()
+        return self._host
+
+    @functools.cached_property
+    def positions(self) -> np.ndarray:
+        return self._arrays()[0]
+
+    @functools.cached_property
+    def velocities(self) -> np.ndarray:
+        q, q_prev = self._arrays()[:2]
+        return (q - q_prev) / self._source.dt
+
+    @functools.cached_property
+    def wind(self) -> np.ndarray:
+        return self._arrays()[3]
+
+    @functools.cached_property
+    def stretches(self) -> np.ndarray:
+        q, _, rest, _ = self._arrays()
+        with np.errstate(invalid="ignore", over="ignore"):
+            return np.abs(self._source.model.stick_stretch(q, rest))
+
+    @functools.cached_property
+    def worst_stick(self) -> int:
+        return int(np.argmax(self.stretches)) if len(self.stretches) else -1  # argmax finds a NaN first
+
+    @functools.cached_property
+    def kinetic_energy(self) -> float:
+        v = self.velocities
+        with np.errstate(invalid="ignore", over="ignore"):
+            return float(0.5 * np.sum(self._source.model.particle_free_mass * np.einsum("ij,ij->i", v, v)))
 
 
 def object_of(model: Model, particle: int) -> str:
@@ -70,6 +131,8 @@ def object_of(model: Model, particle: int) -> str:
 def find_blowup(model: Model, frame: Frame, max_stretch: float) -> tuple[str, str] | None:
     """``(object name, what is wrong)`` when ``frame`` shows a blow-up, else None: a non-finite position or
     velocity, or a worst stick stretch above ``max_stretch`` (dimensionless; 0 = no limit)."""
+    if frame.finite and (max_stretch <= 0.0 or frame.worst_stretch <= max_stretch):
+        return None  # the device's report says all is well: no host copy needed
     bad = ~(np.isfinite(frame.positions).all(axis=1) & np.isfinite(frame.velocities).all(axis=1))
     if bad.any():
         p = int(np.flatnonzero(bad)[0])
@@ -94,6 +157,8 @@ def world_blowups(model: Model, frame: Frame, max_stretch: float) -> dict[int, s
     never touch each other, so one world's blow-up leaves the others sound): a non-finite position or
     velocity, or a stick of that world stretched past ``max_stretch`` (dimensionless; 0 = no limit). Particles
     and sticks are numbered within their world, so a world says the same whatever batch it runs in."""
+    if frame.finite and (max_stretch <= 0.0 or frame.worst_stretch <= max_stretch):
+        return {}  # the device's report says all is well: no host copy needed
     world = model.particle_world_np
     first_particle = np.searchsorted(world, np.arange(model.world_count))  # worlds are built one after another
     bad = ~(np.isfinite(frame.positions).all(axis=1) & np.isfinite(frame.velocities).all(axis=1))
@@ -232,6 +297,8 @@ class GroundContacts:
 
     Parts that lie on the ground or hold an object to it by design (``GROUNDED_PARTS``) and nailed particles
     are left out: their contact is not news. A particle within ``CONTACT_DISTANCE`` of the surface touches it.
+    The device measures each object's lowest clearance every frame (:attr:`Frame.clearance`, from the particles
+    :meth:`owners` names).
     """
 
     GROUNDED_PARTS = ("rope", "pole", "lines", "virtual")
@@ -239,36 +306,31 @@ class GroundContacts:
 
     def __init__(self, model: Model):
         self.model = model
+        self.first: dict[str, float] = {}  # object name -> first time [s] it touched the terrain
+
+    def owners(self) -> np.ndarray:
+        """Host ``[P]`` int32: the object whose contact each particle tells, -1 where its contact is not news."""
+        model = self.model
+        owner = np.full(model.particle_count, -1, dtype=np.int32)
         free = np.isfinite(model.particle_mass)
-        ids, owner = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
         for k, record in enumerate(model.objects):
             particles = np.asarray(record.particles, dtype=np.int64)
             grounded = [np.asarray(record.parts[p], dtype=np.int64) for p in self.GROUNDED_PARTS if p in record.parts]
             keep = free[particles] & ~np.isin(particles, np.concatenate([np.zeros(0, np.int64), *grounded]))
-            ids.append(particles[keep])
-            owner.append(np.full(int(keep.sum()), k, dtype=np.int64))
-        self._ids = np.concatenate(ids)
-        self._owner = np.concatenate(owner)
-        self._top = float(model.terrain.heights.max()) + self.CONTACT_DISTANCE
-        self.first: dict[str, float] = {}  # object name -> first time [s] it touched the terrain
+            owner[particles[keep]] = k
+        return owner
 
     def touching(self, frame: Frame) -> np.ndarray:
         """``[K]`` bool: which objects touch the terrain in ``frame`` (their grounded parts and nails aside)."""
-        out = np.zeros(len(self.model.objects), dtype=bool)
-        if not len(self._ids):
-            return out
-        z = frame.positions[self._ids, 2]
-        low = np.flatnonzero(z < self._top)  # only those can touch: a cheap test first
-        if len(low):
-            p = frame.positions[self._ids[low]]
-            touching = low[p[:, 2] - self.model.terrain.height(p[:, 0], p[:, 1]) < self.CONTACT_DISTANCE]
-            out[self._owner[touching]] = True
-        return out
+        return frame.clearance < self.CONTACT_DISTANCE
 
     def note(self, frame: Frame) -> None:
         """Record the objects that touch the terrain in ``frame`` for the first time."""
-        if len(self.first) == len(self.model.objects):
-            return
+        if (
+            len(self.first) == len(self.model.objects)
+            or not frame.clearance.min(initial=np.inf) < self.CONTACT_DISTANCE
+        ):
+            return  # all seen already, or nothing touches (one test of the device's report)
         for k in np.flatnonzero(self.touching(frame)):
             self.first.setdefault(self.model.objects[int(k)].name, float(frame.time))
 

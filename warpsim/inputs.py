@@ -44,6 +44,7 @@ class Inputs:
         control.set_wind(np.array([w.velocity for w in winds]))
         self.in_force: dict = {}  # every control set so far, by name
         self.scheduled: dict = {}  # the schedule's last values, so that held values are not set again
+        self.version = 0  # counts the changes to the controls, gusts and control arrays (what a save must follow)
 
     def set(self, **values) -> None:
         """Set controls (see :meth:`warpsim.runner.Simulation.set_controls`); ``ValueError`` for a control this
@@ -52,6 +53,7 @@ class Inputs:
             if name not in self.names:
                 raise ValueError(f"this scene has no control {name!r}; its controls are: {', '.join(self.names)}")
             values[name] = check_value(name, value)
+        self.version += 1
         if "wind" in values:
             self.control.set_wind(values["wind"])
             for gusts in self.gusts:
@@ -86,6 +88,7 @@ class Inputs:
                 if self.scheduled.get("wind") != mean:
                     self.set(wind=mean)
                     self.scheduled["wind"] = mean
+            self.version += 1
             winds = self.control.wind.numpy().copy()
             for k, gusts in enumerate(self.gusts):
                 if gusts is not None:
@@ -116,6 +119,7 @@ class Inputs:
 
     def load(self, checkpoint) -> None:
         """Continue from the inputs saved in ``checkpoint`` (its control arrays are restored by the caller)."""
+        self.version += 1
         for k, gusts in enumerate(self.gusts):
             if gusts is not None and checkpoint.gust_active[k]:
                 gusts.g = checkpoint.gust_g[k].copy()

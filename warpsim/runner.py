@@ -3,12 +3,15 @@
 A frame is what outputs see (``fps`` per simulated second); between frames the solver takes as many
 steps of ``dt`` as one frame lasts. The pieces live beside it: :mod:`warpsim.scene` builds the model,
 :func:`warpsim.solver.make_solver` the solver, :mod:`warpsim.inputs` turns controls, schedule and gusts into
-control arrays, :mod:`warpsim.diagnostics` measures each frame (on the host, once per frame).
+control arrays, :mod:`warpsim.diagnostics` says what a frame shows. After each frame the device reports a few
+numbers (worst stretch, non-finite particles, terrain clearance: :mod:`warpsim.kernels.frame`), captured in one
+graph with the frame's steps; positions reach the host only when an output, the viewer or a check asks.
 """
 
 from __future__ import annotations
 
 import time
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -19,8 +22,9 @@ from .checkpoint import Checkpoint
 from .config import WindConfig, from_section
 from .controls import ControlError, ControlSchedule
 from .descriptor import DescriptorError, world_descriptor
-from .diagnostics import Frame, GroundContacts, find_blowup, measure
+from .diagnostics import Frame, FrameSource, GroundContacts, find_blowup
 from .inputs import Inputs, control_names
+from .kernels import frame as frame_kernels
 from .scene import build_model, settings
 from .solver import make_solver
 
@@ -148,14 +152,23 @@ class Simulation:
         except ControlError as err:
             raise DescriptorError(str(err)) from None
         self.inputs = Inputs(self.model, self.control, winds, schedule)
+        self.contacts = GroundContacts(self.model)
+        self.probe = frame_kernels.FrameProbe(self.model, self.contacts.owners())
+        self._source = FrameSource(self.model, self.state, self.control, self.dt)
+        self._out = _nothing  # the last frame handed out (a weak reference), copied before the state moves on
+        self._graphs = {}  # per probe slot: the whole frame (probe, steps, probe) as one graph
+        self._good = (0, 0.0, 0, 0)  # the last good frame: index, time [s], steps, the probe slot it is kept in
+        self._slot = 1  # the probe slot the last measured frame was kept in
+        self._saved_version, self._saved = -1, None  # inputs and control arrays of the last good frame
         problem = self.blowup(self.frame(0))
         if problem:
             raise DescriptorError(
                 f"{where}: the built {problem[0]} is not sound: {problem[1]}; check its sizes, masses, speed and dt"
             )
         self.steps_per_frame = cfg.scene.steps_per_frame(self.dt)
-        self.contacts = GroundContacts(self.model)
-        self.solver.load_kernels()  # compile now, not in the first frame's time (the graph is captured there)
+        self.solver.load_kernels()  # compile now, not in the first frame's time
+        if self.solver.use_graph:
+            self._frame_graph(0), self._frame_graph(1)
         wp.synchronize_device(self.model.device)
         self.startup_time = time.perf_counter() - started  # [s] model build, kernel load/compilation
 
@@ -171,6 +184,7 @@ class Simulation:
 
         Raises ``ValueError`` for a control the scene's object does not have or an invalid value.
         """
+        self._release()
         self.inputs.set(**values)
 
     def control_names(self) -> tuple[str, ...]:
@@ -179,20 +193,78 @@ class Simulation:
 
     def apply_schedule(self) -> None:
         """Apply the descriptor's ``[[controls]]`` schedule at the current time and advance the gusts one frame."""
+        self._release()
         self.inputs.frame_start(self.state.time, self.steps_per_frame * self.dt)
 
     def step(self, count: int = 1) -> None:
         """Take ``count`` solver steps of ``dt``."""
+        self._release()
         for _ in range(count):
             self.solver.step(self.state, self.control, self.dt)
         self.steps_taken += count
 
     def frame(self, index: int) -> Frame:
-        """The current state measured as frame ``index`` (see :func:`warpsim.diagnostics.measure`), with the
+        """The current state measured as frame ``index`` (see :class:`warpsim.diagnostics.Frame`), with the
         controls in force."""
-        frame = measure(self.model, self.state, self.control, self.dt, index, self.steps_taken)
-        frame.controls = dict(self.inputs.in_force)
+        self._slot = 1 - self._good[3]  # never over the last good frame's
+        self.probe.begin()
+        self.probe.measure(self.state, self.control, self._slot)
+        return self._hand_out(index)
+
+    def _hand_out(self, index: int) -> Frame:
+        """Frame ``index`` of the probe's report, remembered so that :meth:`_release` can copy what it needs."""
+        self._release()
+        controls = dict(self.inputs.in_force)
+        frame = Frame(index, self.state.time, self.steps_taken, self.probe.read(), self._source, controls)
+        self._out = weakref.ref(frame)
         return frame
+
+    def _release(self) -> None:
+        """Before the state or the controls change: the last frame handed out, if someone still holds it, copies
+        the state it shows to the host (a frame nobody holds costs nothing)."""
+        frame = self._out()
+        if frame is not None:
+            frame.fetch()
+            self._out = _nothing
+
+    def _frame_graph(self, slot: int):
+        """The graph of one whole frame kept in probe ``slot``: the probe's start, ``steps_per_frame`` solver
+        steps, the probe's report (captured once, for this simulation's state and control; the same kernels as
+        stepping one by one)."""
+        graph = self._graphs.get(slot)
+        if graph is None:
+            self.solver.load_kernels()
+            wp.load_module(frame_kernels, device=self.model.device)
+            with wp.ScopedCapture(device=self.model.device) as capture:
+                self.probe.begin()
+                for _ in range(self.steps_per_frame):
+                    self.solver.launch(self.state, self.control, self.dt)
+                self.probe.measure(self.state, self.control, slot)
+            graph = self._graphs[slot] = capture.graph
+        return graph
+
+    def _step_frame(self, count: int) -> None:
+        """Take ``count`` steps (one frame or what is left of it) and have the probe report and keep the state in
+        the slot that is not the last good frame's."""
+        self._release()
+        self._slot = slot = 1 - self._good[3]
+        if count == self.steps_per_frame and self.solver.use_graph:
+            wp.capture_launch(self._frame_graph(slot))
+            for _ in range(count):  # the same sum of dt as the solver keeps step by step
+                self.state.time += self.dt
+            self.steps_taken += count
+        else:
+            self.probe.begin()
+            self.step(count)
+            self.probe.measure(self.state, self.control, slot)
+
+    def _keep_good(self, frame: Frame) -> None:
+        """Make ``frame`` (just checked) the last good frame, with the controls in force now."""
+        self._good = (frame.index, frame.time, frame.steps, self._slot)
+        if self._saved_version != self.inputs.version:  # the controls changed since the last good frame
+            self._saved_version = self.inputs.version
+            c = self.control
+            self._saved = (self.inputs.save(), *(a.numpy().copy() for a in (c.stick_rest, c.nail_target, c.wind)))
 
     def blowup(self, frame: Frame) -> tuple[str, str] | None:
         """``(object name, what is wrong)`` when ``frame`` shows a blow-up (non-finite values, or a stick past
@@ -220,6 +292,7 @@ class Simulation:
         Raises ``ValueError`` when its fields do not fit this scene (other shapes, types or controls).
         """
         checkpoint.check_like(self.checkpoint())
+        self._release()
         self.state.particle_q.assign(checkpoint.q)
         self.state.particle_q_prev.assign(checkpoint.q_prev)
         self.state.time = float(checkpoint.time[0])
@@ -241,7 +314,7 @@ class Simulation:
             raise BlowUpError(
                 self.steps_taken, first.time, *problem, -1, first.time, RunSummary(0.0, 0, 0.0, 0.0, blew_up=True)
             )
-        self._good = (self.checkpoint(), first)
+        self._keep_good(first)
         return first
 
     def advance(self, limit: int | None = None, before: Callable[[int], None] | None = None) -> Frame:
@@ -260,18 +333,38 @@ class Simulation:
             if before is not None:
                 before(self.steps_taken // spf + 1)
         n = spf - into if limit is None else min(spf - into, limit)
-        self.step(n)
-        frame = self.frame(-(-self.steps_taken // spf))
+        self._step_frame(n)
+        frame = self._hand_out(-(-self.steps_taken // spf))
         problem = self.blowup(frame)
-        good, good_frame = self._good
         if problem:
             bad_step = self.steps_taken
-            self.restore(good)
-            wp.synchronize_device(self.model.device)
-            raise BlowUpError(bad_step, frame.time, *problem, good_frame.index, good_frame.time, None)
+            self._go_back()
+            raise BlowUpError(bad_step, frame.time, *problem, *self._good[:2], None)
         self.contacts.note(frame)
-        self._good = (self.checkpoint(), frame)
+        self._keep_good(frame)
         return frame
+
+    def _go_back(self) -> None:
+        """Put the state, the control arrays and the inputs back to the last good frame (:meth:`advance` and
+        :meth:`start_frames` check every frame they return, and the probe keeps its positions)."""
+        self._release()
+        inputs, stick_rest, nail_target, wind = self._saved
+        _, time, steps, slot = self._good
+        q, q_prev = self.probe.kept(slot)
+        self.restore(
+            Checkpoint(
+                q=q,
+                q_prev=q_prev,
+                time=np.array([time], dtype=np.float64),
+                steps=np.array([steps], dtype=np.int64),
+                stick_rest=stick_rest,
+                nail_target=nail_target,
+                wind=wind,
+                **inputs,
+                control_names=self.inputs.names,
+            )
+        )
+        wp.synchronize_device(self.model.device)
 
     def run(
         self,
@@ -306,6 +399,7 @@ class Simulation:
             worst = first.worst_stretch
             if on_frame and self.steps_taken == 0:
                 on_frame(first)
+            del first  # a frame nobody holds is not copied when the state moves on
             while steps < total_steps:
                 if stop is not None and stop():
                     interrupted = True
@@ -314,13 +408,14 @@ class Simulation:
                 try:
                     frame = self.advance(total_steps - steps, before)
                 except BlowUpError as err:
-                    steps -= before_steps - self._good[1].steps  # the run's count up to the good frame
+                    steps -= before_steps - self._good[2]  # the run's count up to the good frame
                     err.summary = self._summary(steps, worst, pace, blew_up=True)
                     raise
                 steps += self.steps_taken - before_steps
                 worst = max(worst, frame.worst_stretch)
                 if on_frame:
                     on_frame(frame)
+                del frame
                 pace.after_frame(self.state.time, steps)
         except KeyboardInterrupt:
             interrupted = True
@@ -338,6 +433,11 @@ class Simulation:
             ground_contacts=self.contacts.by_time(),
             **flags,
         )
+
+
+def _nothing() -> None:
+    """A dead weak reference: no frame handed out."""
+    return None
 
 
 class RecordedControls:

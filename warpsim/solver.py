@@ -69,6 +69,11 @@ class _Solver:
     def _launch(self, state: State, control: Control, dt: float) -> None:
         raise NotImplementedError
 
+    def launch(self, state: State, control: Control, dt: float) -> None:
+        """Launch one step's kernels on ``state`` (no graph, ``state.time`` left alone): what a caller records
+        when it captures several steps, with kernels of its own, in one graph (see :meth:`load_kernels`)."""
+        self._launch(state, control, _check_dt(dt))
+
     modules: tuple = MODULES
     """The kernel modules this solver launches (:meth:`load_kernels` loads only these)."""
 

@@ -1,0 +1,121 @@
+"""Frames checked on the device: the report a run reads after each frame agrees with the host's measures, a run
+that writes nothing copies no state to the host, and a frame kept by its reader still shows its own state."""
+
+import numpy as np
+import pytest
+
+from warpsim import diagnostics
+from warpsim.descriptor import defaults
+from warpsim.runner import Simulation
+
+
+def _kites(count: int = 3) -> Simulation:
+    d = defaults("kite")
+    d["worlds"] = {"count": count, "wind": {"speed": list(np.linspace(4.0, 9.0, count))}}
+    return Simulation(d)
+
+
+def test_whole_frame_graph_steps_as_one_step_at_a_time():
+    """`run` replays a frame (its steps and the probe's kernels) as one graph; the state is the same, bit for bit,
+    as after the same steps one by one, with or without graphs."""
+    runs = {}
+    for label, use_graph, by_frames in (("frames", True, True), ("steps", True, False), ("plain", False, True)):
+        sim = Simulation(defaults("hang-glider"), use_graph=use_graph)
+        steps = 40 * sim.steps_per_frame
+        if by_frames:
+            sim.run(steps * sim.dt)
+        else:
+            sim.step(steps)
+        assert sim.steps_taken == steps
+        runs[label] = (sim.state.positions(), sim.state.particle_q_prev.numpy().copy(), sim.state.time)
+    for label in ("steps", "plain"):
+        np.testing.assert_array_equal(runs["frames"][0], runs[label][0])
+        np.testing.assert_array_equal(runs["frames"][1], runs[label][1])
+        assert runs["frames"][2] == runs[label][2]
+
+
+@pytest.mark.parametrize("scene", ["hang-glider", "kites"])
+def test_device_report_agrees_with_the_host(scene):
+    """Worst stretch per world (with the glider's pretensioned sail, which shows none inside its band) and each
+    object's lowest clearance above the terrain, from the device, against NumPy on the host copy."""
+    sim = _kites() if scene == "kites" else Simulation(defaults("hang-glider"))
+    model = sim.model
+    owner = sim.contacts.owners()
+    stick_world = model.particle_world_np[model.stick_particles_np[:, 0]]
+    seen = []
+
+    def check(frame):
+        stretches = frame.stretches
+        for w in range(model.world_count):
+            host = stretches[stick_world == w].max()
+            assert frame.world_stretch[w] == pytest.approx(host, rel=1e-4, abs=1e-6)
+        assert frame.worst_stretch == pytest.approx(stretches[frame.worst_stick], rel=1e-4, abs=1e-6)
+        q = frame.positions
+        for k in range(len(model.objects)):
+            mine = q[owner == k]
+            host = (mine[:, 2] - model.terrain.height(mine[:, 0], mine[:, 1])).min()
+            assert frame.clearance[k] == pytest.approx(host, abs=1e-4)
+        assert frame.finite and frame.world_nonfinite.sum() == 0
+        seen.append(frame.worst_stretch)
+
+    sim.run(1.0, on_frame=check)
+    assert len(seen) > 10 and max(seen) > 1e-4  # real stretches were compared, not only zeros
+
+
+def test_a_run_that_writes_nothing_copies_no_state(monkeypatch):
+    copies = []
+    original = diagnostics.FrameSource.copy
+    monkeypatch.setattr(diagnostics.FrameSource, "copy", lambda self: copies.append(1) or original(self))
+    sim = Simulation(defaults("hang-glider"))
+    summary = sim.run(2.0)
+    assert summary.steps == round(2.0 / sim.dt) and copies == []  # the checks read the device's report only
+    read = []
+    sim.run(0.5, on_frame=lambda frame: read.append(frame.positions[0, 2]))
+    assert len(copies) == len(read) > 10  # one copy per frame that was read, none more
+
+
+def test_kept_frames_show_their_own_state():
+    """Frames kept and read after the run show what they showed when handed out (the simulation copies a frame
+    someone holds before the state moves on), bit for bit as frames read at once."""
+    kept, now = [], []
+    for sink in (kept, now):
+        sim = _kites(2)
+        if sink is kept:
+            sim.run(0.7, on_frame=kept.append)
+        else:
+            sim.run(0.7, on_frame=lambda f: now.append((f.positions, f.velocities, f.stretches, f.wind, f.time)))
+    assert len(kept) == len(now) > 10
+    for frame, (q, v, stretches, wind, t) in zip(kept, now, strict=True):
+        assert frame.time == t
+        np.testing.assert_array_equal(frame.positions, q)
+        np.testing.assert_array_equal(frame.velocities, v)
+        np.testing.assert_array_equal(frame.stretches, stretches)
+        np.testing.assert_array_equal(frame.wind, wind)
+    assert np.abs(kept[-1].positions - kept[0].positions).max() > 0.1  # the kites moved
+
+
+def test_blow_up_goes_back_to_the_last_good_frame_and_its_controls():
+    """A bad frame is undone whole: positions from the probe's slot of the last good frame, and the controls,
+    even when they changed at the bad frame's start."""
+    sim = Simulation(defaults("hang-glider"))
+    sim.run(0.3)
+    good = (sim.state.positions(), sim.state.particle_q_prev.numpy().copy(), sim.state.time, sim.steps_taken)
+    rest = sim.control.stick_rest.numpy().copy()
+    before = dict(sim.controls)
+    poisoned = sim.model.objects[0].particles[3]
+
+    def pull_and_poison(index):
+        sim.set_controls(roll=0.8)  # the pilot moves: control sticks change their rest lengths
+        q = sim.state.particle_q.numpy()
+        q[poisoned] = np.inf  # and the frame about to be stepped goes bad
+        sim.state.particle_q.assign(q)
+
+    with pytest.raises(Exception, match="non-finite"):
+        sim.advance(before=pull_and_poison)
+    np.testing.assert_array_equal(sim.state.positions(), good[0])
+    np.testing.assert_array_equal(sim.state.particle_q_prev.numpy(), good[1])
+    assert (sim.state.time, sim.steps_taken) == good[2:]
+    np.testing.assert_array_equal(sim.control.stick_rest.numpy(), rest)
+    assert sim.controls == before
+    sim.run(0.3)  # and it goes on from there
+    assert np.isfinite(sim.state.positions()).all()

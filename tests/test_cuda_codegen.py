@@ -10,9 +10,9 @@ import importlib
 import pytest
 import warp as wp
 
-from warpsim.kernels import MODULES
+from warpsim.kernels import MODULES, frame
 
-KERNEL_MODULES = tuple(module.__name__ for module in MODULES)
+KERNEL_MODULES = tuple(module.__name__ for module in (*MODULES, frame))  # the solvers' and the runner's
 
 
 def _nvrtc_archs() -> set[int]:

@@ -26,7 +26,7 @@ from .diagnostics import Frame, FrameSource, GroundContacts, find_blowup
 from .inputs import Inputs, control_names
 from .kernels import frame as frame_kernels
 from .scene import build_model, settings
-from .solver import make_solver
+from .solver import SOLVERS, load_modules, make_solver
 
 __all__ = ["BlowUpError", "Frame", "RunSummary", "Simulation"]
 
@@ -137,6 +137,8 @@ class Simulation:
         started = time.perf_counter()
         self.descriptor = descriptor
         self.settings = cfg = settings(descriptor)
+        # every kernel module the run launches, compiled together on a cold cache before anything else uses one
+        load_modules((*SOLVERS[cfg.solver.method].modules, frame_kernels), device)
         self.model = build_model(descriptor, device, where)
         self.dt = cfg.solver.dt
         self.solver = make_solver(
@@ -160,13 +162,13 @@ class Simulation:
         self._good = (0, 0.0, 0, 0)  # the last good frame: index, time [s], steps, the probe slot it is kept in
         self._slot = 1  # the probe slot the last measured frame was kept in
         self._saved_version, self._saved = -1, None  # inputs and control arrays of the last good frame
+        self.solver.load_kernels(also=(frame_kernels,))  # compile now (all at once), not in the first frame's time
         problem = self.blowup(self.frame(0))
         if problem:
             raise DescriptorError(
                 f"{where}: the built {problem[0]} is not sound: {problem[1]}; check its sizes, masses, speed and dt"
             )
         self.steps_per_frame = cfg.scene.steps_per_frame(self.dt)
-        self.solver.load_kernels()  # compile now, not in the first frame's time
         if self.solver.use_graph:
             self._frame_graph(0), self._frame_graph(1)
         wp.synchronize_device(self.model.device)
@@ -233,8 +235,7 @@ class Simulation:
         stepping one by one)."""
         graph = self._graphs.get(slot)
         if graph is None:
-            self.solver.load_kernels()
-            wp.load_module(frame_kernels, device=self.model.device)
+            self.solver.load_kernels(also=(frame_kernels,))  # a capture cannot compile
             with wp.ScopedCapture(device=self.model.device) as capture:
                 self.probe.begin()
                 for _ in range(self.steps_per_frame):

@@ -395,7 +395,6 @@ def run_chunk(task: ChunkTask) -> list[dict]:
     figures = list(figure_names(sim.descriptor["scene"]["object"]))
     acc = _Accumulator(count, figures)
     contacts = GroundContacts(model)
-    stick_world = model.particle_world_np[model.stick_particles_np[:, 0]] if model.stick_count else np.zeros(0, int)
     max_stretch = sim.settings.solver.max_stretch
     measure_figures = Figures(model)
     live = np.ones(count, dtype=bool)
@@ -414,10 +413,8 @@ def run_chunk(task: ChunkTask) -> list[dict]:
                 if live[w]:
                     live[w] = False
                     blew[w] = (frame.time, f"{reason} (at t = {frame.time:.4f} s)")
-            if len(frame.stretches):
-                per_world = np.zeros(count)
-                np.maximum.at(per_world, stick_world, np.nan_to_num(frame.stretches, nan=0.0))
-                acc.worst = np.where(live, np.maximum(acc.worst, per_world), acc.worst)
+            # each world's worst stretch as the device measured it (what a run's summary reports)
+            acc.worst = np.where(live, np.maximum(acc.worst, frame.world_stretch), acc.worst)
             found = measure_figures(frame, sim.solver.tri_force)
             values = np.array([[f[name] for f in found] for name in figures], dtype=np.float64)
             in_window = start - eps <= frame.time <= stop + eps

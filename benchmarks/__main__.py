@@ -92,9 +92,11 @@ def table(rows: list[dict]) -> str:
             continue
         if r["case"] == "build-scaling":
             sizes = ", ".join(f"{k}: {v:.1f} us" for k, v in r["us_per_particle"].items())
+            worlds = ", ".join(f"x{k}: {v:.1f} ms" for k, v in r["ms_per_kite_world"].items())
             lines.append(
                 f"| build-scaling | model build per particle, {sizes}; growth {r['growth']:.2f}x per 4x particles "
-                "(1 = linear) |||||||||"
+                f"(1 = linear); batched kites per world, {worlds}; growth {r['world_growth']:.2f}x per 4x worlds "
+                "|||||||||"
             )
             continue
         rt = r.get("realtime_factor")

@@ -417,20 +417,29 @@ def case_sweep(opts: Options) -> dict:
 
 
 BUILD_SIZES = (32, 64, 128, 256, 512)
+BUILD_WORLDS = (16, 64, 256)
 
 
 def case_build_scaling(opts: Options) -> dict:
-    """model build time of square flags from 32^2 to 512^2 particles: microseconds per particle (linear = flat)"""
-    per_particle = {}
+    """model build time of square flags from 32^2 to 512^2 particles (microseconds per particle) and of batches of
+    16 to 256 kites (milliseconds per world): linear = flat"""
+    per_particle, per_world = {}, {}
     for n in BUILD_SIZES:
         desc = flag(n)
         start = time.perf_counter()
         model = Simulation(desc, device=opts.device).model
         per_particle[n] = (time.perf_counter() - start) / model.particle_count * 1e6
+    for n in BUILD_WORLDS:
+        desc = scene("kite", {"worlds": {"count": n, "wind": {"gust_seed": list(range(n))}}})
+        start = time.perf_counter()
+        Simulation(desc, device=opts.device)
+        per_world[n] = (time.perf_counter() - start) / n * 1e3
     return {
         "case": "build-scaling",
         "us_per_particle": {f"{n}x{n}": round(v, 2) for n, v in per_particle.items()},
         "growth": per_particle[BUILD_SIZES[-1]] / per_particle[BUILD_SIZES[-2]],  # ~1 when the build is linear
+        "ms_per_kite_world": {str(n): round(v, 2) for n, v in per_world.items()},
+        "world_growth": per_world[BUILD_WORLDS[-1]] / per_world[BUILD_WORLDS[-2]],
         "device": opts.device,
     }
 

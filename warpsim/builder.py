@@ -114,6 +114,18 @@ class ModelBuilder:
         """Number of triangles added so far."""
         return len(self.tri_indices)
 
+    def positions(self, ids) -> np.ndarray:
+        """Float64 positions [m] of the particles ``ids`` (an index or an array of any shape): ``[..., 3]``, a
+        copy. Builders ask for the particles they need, not the whole list (which grows with every world)."""
+        ids = np.asarray(ids, dtype=np.int64)
+        q = self.particle_q
+        return np.array([q[i] for i in ids.ravel()], dtype=np.float64).reshape(*ids.shape, 3)
+
+    def triangle_particles(self, tris) -> np.ndarray:
+        """The ``[len(tris), 3]`` int64 particles of the triangles ``tris``."""
+        t = self.tri_indices
+        return np.array([t[i] for i in np.asarray(tris, dtype=np.int64).ravel()], dtype=np.int64).reshape(-1, 3)
+
     # ------------------------------------------------------------------ primitives
     def add_particle(self, pos, mass: float, vel=(0.0, 0.0, 0.0)) -> int:
         """Add a particle at ``pos`` [m] of ``mass`` [kg] (> 0) moving at ``vel`` [m/s]; returns its index."""

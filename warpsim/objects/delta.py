@@ -71,7 +71,7 @@ def add_rigid_frame(
         builder.stick_weight[s] = weight
     centre, up = np.asarray(centre, dtype=np.float64), np.asarray(up, dtype=np.float64)
     virtual = [builder.add_particle(centre + k * up, virtual_mass, vel) for k in offsets]
-    q = np.asarray(builder.particle_q, dtype=np.float64)
+    q = dict(zip(virtual + points, builder.positions(virtual + points), strict=True))
     # a virtual particle in the sail plane (offset 0) lands on a keel particle when the divisions are a multiple
     # of 3 (the centroid is then a grid point): the two coincide, and a stick between them has no length
     tol = 1e-9 * max(1.0, float(np.linalg.norm(up)))
@@ -108,8 +108,7 @@ def chordwise_loading(
     mean is 1. Returns the ``[len(tris)]`` factors (also written into the builder).
     """
     tris = np.asarray(tris, dtype=np.int64)
-    q = np.asarray(builder.particle_q, dtype=np.float64)
-    corners = q[np.asarray(builder.tri_indices, dtype=np.int64)[tris]]
+    corners = builder.positions(builder.triangle_particles(tris))
     d = corners.mean(axis=1) - np.asarray(nose, dtype=np.float64)
     behind = -(d @ np.asarray(fwd))
     leading = chord * np.minimum(np.abs(d @ np.asarray(left)) / semi_span, 1.0)
@@ -142,7 +141,7 @@ def delta_sail_aero(
     tris = np.asarray(tris, dtype=np.int64)
     builder.set_triangle_sail(tris, sail_coefficients(span**2 / area, 0.0, oswald, profile_drag, stall_deg))
     n = len(rows) - 1
-    centres = np.array(builder.particle_q)[np.array(builder.tri_indices)[tris]].mean(axis=1)
+    centres = builder.positions(builder.triangle_particles(tris)).mean(axis=1)
     side = (centres - np.asarray(nose)) @ np.asarray(left)
     tol = 1e-6 * span
     ends = np.where(

@@ -316,7 +316,7 @@ def _paper_sticks(builder: ModelBuilder, cfg: HangGliderConfig, rows, virtual, n
     q, b = n // 3, (2 * n) // 3
     points = [rows[0][0], rows[q][0], rows[q][q], rows[n][n // 2], rows[b][0], rows[b][b], virtual[2]]
     control = [builder.add_stick(pilot, p) for p in points]
-    return pilot, control, np.array(builder.particle_q)[points], neutral
+    return pilot, control, builder.positions(points), neutral
 
 
 def _hang_strap(builder: ModelBuilder, cfg: HangGliderConfig, rows, frame, nose, fwd, left, up, vel):
@@ -333,9 +333,8 @@ def _hang_strap(builder: ModelBuilder, cfg: HangGliderConfig, rows, frame, nose,
     """
     n = len(rows) - 1
     w = cfg.frame_weight
-    q = np.array(builder.particle_q)
     keel = frame.keel
-    keel_pos = q[keel]
+    keel_pos = builder.positions(keel)
     station = cfg.hang_point * cfg.chord
     hang = nose - station * fwd
     # the keel particles either side of the hang point, and the leading-edge particles of the nearest row
@@ -347,7 +346,8 @@ def _hang_strap(builder: ModelBuilder, cfg: HangGliderConfig, rows, frame, nose,
     h = builder.add_particle(hang, part_mass, vel)
     # a tie to a keel particle the hang point (nearly) sits on would be a stick of (almost) no length, whose
     # relative stretch means nothing: skip ties shorter than a quarter of a row (the others hold it)
-    ties = [builder.add_stick(h, a, weight=w) for a in anchors if np.linalg.norm(q[a] - hang) > 0.25 * cfg.chord / n]
+    near = 0.25 * cfg.chord / n
+    ties = [builder.add_stick(h, a, weight=w) for a in anchors if np.linalg.norm(builder.positions(a) - hang) > near]
     bar_centre = hang + cfg.bar_forward * fwd - cfg.hang_depth * up
     bar = [builder.add_particle(bar_centre + s * 0.5 * cfg.bar_width * left, 0.5 * part_mass, vel) for s in (1.0, -1.0)]
     for end, side in zip(bar, (rows[row][0], rows[row][-1]), strict=True):
@@ -360,7 +360,7 @@ def _hang_strap(builder: ModelBuilder, cfg: HangGliderConfig, rows, frame, nose,
     strap = builder.add_stick(h, pilot)
     arms = [builder.add_stick(pilot, end) for end in bar]
     extra = {"control_frame": np.array([h, *bar]), "strap": strap}
-    return pilot, arms, np.array(builder.particle_q)[bar], neutral, hang, ties, extra
+    return pilot, arms, builder.positions(bar), neutral, hang, ties, extra
 
 
 def _to_frame(points: np.ndarray, origin, fwd, left, up) -> np.ndarray:

@@ -159,15 +159,18 @@ class Simulation:
         self._source = FrameSource(self.model, self.state, self.control, self.dt)
         self._out = _nothing  # the last frame handed out (a weak reference), copied before the state moves on
         self._graphs = {}  # per probe slot: the whole frame (probe, steps, probe) as one graph
-        self._good = (0, 0.0, 0, 0)  # the last good frame: index, time [s], steps, the probe slot it is kept in
-        self._slot = 1  # the probe slot the last measured frame was kept in
+        # the last good frame: index, time [s], steps, and the probe slot its positions are kept in (a frame is
+        # measured into the other slot: 1 - self._good[3])
+        self._good = (0, 0.0, 0, 0)
         self._saved_version, self._saved = -1, None  # inputs and control arrays of the last good frame
-        self.solver.load_kernels(also=(frame_kernels,))  # compile now (all at once), not in the first frame's time
-        problem = self.blowup(self.frame(0))
+        first = self.frame(0)
+        problem = self.blowup(first)
         if problem:
             raise DescriptorError(
                 f"{where}: the built {problem[0]} is not sound: {problem[1]}; check its sizes, masses, speed and dt"
             )
+        self._keep_good(first)
+        del first
         self.steps_per_frame = cfg.scene.steps_per_frame(self.dt)
         if self.solver.use_graph:
             self._frame_graph(0), self._frame_graph(1)
@@ -208,9 +211,8 @@ class Simulation:
     def frame(self, index: int) -> Frame:
         """The current state measured as frame ``index`` (see :class:`warpsim.diagnostics.Frame`), with the
         controls in force."""
-        self._slot = 1 - self._good[3]  # never over the last good frame's
         self.probe.begin()
-        self.probe.measure(self.state, self.control, self._slot)
+        self.probe.measure(self.state, self.control, 1 - self._good[3])  # never over the last good frame's slot
         return self._hand_out(index)
 
     def _hand_out(self, index: int) -> Frame:
@@ -248,7 +250,7 @@ class Simulation:
         """Take ``count`` steps (one frame or what is left of it) and have the probe report and keep the state in
         the slot that is not the last good frame's."""
         self._release()
-        self._slot = slot = 1 - self._good[3]
+        slot = 1 - self._good[3]
         if count == self.steps_per_frame and self.solver.use_graph:
             wp.capture_launch(self._frame_graph(slot))
             for _ in range(count):  # the same sum of dt as the solver keeps step by step
@@ -260,8 +262,9 @@ class Simulation:
             self.probe.measure(self.state, self.control, slot)
 
     def _keep_good(self, frame: Frame) -> None:
-        """Make ``frame`` (just checked) the last good frame, with the controls in force now."""
-        self._good = (frame.index, frame.time, frame.steps, self._slot)
+        """Make ``frame``, the last one measured and just checked, the last good frame, with the controls in force
+        now."""
+        self._good = (frame.index, frame.time, frame.steps, 1 - self._good[3])
         if self._saved_version != self.inputs.version:  # the controls changed since the last good frame
             self._saved_version = self.inputs.version
             c = self.control

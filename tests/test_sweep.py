@@ -145,7 +145,7 @@ def test_a_worker_killed_mid_sweep_is_replaced_and_the_rows_are_the_same(cluster
     assert killed[0] not in cluster.run(os.getpid).values()  # a new process took the dead one's place
 
 
-def _cli(tmp_path, *extra) -> list[str]:
+def _cli(tmp_path, *extra, workers: int = 2) -> list[str]:
     vary = sum((["--vary", a] for a in AXES), [])
     return [
         sys.executable,
@@ -159,7 +159,7 @@ def _cli(tmp_path, *extra) -> list[str]:
         "--seconds",
         str(SECONDS),
         "--workers",
-        "2",
+        str(workers),
         "--chunk",
         "1",
         "--out",
@@ -170,8 +170,10 @@ def _cli(tmp_path, *extra) -> list[str]:
 
 def test_ctrl_c_keeps_the_finished_rows_and_a_rerun_runs_only_the_rest(tmp_path, reference):
     journal = tmp_path / "s.parquet.partial"
+    # one worker runs the six chunks one after another (~0.25 s each on 2 cores), so that Ctrl-C after the first
+    # row lands well before the last: on two workers the whole sweep once ended before the signal came
     proc = subprocess.Popen(
-        _cli(tmp_path), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
+        _cli(tmp_path, workers=1), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
     )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and proc.poll() is None:

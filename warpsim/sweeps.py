@@ -20,6 +20,7 @@ This is the only module that imports Dask; pandas and pyarrow come with it (the 
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import itertools
 import json
@@ -773,29 +774,62 @@ def _local_cluster(count: int):
     return client, cluster
 
 
+POLL = 0.1
+"""[s] how often a running sweep looks for finished chunks and for Ctrl-C."""
+
+
 def _run_tasks(client, tasks: list[ChunkTask], results: _Results, total: int, started: float, on_progress) -> None:
     import uuid
 
-    from dask.distributed import as_completed
+    from dask.distributed import wait
 
     token = uuid.uuid4().hex[:8]  # task keys unique on a shared scheduler
-    futures = [
+    pending = [
         client.submit(run_chunk, task, key=f"warpsim-cases-{task.cases[0]}-{task.cases[-1]}-{token}", retries=2)
         for task in tasks
     ]
-    done = 0
+    futures, done = list(pending), 0
     try:
-        for future in as_completed(futures):
-            try:
-                rows = future.result()
-            except Exception as err:
-                raise _TaskFailedError() from err
-            results.add(rows)
-            done += len(rows)
-            if on_progress is not None:
-                on_progress(done, total, time.perf_counter() - started)
+        with _ctrl_c_flag() as stop:
+            while pending:
+                if stop.is_set():
+                    raise KeyboardInterrupt
+                try:
+                    wait(pending, timeout=POLL, return_when="FIRST_COMPLETED")
+                except TimeoutError:
+                    continue
+                finished = [f.done() for f in pending]
+                for future in [f for f, ok in zip(pending, finished, strict=True) if ok]:
+                    try:
+                        rows = future.result()
+                    except Exception as err:
+                        raise _TaskFailedError() from err
+                    results.add(rows)
+                    done += len(rows)
+                    if on_progress is not None:
+                        on_progress(done, total, time.perf_counter() - started)
+                pending = [f for f, ok in zip(pending, finished, strict=True) if not ok]
     finally:
         client.cancel(futures)
+
+
+@contextlib.contextmanager
+def _ctrl_c_flag():
+    """While inside, Ctrl-C (SIGINT) sets the event this yields instead of raising ``KeyboardInterrupt`` wherever
+    the main thread happens to be (inside Dask's client code it could be lost); the sweep's loop raises it at its
+    next look, within :data:`POLL` seconds. Off the main thread (where no signal lands) the event is never set."""
+    import signal
+    import threading
+
+    stop = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+    previous = signal.signal(signal.SIGINT, lambda *_: stop.set())
+    try:
+        yield stop
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 class _TaskFailedError(Exception):
@@ -804,8 +838,6 @@ class _TaskFailedError(Exception):
 
 def _close(client, cluster) -> None:
     """Close this sweep's client and local cluster (quietly: they may be half gone after Ctrl-C)."""
-    import contextlib
-
     if client is not None:
         with contextlib.suppress(Exception):
             client.close(timeout=5)

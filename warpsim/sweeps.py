@@ -774,32 +774,26 @@ def _local_cluster(count: int):
     return client, cluster
 
 
-POLL = 0.1
-"""[s] how often a running sweep looks for finished chunks and for Ctrl-C."""
+POLL = 0.02
+"""[s] how long a running sweep waits, when no chunk has finished, before it looks again (Ctrl-C wakes it)."""
 
 
 def _run_tasks(client, tasks: list[ChunkTask], results: _Results, total: int, started: float, on_progress) -> None:
     import uuid
 
-    from dask.distributed import wait
+    from dask.distributed import as_completed
 
     token = uuid.uuid4().hex[:8]  # task keys unique on a shared scheduler
-    pending = [
+    futures = [
         client.submit(run_chunk, task, key=f"warpsim-cases-{task.cases[0]}-{task.cases[-1]}-{token}", retries=2)
         for task in tasks
     ]
-    futures, done = list(pending), 0
+    finished, done = as_completed(futures), 0
     try:
         with _ctrl_c_flag() as stop:
-            while pending:
-                if stop.is_set():
-                    raise KeyboardInterrupt
-                try:
-                    wait(pending, timeout=POLL, return_when="FIRST_COMPLETED")
-                except TimeoutError:
-                    continue
-                finished = [f.done() for f in pending]
-                for future in [f for f, ok in zip(pending, finished, strict=True) if ok]:
+            while not finished.is_empty():
+                batch = finished.next_batch(block=False)
+                for future in batch:  # rows that are done are kept, even when Ctrl-C came meanwhile
                     try:
                         rows = future.result()
                     except Exception as err:
@@ -808,7 +802,10 @@ def _run_tasks(client, tasks: list[ChunkTask], results: _Results, total: int, st
                     done += len(rows)
                     if on_progress is not None:
                         on_progress(done, total, time.perf_counter() - started)
-                pending = [f for f, ok in zip(pending, finished, strict=True) if not ok]
+                if stop.is_set():
+                    raise KeyboardInterrupt
+                if not batch:
+                    stop.wait(POLL)
     finally:
         client.cancel(futures)
 
@@ -816,8 +813,8 @@ def _run_tasks(client, tasks: list[ChunkTask], results: _Results, total: int, st
 @contextlib.contextmanager
 def _ctrl_c_flag():
     """While inside, Ctrl-C (SIGINT) sets the event this yields instead of raising ``KeyboardInterrupt`` wherever
-    the main thread happens to be (inside Dask's client code it could be lost); the sweep's loop raises it at its
-    next look, within :data:`POLL` seconds. Off the main thread (where no signal lands) the event is never set."""
+    the main thread happens to be (inside Dask's client code it could be lost); the sweep's loop raises it when
+    it looks next, at once if it was waiting. Off the main thread (where no signal lands) the event is never set."""
     import signal
     import threading
 

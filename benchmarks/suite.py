@@ -172,8 +172,10 @@ def case_euler_vs_verlet(opts: Options) -> dict:
     )
 
 
-def case_batched(count: int) -> Callable[[Options], dict]:
+def case_batched(count: int, gpu_only: bool = False) -> Callable[[Options], dict]:
     def run(opts: Options) -> dict:
+        if gpu_only and opts.device == "cpu":
+            return {"case": f"kites-x{count}", "skipped": "a GPU row: python -m benchmarks --device cuda"}
         single = measure("kite", scene("kite"), opts)
         speeds = list(np.linspace(4.0, 12.0, count))
         row = measure(f"kites-x{count}", scene("kite", {"worlds": {"count": count, "wind": {"speed": speeds}}}), opts)
@@ -451,6 +453,7 @@ CASES: dict[str, Callable[[Options], dict]] = {
     **{f"flag-{n}": case_flag(n) for n in FLAG_SIZES},
     "euler-vs-verlet": case_euler_vs_verlet,
     "kites-x256": case_batched(256),
+    "kites-x1024": case_batched(1024, gpu_only=True),
     "numpy-hang-glider": case_numpy("hang-glider"),
     "numpy-flag-256": case_numpy("flag-256"),
     **{f"newton-flag-{n}": case_newton(n) for n in FLAG_SIZES},

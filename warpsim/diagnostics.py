@@ -131,8 +131,8 @@ def object_of(model: Model, particle: int) -> str:
 def find_blowup(model: Model, frame: Frame, max_stretch: float) -> tuple[str, str] | None:
     """``(object name, what is wrong)`` when ``frame`` shows a blow-up, else None: a non-finite position or
     velocity, or a worst stick stretch above ``max_stretch`` (dimensionless; 0 = no limit)."""
-    if frame.finite and (max_stretch <= 0.0 or frame.worst_stretch <= max_stretch):
-        return None  # the device's report says all is well: no host copy needed
+    if _reported_sound(frame, max_stretch):
+        return None
     bad = ~(np.isfinite(frame.positions).all(axis=1) & np.isfinite(frame.velocities).all(axis=1))
     if bad.any():
         p = int(np.flatnonzero(bad)[0])
@@ -142,6 +142,12 @@ def find_blowup(model: Model, frame: Frame, max_stretch: float) -> tuple[str, st
             model, frame.worst_stick, frame.worst_stretch, max_stretch
         )
     return None
+
+
+def _reported_sound(frame: Frame, max_stretch: float) -> bool:
+    """The device's report says all is well (no host copy needed): every value finite, no stick past
+    ``max_stretch`` (0 = no limit)."""
+    return frame.finite and (max_stretch <= 0.0 or frame.worst_stretch <= max_stretch)
 
 
 def _stretch_reason(model: Model, stick: int, stretch: float, max_stretch: float) -> str:
@@ -157,8 +163,8 @@ def world_blowups(model: Model, frame: Frame, max_stretch: float) -> dict[int, s
     never touch each other, so one world's blow-up leaves the others sound): a non-finite position or
     velocity, or a stick of that world stretched past ``max_stretch`` (dimensionless; 0 = no limit). Particles
     and sticks are numbered within their world, so a world says the same whatever batch it runs in."""
-    if frame.finite and (max_stretch <= 0.0 or frame.worst_stretch <= max_stretch):
-        return {}  # the device's report says all is well: no host copy needed
+    if _reported_sound(frame, max_stretch):
+        return {}
     world = model.particle_world_np
     first_particle = np.searchsorted(world, np.arange(model.world_count))  # worlds are built one after another
     bad = ~(np.isfinite(frame.positions).all(axis=1) & np.isfinite(frame.velocities).all(axis=1))
@@ -326,11 +332,8 @@ class GroundContacts:
 
     def note(self, frame: Frame) -> None:
         """Record the objects that touch the terrain in ``frame`` for the first time."""
-        if (
-            len(self.first) == len(self.model.objects)
-            or not frame.clearance.min(initial=np.inf) < self.CONTACT_DISTANCE
-        ):
-            return  # all seen already, or nothing touches (one test of the device's report)
+        if len(self.first) == len(self.model.objects):
+            return
         for k in np.flatnonzero(self.touching(frame)):
             self.first.setdefault(self.model.objects[int(k)].name, float(frame.time))
 

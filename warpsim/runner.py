@@ -158,7 +158,6 @@ class Simulation:
         self.probe = frame_kernels.FrameProbe(self.model, self.contacts.owners())
         self._source = FrameSource(self.model, self.state, self.control, self.dt)
         self._out = _nothing  # the last frame handed out (a weak reference), copied before the state moves on
-        self._graphs = {}  # per probe slot: the whole frame (probe, steps, probe) as one graph
         # the last good frame: index, time [s], steps, and the probe slot its positions are kept in (a frame is
         # measured into the other slot: 1 - self._good[3])
         self._good = (0, 0.0, 0, 0)
@@ -172,8 +171,8 @@ class Simulation:
         self._keep_good(first)
         del first
         self.steps_per_frame = cfg.scene.steps_per_frame(self.dt)
-        if self.solver.use_graph:
-            self._frame_graph(0), self._frame_graph(1)
+        # per probe slot, the whole frame (probe, steps, probe) as one graph
+        self._graphs = (self._capture_frame(0), self._capture_frame(1)) if self.solver.use_graph else None
         wp.synchronize_device(self.model.device)
         self.startup_time = time.perf_counter() - started  # [s] model build, kernel load/compilation
 
@@ -231,28 +230,24 @@ class Simulation:
             frame.fetch()
             self._out = _nothing
 
-    def _frame_graph(self, slot: int):
+    def _capture_frame(self, slot: int):
         """The graph of one whole frame kept in probe ``slot``: the probe's start, ``steps_per_frame`` solver
-        steps, the probe's report (captured once, for this simulation's state and control; the same kernels as
-        stepping one by one)."""
-        graph = self._graphs.get(slot)
-        if graph is None:
-            self.solver.load_kernels(also=(frame_kernels,))  # a capture cannot compile
-            with wp.ScopedCapture(device=self.model.device) as capture:
-                self.probe.begin()
-                for _ in range(self.steps_per_frame):
-                    self.solver.launch(self.state, self.control, self.dt)
-                self.probe.measure(self.state, self.control, slot)
-            graph = self._graphs[slot] = capture.graph
-        return graph
+        steps, the probe's report (for this simulation's state and control, whose kernels are loaded; the same
+        kernels as stepping one by one)."""
+        with wp.ScopedCapture(device=self.model.device) as capture:
+            self.probe.begin()
+            for _ in range(self.steps_per_frame):
+                self.solver.launch(self.state, self.control, self.dt)
+            self.probe.measure(self.state, self.control, slot)
+        return capture.graph
 
     def _step_frame(self, count: int) -> None:
         """Take ``count`` steps (one frame or what is left of it) and have the probe report and keep the state in
         the slot that is not the last good frame's."""
         self._release()
         slot = 1 - self._good[3]
-        if count == self.steps_per_frame and self.solver.use_graph:
-            wp.capture_launch(self._frame_graph(slot))
+        if count == self.steps_per_frame and self._graphs is not None:
+            wp.capture_launch(self._graphs[slot])
             for _ in range(count):  # the same sum of dt as the solver keeps step by step
                 self.state.time += self.dt
             self.steps_taken += count

@@ -89,10 +89,9 @@ class _Solver:
     modules: tuple = MODULES
     """The kernel modules this solver launches (:meth:`load_kernels` loads only these)."""
 
-    def load_kernels(self, also: tuple = ()) -> None:
-        """Load the solver's kernel modules, and the Python modules ``also`` of kernels beside them, on the model's
-        device (see :func:`load_modules`)."""
-        load_modules((*self.modules, *also), self.model.device)
+    def load_kernels(self) -> None:
+        """Load the solver's kernel modules on the model's device (see :func:`load_modules`)."""
+        load_modules(self.modules, self.model.device)
 
     def prepare(self, state: State, control: Control, dt: float):
         """Load the kernels and, with ``use_graph``, capture the step for ``(state, control, dt)`` without

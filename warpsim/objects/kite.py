@@ -181,7 +181,7 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
         cfg.stall_angle,
     )
     keel_top = [rows[r][r // 2] for r in range(2, 3 + 2 * kd, 2)]
-    top_front, top_back = (np.array(builder.particle_q[p]) for p in (keel_top[0], keel_top[-1]))
+    top_front, top_back = builder.positions([keel_top[0], keel_top[-1]])
     k0 = builder.particle_count
     keel_rows, keel_sticks, keel_tris = builder.add_subdivided_triangle(
         tow, top_front, top_back, kd, per_particle * keel_count, last_row=keel_top

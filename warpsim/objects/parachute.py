@@ -141,7 +141,7 @@ def build_parachute(builder: ModelBuilder, cfg: ParachuteConfig, terrain: Height
     per_line_mass = cfg.line_mass / (cfg.line_count * max(cfg.line_particles, 1))
     for k in range(cfg.line_count):
         top = rim[int(round(k * len(rim) / cfg.line_count)) % len(rim)]
-        start = np.array(builder.particle_q[top])
+        start = builder.positions(top)
         if cfg.line_particles:
             end = start + (person_pos - start) * (cfg.line_particles / (cfg.line_particles + 1))
             ids, sticks = builder.add_rope(

@@ -25,12 +25,12 @@ class Checkpoint:
     ``C`` controls the scene accepts, named by ``control_names``).
 
     Attributes:
-        q: ``[N, 3]`` float32 positions [m].
-        q_prev: ``[N, 3]`` float32 positions one step earlier [m] (Verlet's implicit velocity).
+        q: ``[N, 3]`` float64 positions [m].
+        q_prev: ``[N, 3]`` float64 positions one step earlier [m] (Verlet's implicit velocity).
         time: ``[1]`` float64 simulated time [s].
         steps: ``[1]`` int64 solver steps taken since the scene started.
         stick_rest: ``[M]`` float32 current rest lengths [m] (the pilot's control sticks change).
-        nail_target: ``[N, 3]`` float32 where each nailed particle is held [m] (the kite's anchor moves).
+        nail_target: ``[N, 3]`` float64 where each nailed particle is held [m] (the kite's anchor moves).
         wind: ``[W, 3]`` float32 current wind of each world [m/s].
         gust_active: ``[W]`` uint8, 1 where the world has gusts.
         gust_g: ``[W, 3]`` float64 the gust processes' current values (dimensionless).

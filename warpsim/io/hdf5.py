@@ -3,7 +3,7 @@
 Layout (``F`` frames, ``N`` particles, ``M`` sticks, ``T`` triangles, ``O`` objects; SI units)::
 
     /time                        [F]        float64  simulated time of each frame [s]
-    /positions                   [F, N, 3]  float32  particle positions [m] (chunk = 1 frame, gzip)
+    /positions                   [F, N, 3]  float64  particle positions [m] (chunk = 1 frame, gzip)
     /diagnostics/worst_stretch   [F]        float32  largest |l - r| / r over all sticks
     /diagnostics/kinetic_energy  [F]        float64  kinetic energy of the free particles [J]
     /diagnostics/centre          [F, O, 3]  float32  mass centre of each object [m]
@@ -73,7 +73,7 @@ from .h5safe import (
 
 EXTENSIONS = (".h5", ".hdf5")
 FORMAT = "warpsim-recording"
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4
 SLOTS = ("slot0", "slot1")
 _CHECKSUM = {"fletcher32": True}
 
@@ -84,7 +84,7 @@ def _frame_layout(particles: int, objects: int, controls: int) -> dict[str, tupl
     return {
         "controls": ((controls, 3), "f8", 256),
         "time": ((), "f8", 256),
-        "positions": ((particles, 3), "f4", 1),
+        "positions": ((particles, 3), "f8", 1),
         "diagnostics/worst_stretch": ((), "f4", 256),
         "diagnostics/kinetic_energy": ((), "f8", 256),
         "diagnostics/centre": ((objects, 3), "f4", 64),

@@ -166,8 +166,8 @@ def _triangle_air_force(
     tri_span: wp.array(dtype=wp.vec2i),
     particle_world: wp.array(dtype=wp.int32),
     hf: HeightfieldData,
-    particle_q: wp.array(dtype=wp.vec3),
-    particle_q_prev: wp.array(dtype=wp.vec3),
+    particle_q: wp.array(dtype=wp.vec3d),
+    particle_q_prev: wp.array(dtype=wp.vec3d),
     wind: wp.array(dtype=wp.vec3),
     dt: float,
     air_density: float,
@@ -179,26 +179,27 @@ def _triangle_air_force(
 ):
     t = wp.tid()
     idx = tri_indices[t]
+    # float64 positions; edges, velocity and centre are measured in float64, then rounded to float32
     a = particle_q[idx[0]]
     b = particle_q[idx[1]]
     c = particle_q[idx[2]]
-    cross = wp.cross(b - a, c - b)
+    cross = wp.cross(wp.vec3(b - a), wp.vec3(c - b))
     cross_len = wp.length(cross)
     if cross_len == 0.0:
         tri_force_out[t] = wp.vec3(0.0)
         return
-    velocity = ((a - particle_q_prev[idx[0]]) + (b - particle_q_prev[idx[1]]) + (c - particle_q_prev[idx[2]])) / (
-        3.0 * dt
-    )
-    centre = (a + b + c) / 3.0
-    ground = terrain_height(hf, centre[0], centre[1])
-    w = wind_at(wind[particle_world[idx[0]]], centre[2] - ground, shear_reference_height, shear_exponent)
+    moved = (a - particle_q_prev[idx[0]]) + (b - particle_q_prev[idx[1]]) + (c - particle_q_prev[idx[2]])
+    velocity = wp.vec3(moved) / (3.0 * dt)
+    centre = (a + b + c) / wp.float64(3.0)
+    ground = terrain_height(hf, float(centre[0]), float(centre[1]))
+    height = float(centre[2] - wp.float64(ground))
+    w = wind_at(wind[particle_world[idx[0]]], height, shear_reference_height, shear_exponent)
     n = cross / cross_len
     if aero_model == AeroModel.SAIL:
         ends = tri_span[t]
         span = wp.vec3(0.0)
         if ends[0] >= 0:
-            span = wp.normalize(particle_q[ends[1]] - particle_q[ends[0]])
+            span = wp.normalize(wp.vec3(particle_q[ends[1]] - particle_q[ends[0]]))
         force = sail_force(n, 0.5 * cross_len, w - velocity, span, air_density, tri_loading[t], tri_sail[t])
     else:
         force = normal_force(n, 0.5 * cross_len, w - velocity, air_density, aero_model, tri_loading[t])
@@ -211,8 +212,8 @@ def _body_drag(
     drag_area: wp.array(dtype=wp.float32),
     particle_world: wp.array(dtype=wp.int32),
     hf: HeightfieldData,
-    particle_q: wp.array(dtype=wp.vec3),
-    particle_q_prev: wp.array(dtype=wp.vec3),
+    particle_q: wp.array(dtype=wp.vec3d),
+    particle_q_prev: wp.array(dtype=wp.vec3d),
     wind: wp.array(dtype=wp.vec3),
     dt: float,
     air_density: float,
@@ -224,9 +225,9 @@ def _body_drag(
     k = wp.tid()
     i = drag_particles[k]
     x = particle_q[i]
-    ground = terrain_height(hf, x[0], x[1])
-    w = wind_at(wind[particle_world[i]], x[2] - ground, shear_reference_height, shear_exponent)
-    w = w - (x - particle_q_prev[i]) / dt
+    ground = terrain_height(hf, float(x[0]), float(x[1]))
+    w = wind_at(wind[particle_world[i]], float(x[2] - wp.float64(ground)), shear_reference_height, shear_exponent)
+    w = w - wp.vec3(x - particle_q_prev[i]) / dt
     particle_air_out[i] = w * (0.5 * air_density * wp.length(w) * drag_area[k] * aero_scale)
 
 

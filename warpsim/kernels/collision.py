@@ -79,30 +79,30 @@ def terrain_normal(hf: HeightfieldData, x: float, y: float) -> wp.vec3:
 def _collide_heightfield(
     hf: HeightfieldData,
     particle_inv_mass: wp.array(dtype=wp.float32),
-    particle_q_prev: wp.array(dtype=wp.vec3),
+    particle_q_prev: wp.array(dtype=wp.vec3d),
     mode: int,
     friction: float,
-    particle_q_out: wp.array(dtype=wp.vec3),
+    particle_q_out: wp.array(dtype=wp.vec3d),
 ):
     i = wp.tid()
     if particle_inv_mass[i] == 0.0:
         return
-    x = particle_q_out[i]
-    h = terrain_height(hf, x[0], x[1])
+    x = particle_q_out[i]  # float64; the terrain is looked up and corrections made in float32
+    h = wp.float64(terrain_height(hf, float(x[0]), float(x[1])))
     if x[2] >= h:
         return
     if mode == CollisionMode.NORMAL:
-        n = terrain_normal(hf, x[0], x[1])
-        depth = (h - x[2]) * n[2]
-        x = x + n * depth
+        n = terrain_normal(hf, float(x[0]), float(x[1]))
+        depth = float(h - x[2]) * n[2]
+        x = x + wp.vec3d(n * depth)
         # friction on the tangential part of this step's trajectory
-        move = x - particle_q_prev[i]
+        move = wp.vec3(x - particle_q_prev[i])
         slide = move - n * wp.dot(move, n)
         slide_len = wp.length(slide)
         if slide_len > 0.0:
-            x = x - slide * wp.min(1.0, friction * depth / slide_len)
-        h = terrain_height(hf, x[0], x[1])
-    particle_q_out[i] = wp.vec3(x[0], x[1], wp.max(x[2], h))
+            x = x - wp.vec3d(slide * wp.min(1.0, friction * depth / slide_len))
+        h = wp.float64(terrain_height(hf, float(x[0]), float(x[1])))
+    particle_q_out[i] = wp.vec3d(x[0], x[1], wp.max(x[2], h))
 
 
 @wp.kernel

@@ -43,14 +43,13 @@ Three schemes, one class each (:class:`FusedProjector`, :class:`ScatterProjector
   run to run, and agrees with the others to float rounding.
   Only the positions need two buffers: a particle's increment, offset and origin are its own thread's.
 
-Positions are float32, and an iterate's small corrections can be smaller than half a float32 step of
-the coordinate (1.5e-5 m at 300 m): rounded away every iteration, always in the same direction, they
-would break momentum for heavy particles far from the origin (a pilot or a parachutist hundreds of
-metres up). So each particle keeps, across the iterations of one projection, its *origin* (its position
-when the projection began) and its *offset* from it, the sum of its increments: small, so float32 holds
-it to ~1e-9 m. Every iterate is ``origin + offset``, rounded afresh, so the rounding to a float32
-position never accumulates, and Chebyshev extrapolation works on the last *increment* instead of the
-older position.
+Positions are float64 (``State.particle_q``) and everything measured from them is float32: a stick's
+ends are subtracted in float64 and only the difference, at most a few metres, is rounded to float32, so a
+stick is measured as well 10 km from the origin as next to it (float32 world coordinates would be quantised
+to 1e-3 m there, a tenth of a percent of a 1 m stick). Each particle keeps, across the iterations of one
+projection, its float64 *origin* (its position when the projection began) and its float32 *offset* from it,
+the sum of its increments; every iterate is ``origin + offset``, and Chebyshev extrapolation works on the
+last *increment*.
 
 ``fused`` is the fastest on the CPU: it drops two launches per iteration, reads packed records and runs
 plain ``while`` loops (the per-scheme costs are in ``benchmarks/results.md``). On CUDA it would run on a
@@ -115,26 +114,26 @@ def iterate_increment(total: wp.vec3, step: float, omega: float, last: wp.vec3) 
 
 
 @wp.func
-def advance_offset(origin: wp.vec3, offset: wp.vec3, inc: wp.vec3):
-    """Adds the increment ``inc`` [m] to a particle's ``offset`` [m]: returns the new offset and the iterate
-    ``origin + offset`` rounded to float32 (every scheme does exactly these operations)."""
+def advance_offset(origin: wp.vec3d, offset: wp.vec3, inc: wp.vec3):
+    """Adds the float32 increment ``inc`` [m] to a particle's float32 ``offset`` [m]: returns the new offset and
+    the float64 iterate ``origin + offset`` (every scheme does exactly these operations)."""
     moved = offset + inc
-    return moved, origin + moved
+    return moved, origin + wp.vec3d(moved)
 
 
 @wp.func
 def next_position(
     i: int,
-    x: wp.vec3,
+    x: wp.vec3d,
     total: wp.vec3,
     step: float,
     omega: float,
     first: int,
     last_inc_out: wp.array(dtype=wp.vec3),
     offset_out: wp.array(dtype=wp.vec3),
-    origin_out: wp.array(dtype=wp.vec3),
-) -> wp.vec3:
-    """Particle ``i``'s next float32 position [m] from ``x`` and its summed corrections ``total``.
+    origin_out: wp.array(dtype=wp.vec3d),
+) -> wp.vec3d:
+    """Particle ``i``'s next float64 position [m] from ``x`` and its summed float32 corrections ``total``.
 
     The iterate is
     ``origin_out[i] + offset_out[i]``: the position when the projection began (stored on the
@@ -162,12 +161,12 @@ def _scatter_corrections(
     stick_particles: wp.array(dtype=wp.vec2i),
     stick_rest: wp.array(dtype=wp.float32),
     stick_coef: wp.array(dtype=wp.float32),
-    particle_q: wp.array(dtype=wp.vec3),
+    particle_q: wp.array(dtype=wp.vec3d),
     accum_out: wp.array(dtype=wp.vec3),
 ):
     s = wp.tid()
     ends = stick_particles[s]
-    c = stick_correction(particle_q[ends[1]] - particle_q[ends[0]], stick_rest[s], stick_coef[s])
+    c = stick_correction(wp.vec3(particle_q[ends[1]] - particle_q[ends[0]]), stick_rest[s], stick_coef[s])
     wp.atomic_add(accum_out, ends[0], c)
     wp.atomic_sub(accum_out, ends[1], c)
 
@@ -176,15 +175,15 @@ def _scatter_corrections(
 def _apply_accumulated(
     particle_scale: wp.array(dtype=wp.float32),
     particle_nail: wp.array(dtype=wp.int32),
-    nail_target: wp.array(dtype=wp.vec3),
+    nail_target: wp.array(dtype=wp.vec3d),
     relaxation: float,
     omega: float,
     first: int,
     accum_out: wp.array(dtype=wp.vec3),
-    particle_q_out: wp.array(dtype=wp.vec3),
+    particle_q_out: wp.array(dtype=wp.vec3d),
     last_inc_out: wp.array(dtype=wp.vec3),
     offset_out: wp.array(dtype=wp.vec3),
-    origin_out: wp.array(dtype=wp.vec3),
+    origin_out: wp.array(dtype=wp.vec3d),
 ):
     i = wp.tid()
     total = accum_out[i]
@@ -208,15 +207,15 @@ def _gather_iteration(
     stick_coef: wp.array(dtype=wp.float32),
     particle_scale: wp.array(dtype=wp.float32),
     particle_nail: wp.array(dtype=wp.int32),
-    nail_target: wp.array(dtype=wp.vec3),
+    nail_target: wp.array(dtype=wp.vec3d),
     relaxation: float,
     omega: float,
     first: int,
-    q_in: wp.array(dtype=wp.vec3),
-    q_out: wp.array(dtype=wp.vec3),
+    q_in: wp.array(dtype=wp.vec3d),
+    q_out: wp.array(dtype=wp.vec3d),
     last_inc_out: wp.array(dtype=wp.vec3),
     offset_out: wp.array(dtype=wp.vec3),
-    origin_out: wp.array(dtype=wp.vec3),
+    origin_out: wp.array(dtype=wp.vec3d),
 ):
     i = wp.tid()
     if pin_to_nail(i, particle_nail, nail_target, q_out):
@@ -234,7 +233,7 @@ def _gather_iteration(
         other = ends[1]
         if (ref & 1) == 1:
             other = ends[0]
-        total += stick_correction(q_in[other] - x, stick_rest[s], stick_coef[s])
+        total += stick_correction(wp.vec3(q_in[other] - x), stick_rest[s], stick_coef[s])
     # only this thread reads and writes its own increment, offset and origin
     q_out[i] = next_position(i, x, total, relaxation * scale, omega, first, last_inc_out, offset_out, origin_out)
 
@@ -257,7 +256,7 @@ class ParticleIterate:
 
     last: wp.vec3
     offset: wp.vec3
-    origin: wp.vec3
+    origin: wp.vec3d
     step: wp.float32
 
 
@@ -290,10 +289,10 @@ def _pack_steps(
 def _fused_projection(
     stick_rest: wp.array(dtype=wp.float32),
     particle_nail: wp.array(dtype=wp.int32),
-    nail_target: wp.array(dtype=wp.vec3),
+    nail_target: wp.array(dtype=wp.vec3d),
     omegas: wp.array(dtype=wp.float32),
     accum_out: wp.array(dtype=wp.vec3),
-    particle_q_out: wp.array(dtype=wp.vec3),
+    particle_q_out: wp.array(dtype=wp.vec3d),
     packed_out: wp.array(dtype=PackedStick),
     iterate_out: wp.array(dtype=ParticleIterate),
 ):
@@ -325,7 +324,7 @@ def _fused_projection(
         s = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
         while s < stick_count:
             p = packed_out[s]
-            c = stick_correction(particle_q_out[p.b] - particle_q_out[p.a], p.rest, p.coef)
+            c = stick_correction(wp.vec3(particle_q_out[p.b] - particle_q_out[p.a]), p.rest, p.coef)
             accum_out[p.a] = accum_out[p.a] + c
             accum_out[p.b] = accum_out[p.b] - c
             s += 1
@@ -349,7 +348,7 @@ def _fused_projection(
 
 
 @wp.kernel
-def _copy_positions(src: wp.array(dtype=wp.vec3), dst_out: wp.array(dtype=wp.vec3)):
+def _copy_positions(src: wp.array(dtype=wp.vec3d), dst_out: wp.array(dtype=wp.vec3d)):
     i = wp.tid()
     dst_out[i] = src[i]
 
@@ -423,7 +422,7 @@ class StickProjector:
         n, device = self.model.particle_count, self.model.device
         self.last_inc = wp.zeros(n, dtype=wp.vec3, device=device)
         self.offset = wp.zeros(n, dtype=wp.vec3, device=device)
-        self.origin = wp.zeros(n, dtype=wp.vec3, device=device)
+        self.origin = wp.zeros(n, dtype=wp.vec3d, device=device)
 
 
 class FusedProjector(StickProjector):
@@ -505,7 +504,7 @@ class GatherProjector(StickProjector):
     def __init__(self, model, config: SolverConfig):
         super().__init__(model, config)
         self._make_iterate_buffers()
-        self.scratch = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)
+        self.scratch = wp.zeros(model.particle_count, dtype=wp.vec3d, device=model.device)
 
     def _project(self, state, control, iterations: int) -> None:
         m = self.model

@@ -34,15 +34,15 @@ def _frame_begin(world_count: int, object_count: int, report_out: wp.array(dtype
 
 
 @wp.func
-def _finite(v: wp.vec3) -> bool:
+def _finite(v: wp.vec3d) -> bool:
     return wp.isfinite(v[0]) and wp.isfinite(v[1]) and wp.isfinite(v[2])
 
 
 @wp.kernel
 def _frame_measure(
     hf: HeightfieldData,
-    particle_q: wp.array(dtype=wp.vec3),
-    particle_q_prev: wp.array(dtype=wp.vec3),
+    particle_q: wp.array(dtype=wp.vec3d),
+    particle_q_prev: wp.array(dtype=wp.vec3d),
     particle_world: wp.array(dtype=wp.int32),
     particle_owner: wp.array(dtype=wp.int32),
     stick_particles: wp.array(dtype=wp.vec2i),
@@ -51,8 +51,8 @@ def _frame_measure(
     stick_world: wp.array(dtype=wp.int32),
     world_count: int,
     report_out: wp.array(dtype=wp.float32),
-    snap_q_out: wp.array(dtype=wp.vec3),
-    snap_q_prev_out: wp.array(dtype=wp.vec3),
+    snap_q_out: wp.array(dtype=wp.vec3d),
+    snap_q_prev_out: wp.array(dtype=wp.vec3d),
 ):
     i = wp.tid()
     if i < particle_q.shape[0]:
@@ -62,11 +62,11 @@ def _frame_measure(
         if not (_finite(x) and _finite(x - particle_q_prev[i])):  # a position or a velocity
             wp.atomic_add(report_out, world_count + particle_world[i], 1.0)
         elif particle_owner[i] >= 0:
-            clearance = x[2] - terrain_height(hf, x[0], x[1])
+            clearance = float(x[2] - wp.float64(terrain_height(hf, float(x[0]), float(x[1]))))
             wp.atomic_min(report_out, 2 * world_count + particle_owner[i], clearance)
     if i < stick_particles.shape[0]:
         ends = stick_particles[i]
-        length = wp.length(particle_q[ends[1]] - particle_q[ends[0]])
+        length = wp.length(wp.vec3(particle_q[ends[1]] - particle_q[ends[0]]))
         rest = wp.max(stick_rest[i], 1.0e-12)
         built = rest / (1.0 - stick_pretension[i])
         high = wp.max(rest, built)
@@ -92,7 +92,7 @@ class FrameProbe:
         self.world_count = model.world_count
         self.object_count = len(model.objects)
         self.slots = [
-            tuple(wp.zeros(model.particle_count, dtype=wp.vec3, device=device) for _ in range(2)) for _ in range(2)
+            tuple(wp.zeros(model.particle_count, dtype=wp.vec3d, device=device) for _ in range(2)) for _ in range(2)
         ]  # per slot: (positions, previous positions)
         self.report = wp.zeros(2 * self.world_count + max(self.object_count, 1), dtype=wp.float32, device=device)
         self.owner = wp.array(np.asarray(owner, dtype=np.int32), dtype=wp.int32, device=device)

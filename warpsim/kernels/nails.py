@@ -15,8 +15,8 @@ wp.set_module_options({"enable_backward": False})  # forward-only: halves compil
 def pin_to_nail(
     i: int,
     particle_nail: wp.array(dtype=wp.int32),
-    nail_target: wp.array(dtype=wp.vec3),
-    particle_q_out: wp.array(dtype=wp.vec3),
+    nail_target: wp.array(dtype=wp.vec3d),
+    particle_q_out: wp.array(dtype=wp.vec3d),
 ) -> bool:
     """Put particle ``i`` on its nail's target [m] when it has a nail; returns whether it did."""
     nail = particle_nail[i]

@@ -24,8 +24,8 @@ wp.set_module_options({"enable_backward": False})  # forward-only: halves compil
 def _spring_forces(
     stick_particles: wp.array(dtype=wp.vec2i),
     stick_rest: wp.array(dtype=wp.float32),
-    particle_q: wp.array(dtype=wp.vec3),
-    particle_q_prev: wp.array(dtype=wp.vec3),
+    particle_q: wp.array(dtype=wp.vec3d),
+    particle_q_prev: wp.array(dtype=wp.vec3d),
     dt: float,
     stiffness: float,
     damping: float,
@@ -33,12 +33,13 @@ def _spring_forces(
 ):
     s = wp.tid()
     ends = stick_particles[s]
-    L = particle_q[ends[1]] - particle_q[ends[0]]
+    L = wp.vec3(particle_q[ends[1]] - particle_q[ends[0]])  # float64 ends, float32 difference
     length = wp.length(L)
     if length == 0.0:
         spring_force_out[s] = wp.vec3(0.0)
         return
-    V = ((particle_q[ends[1]] - particle_q_prev[ends[1]]) - (particle_q[ends[0]] - particle_q_prev[ends[0]])) / dt
+    moved = (particle_q[ends[1]] - particle_q_prev[ends[1]]) - (particle_q[ends[0]] - particle_q_prev[ends[0]])
+    V = wp.vec3(moved) / dt
     f = stiffness * (length - stick_rest[s]) + damping * wp.dot(V, L) / length
     spring_force_out[s] = L * (f / length)
 
@@ -51,14 +52,14 @@ def _integrate_euler(
     particle_tri_ids: wp.array(dtype=wp.int32),
     particle_stick_start: wp.array(dtype=wp.int32),
     particle_stick_refs: wp.array(dtype=wp.int32),
-    nail_target: wp.array(dtype=wp.vec3),
+    nail_target: wp.array(dtype=wp.vec3d),
     tri_force: wp.array(dtype=wp.vec3),
     particle_air: wp.array(dtype=wp.vec3),
     spring_force: wp.array(dtype=wp.vec3),
     gravity: wp.vec3,
     dt: float,
-    particle_q_out: wp.array(dtype=wp.vec3),
-    particle_q_prev_out: wp.array(dtype=wp.vec3),
+    particle_q_out: wp.array(dtype=wp.vec3d),
+    particle_q_prev_out: wp.array(dtype=wp.vec3d),
 ):
     i = wp.tid()
     x = particle_q_out[i]
@@ -71,11 +72,12 @@ def _integrate_euler(
         return
     force = gather_air_force(i, particle_tri_start, particle_tri_ids, tri_force) + particle_air[i]
     force += gather_stick_values(i, particle_stick_start, particle_stick_refs, spring_force)
-    velocity = (x - particle_q_prev_out[i]) / dt
-    x_new = x + velocity * dt
-    velocity_new = velocity + (gravity + force * inv_mass) * dt
+    step = wp.float64(dt)
+    velocity = (x - particle_q_prev_out[i]) / step  # float64, as the positions
+    x_new = x + velocity * step
+    velocity_new = velocity + wp.vec3d((gravity + force * inv_mass) * dt)
     particle_q_out[i] = x_new
-    particle_q_prev_out[i] = x_new - velocity_new * dt
+    particle_q_prev_out[i] = x_new - velocity_new * step
 
 
 def integrate_euler_springs(

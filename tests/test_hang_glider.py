@@ -138,36 +138,39 @@ def _angular_momentum(sim) -> np.ndarray:
     return (m * np.cross(q - centre, v - mean_v)).sum(0)
 
 
-@pytest.mark.parametrize("mass_splitting", [False, True])
-def test_pilot_moving_alone_does_not_move_or_spin_the_glider(mass_splitting):
+@pytest.mark.parametrize("mass_splitting, keep_momentum", [(False, False), (True, False), (False, True), (True, True)])
+def test_pilot_moving_alone_does_not_move_or_spin_the_glider(mass_splitting, keep_momentum):
     """No gravity, no air, at rest: moving the pilot is an internal force; the centre of mass must stay and
     no angular momentum may appear.
 
     The paper's plain per-particle average breaks both between the 65 kg pilot and the light frame (a
-    spurious pitch torque that decided the glider's pitch); mass splitting, the glider's default, keeps them.
-    At the scene's own place, 300 m up: the solver carries what float32 positions cannot hold of each
-    iterate (see warpsim.kernels.constraints); without that the pilot's small corrections were rounded
-    away there and the centre moved 0.35 m in 1 s even with mass splitting.
-    Measured: mass splitting 11 mm, 2.1 kg m^2/s; plain average 199 mm, 7.1 kg m^2/s.
+    spurious pitch torque that decided the glider's pitch); mass splitting, the glider's default, keeps the
+    centre but not all the angular momentum; the momentum projection after each step (keep_momentum, the
+    default) keeps both whatever the average (warpsim.kernels.momentum).
+    Measured: paper's average alone 199 mm, 7.1 kg m^2/s; mass splitting alone 11 mm, 2.1 kg m^2/s; with the
+    momentum projection 1e-10 m.
     """
     d = defaults("hang-glider")
     d["air"]["density"] = 0.0
     d["terrain"]["kind"] = "flat"
     d["hang_glider"]["speed"] = 0.0
     d["solver"]["mass_splitting"] = mass_splitting
+    d["solver"]["keep_momentum"] = keep_momentum
     sim = Simulation(d)
     sim.model.gravity = wp.vec3(0.0, 0.0, 0.0)  # before the first step, which captures the graph
     m = sim.model.particle_mass[:, None]
-    centre = (m * sim.state.positions().astype(np.float64)).sum(0) / m.sum()
+    centre = (m * sim.state.positions()).sum(0) / m.sum()
     sim.set_controls(pitch=1.0)
     drift = spin = 0.0
     for _ in range(20):
         sim.step(10)
-        moved = (m * sim.state.positions().astype(np.float64)).sum(0) / m.sum() - centre
+        moved = (m * sim.state.positions()).sum(0) / m.sum() - centre
         drift = max(drift, float(np.linalg.norm(moved)))
         spin = max(spin, abs(_angular_momentum(sim)[1]))  # about the span axis (+y): pitch
     # pitch inertia is about 70 kg m^2 (pilot 0.9 m below the centre of mass): 1 kg m^2/s ~ 0.8 deg/s
-    if mass_splitting:
+    if keep_momentum:
+        assert drift < 1e-6 and spin < 1e-3
+    elif mass_splitting:
         assert drift < 0.02 and spin < 3.0
     else:
         assert drift > 0.1 and spin > 5.0

@@ -120,7 +120,7 @@ def test_recording_layout_and_round_trip(tmp_path):
         f = rec.file
         assert rec.frame_count == len(frames)
         np.testing.assert_array_equal(rec.time, [t for _, t, _ in frames])
-        np.testing.assert_array_equal(rec.positions(), np.stack([q for _, _, q in frames]).astype(np.float32))
+        np.testing.assert_array_equal(rec.positions(), np.stack([q for _, _, q in frames]))  # float64, as simulated
         assert f["positions"].compression == "gzip" and f["positions"].chunks[0] == 1
         assert f.attrs["format"] == "warpsim-recording" and f.attrs["warp_version"]
         assert "[parachute]" in f.attrs["descriptor"] and f.attrs["dt"] == pytest.approx(0.01)

@@ -173,6 +173,9 @@ class SolverConfig(Checked):
             semi-iterative acceleration (Wang 2015); 0 = plain Jacobi, the paper. Same cost per iteration.
         mass_splitting: split each particle's mass over its sticks so that constraints conserve momentum
             (see :mod:`warpsim.kernels.constraints`); False = the paper's plain average.
+        keep_momentum: after the projection, give each free world (no nailed particle) back the linear and
+            angular momentum the projection's numerical error took or gave (:mod:`warpsim.kernels.momentum`);
+            False = the paper's projection alone.
         damping: fraction of the velocity removed per step, in [0, 1) (0 = none, the paper).
         max_stretch: blow-up limit on a stick's relative stretch ``|l - r|/r`` (0 = no limit).
         spring_stiffness: spring constant of every stick [N/m] (``euler`` only).
@@ -185,6 +188,7 @@ class SolverConfig(Checked):
     relaxation: float = number(1.0, Bounds(0.0, 2.0, low_open=True, high_open=True))
     chebyshev: float = number(0.95, Bounds(0.0, 1.0, high_open=True))
     mass_splitting: bool = False
+    keep_momentum: bool = True
     damping: float = number(0.0, Bounds(0.0, 1.0, high_open=True))
     max_stretch: float = number(1.0, NON_NEGATIVE)
     spring_stiffness: float = number(5000.0, POSITIVE)

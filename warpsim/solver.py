@@ -15,10 +15,11 @@ import dataclasses
 import warp as wp
 
 from .config import AirConfig, GroundConfig, SolverConfig, WindConfig
-from .kernels import MODULES, aero, collision, constraints, springs, verlet
+from .kernels import MODULES, aero, collision, constraints, momentum, springs, verlet
 from .kernels.aero import body_drag, triangle_air_force
 from .kernels.collision import collide_heightfield
 from .kernels.constraints import make_projector
+from .kernels.momentum import MomentumKeeper
 from .kernels.springs import integrate_euler_springs
 from .kernels.verlet import integrate_verlet
 from .model import Control, Model, State
@@ -126,25 +127,30 @@ class _Solver:
 class SolverVerlet(_Solver):
     """The paper's solver: Verlet integration + Jacobi-averaged distance constraints + terrain collision.
 
-    Uses ``iterations``, ``relaxation``, ``chebyshev``, ``mass_splitting`` and ``damping`` of its
+    Uses ``iterations``, ``relaxation``, ``chebyshev``, ``mass_splitting``, ``keep_momentum`` and ``damping`` of its
     :class:`~warpsim.config.SolverConfig` (arguments as for the shared base, see ``_Solver``), plus
     ``constraint_scheme``: ``"fused"``, ``"scatter"`` or ``"gather"`` (:mod:`warpsim.kernels.constraints`);
     None = fused on the CPU, gather on CUDA.
     """
 
-    modules = (aero, collision, constraints, verlet)
+    modules = (aero, collision, constraints, momentum, verlet)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, *, constraint_scheme=None, **kwargs):
         super().__init__(model, config, **kwargs)
         self.projector = make_projector(model, self.config, constraint_scheme)
         self.projector.prepare(self.config.iterations)  # before any graph capture
+        self.momentum = MomentumKeeper(model) if self.config.keep_momentum else None
 
     def _launch(self, state: State, control: Control, dt: float) -> None:
         m, cfg = self.model, self.config
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
         body_drag(m, state, control, dt, self.air, self.wind, self.particle_air)
         integrate_verlet(m, state, control, self.tri_force, self.particle_air, dt, cfg.damping)
+        if self.momentum is not None:
+            self.momentum.before(state)
         self.projector.project(state, control, cfg.iterations)
+        if self.momentum is not None:
+            self.momentum.after(state)
         collide_heightfield(m, state, self.ground.collision, self.ground.friction)
 
 

@@ -5,9 +5,9 @@ shared math lives in ``@wp.func`` helpers. Launch parameters are grouped as mode
 scalars, then outputs (``_out``).
 """
 
-from . import aero, collision, constraints, frame, springs, verlet
+from . import aero, collision, constraints, frame, momentum, springs, verlet
 
-MODULES = (aero, collision, constraints, springs, verlet)
+MODULES = (aero, collision, constraints, momentum, springs, verlet)
 """The solvers' kernel modules (``frame`` is the runner's)."""
 
-__all__ = ["MODULES", "aero", "collision", "constraints", "frame", "springs", "verlet"]
+__all__ = ["MODULES", "aero", "collision", "constraints", "frame", "momentum", "springs", "verlet"]

@@ -440,13 +440,13 @@ def hang_glider() -> list[Row]:
     return rows
 
 
-def fly(scene: str, seconds: float, controls=(), every: float = 0.1) -> list[dict]:
-    """Fly the hang glider of ``scene`` (a built-in name or a scene file) for ``seconds`` [s], setting
+def fly(scene: str | dict, seconds: float, controls=(), every: float = 0.1) -> list[dict]:
+    """Fly the hang glider of ``scene`` (a built-in name, a scene file or a descriptor) for ``seconds`` [s], setting
     ``controls`` ``(time [s], {name: value})`` on the way; its :func:`flight_state` every ``every`` seconds,
     each with its time ``t`` [s]."""
     from warpsim.objects.hang_glider import flight_state
 
-    sim = Simulation(descriptor.resolve(scene)[0])
+    sim = Simulation(scene if isinstance(scene, dict) else descriptor.resolve(scene)[0])
     record = sim.model.objects[0]
     steps = int(round(every / sim.dt))
     history = []
@@ -606,50 +606,102 @@ def kite_angle() -> list[Row]:
     return rows
 
 
-def _hands_off(dt: float, iterations: int, seconds: float = 60.0) -> tuple[float, float]:
-    """Glide ratio and mean airspeed [m/s] of the built-in hang glider hands off, 10 s..``seconds``, at the time
-    step ``dt`` [s] and ``iterations`` constraint iterations, read from the particles every 0.1 s."""
-    from warpsim.objects.hang_glider import flight_state
+def _fly_at(scene: str, dt: float, iterations: int, seconds: float, controls=()) -> list[dict]:
+    """:func:`fly` of ``scene`` at the time step ``dt`` [s] and ``iterations`` constraint iterations."""
+    d = descriptor.merge("convergence", descriptor.resolve(scene)[0], {"solver": {"dt": dt, "iterations": iterations}})
+    return fly(d, seconds, controls)
 
+
+def _glide_and_trim(dt: float, iterations: int) -> tuple[float, float]:
+    return glide(window(_fly_at("hang-glider", dt, iterations, 60.0), 10.0, 60.0))
+
+
+def _turn_rate(dt: float, iterations: int) -> float:
+    """Turn rate [deg/s] with roll 0.5 held from 20 s, over 35-50 s."""
+    return -turn_rate(window(_fly_at("hang-glider", dt, iterations, 50.0, [(20.0, {"roll": 0.5})]), 35.0, 50.0))
+
+
+def _phugoid_period(dt: float, iterations: int) -> float:
+    """Period [s] of the airspeed's oscillation after a 2 s pulse of bar in (as the phugoid row)."""
+    flight = _fly_at("hang-glider", dt, iterations, 60.0, [(20.0, {"pitch": 0.3}), (22.0, {"pitch": 0.0})])
+    pulse = window(flight, 23.0, 60.0)
+    dv = np.array([f["airspeed"] for f in pulse])
+    dv = dv - dv[-100:].mean()
+    troughs = [i for i in range(1, len(dv) - 1) if dv[i] < dv[i - 1] and dv[i] <= dv[i + 1] and dv[i] < -0.2]
+    return (pulse[troughs[-1]]["t"] - pulse[troughs[0]]["t"]) / (len(troughs) - 1)
+
+
+def _kite_angle(dt: float, iterations: int) -> float:
+    """Mean line elevation at the anchor [deg] of the default kite in 6 m/s, 20-40 s."""
+    d = descriptor.merge("convergence", descriptor.resolve("kite")[0], {"solver": {"dt": dt, "iterations": iterations}})
+    sim = Simulation(d)
+    record, angles = sim.model.objects[0], []
+    sim.run(20.0)
+    sim.run(20.0, on_frame=lambda frame: angles.append(anchor_elevation(record, frame.positions)))
+    return float(np.mean(angles))
+
+
+def _parachute_descent(dt: float, iterations: int) -> float:
+    """Steady descent speed [m/s] of the default parachute (hoop on), 20-30 s."""
     d = descriptor.merge(
-        "convergence", descriptor.resolve("hang-glider")[0], {"solver": {"dt": dt, "iterations": iterations}}
+        "convergence", descriptor.defaults("parachute"), {"solver": {"dt": dt, "iterations": iterations}}
     )
     sim = Simulation(d)
-    record, steps, history = sim.model.objects[0], int(round(0.1 / dt)), []
-    for i in range(int(round(seconds / 0.1))):
-        sim.step(steps)
-        state = flight_state(record, sim.state.positions(), sim.state.particle_q_prev.numpy(), dt, (0, 0, 0))
-        state["t"] = (i + 1) * 0.1
-        history.append(state)
-    return glide(window(history, 10.0, seconds))
+    record, speeds = sim.model.objects[0], []
+    sim.run(20.0)
+    sim.run(10.0, on_frame=lambda f: speeds.append(-f.velocities[record.particles, 2].mean()))
+    return float(np.mean(speeds))
 
 
-GRID = ((0.01, 55), (0.01, 110), (0.005, 110), (0.0025, 220))
-"""(dt [s], iterations) of the convergence rows: the defaults, iterations doubled, dt halved with them, the finest."""
+def _ladder(dt: float) -> tuple[tuple[float, int], ...]:
+    """(dt [s], iterations) from the defaults ``(dt, 55)`` on: iterations doubled, dt halved with them, the finest."""
+    return ((dt, 55), (dt, 110), (dt / 2, 110), (dt / 4, 220))
 
 
-def glider_convergence() -> list[Row]:
-    """The hands-off glide and trim speed as dt halves and the iterations double (issue 33)."""
-    runs = {key: _hands_off(*key) for key in GRID}
-    finest = runs[GRID[-1]]
+CONVERGENCE = {
+    # figure: (measure(dt, iterations), default dt [s], unit, band: the defaults' largest distance from the finest)
+    "glider glide ratio": (lambda dt, it: _glide_and_trim(dt, it)[0], 0.01, "", 0.04),
+    "glider trim speed": (lambda dt, it: _glide_and_trim(dt, it)[1], 0.01, " m/s", 0.04),
+    "glider turn rate, roll 0.5": (_turn_rate, 0.01, " °/s", 0.10),
+    "glider phugoid period": (_phugoid_period, 0.01, " s", 0.10),
+    "kite line angle at the anchor": (_kite_angle, 0.005, "°", 0.05),
+    "parachute descent": (_parachute_descent, 0.01, " m/s", 0.05),
+}
+"""The flight figures whose convergence the validation measures (issue 33)."""
+
+LIMITS = {
+    "kite line angle at the anchor": "the kite's launch is marginal: at 0.0025/200, 0.0025/220 and 0.00125/220 it "
+    "fell back to the ground, at 0.0025/165 and 0.0025/240 it flew at 53.0° and 49.7°, with float32 positions as "
+    "with float64 (a launch and trim set by the sticks' compliance, not yet by the sail's centre of pressure: "
+    "issue 35)",
+}
+"""Figures known not to converge, and why: a row outside its band shows as a model limit with this note."""
+
+
+def convergence_figures(names=None) -> list[Row]:
+    """Each figure of :data:`CONVERGENCE` (or of ``names``) at its default dt and 55 iterations, with the iterations
+    doubled, dt halved with them, and dt quartered at 220 iterations (the finest)."""
     rows = []
-    for k, name, unit in ((0, "glide ratio", ""), (1, "trim speed", " m/s")):
-        values = [runs[key][k] for key in GRID]
-        off = abs(values[0] / finest[k] - 1.0)
+    for name in names or CONVERGENCE:
+        measure, dt, unit, band = CONVERGENCE[name]
+        ladder = _ladder(dt)
+        values = [measure(*key) for key in ladder]
+        finest = values[-1]
+        off = abs(values[0] / finest - 1.0)
+        limit = LIMITS.get(name, "") if off > band else ""
         rows.append(
             Row(
-                f"glider {name}, convergence",
-                "hands off, 10-60 s, at dt/iterations " + ", ".join(f"{dt:g}/{it}" for dt, it in GRID),
-                f"{finest[k]:.3f}{unit} (the finest)",
-                "the model's own limit as dt -> 0 and iterations -> inf; a numerical error under 4 % is well inside "
-                "the spread of the references (glide 8-10, trim 9-13 m/s)",
+                f"{name}, convergence",
+                "at dt/iterations " + ", ".join(f"{d:g}/{it}" for d, it in ladder),
+                f"{finest:.3f}{unit} (the finest)",
+                "the model's own limit as dt -> 0 and iterations -> inf (a figure set by the numerics moves as they "
+                "are refined)",
                 ", ".join(f"{v:.3f}" for v in values),
-                "defaults within 4 % of the finest, each refinement closer",
-                off <= 0.04
-                and all(
-                    abs(a - finest[k]) >= abs(b - finest[k]) - 1e-3 for a, b in zip(values, values[1:], strict=False)
-                ),
-                note=f"defaults {100 * (values[0] / finest[k] - 1):+.1f} % from the finest",
+                f"defaults within {100 * band:.0f} % of the finest",
+                off <= band,
+                model_limit=bool(limit),
+                note=f"defaults {100 * (values[0] / finest - 1):+.1f} % from the finest"
+                + (f"; {limit}" if limit else ""),
             )
         )
     return rows
@@ -665,5 +717,8 @@ CASES: dict[str, Callable[[], list[Row]]] = {
     "hang-glider": hang_glider,
     "flying-glider": flying_glider,
     "kite-angle": kite_angle,
-    "glider-convergence": glider_convergence,
+    "convergence-glide": lambda: convergence_figures(["glider glide ratio", "glider trim speed"]),
+    "convergence-figures": lambda: convergence_figures(
+        ["glider turn rate, roll 0.5", "glider phugoid period", "kite line angle at the anchor", "parachute descent"]
+    ),
 }

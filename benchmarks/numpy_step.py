@@ -1,10 +1,15 @@
 """A plain, vectorised NumPy version of warpsim's Verlet step: the benchmark's "no Warp" baseline.
 
-Same algorithm, same order and float32 arithmetic as :class:`warpsim.SolverVerlet` (air force per
-triangle, Verlet, Jacobi iterations with averaged mass-weighted corrections and Chebyshev weights,
-heightfield collision), written the way a careful NumPy programmer would: whole-array operations,
-``np.bincount`` for the per-particle sums, no Python loop over particles or sticks. The tests check that
-it agrees with warpsim to float tolerance, so the speed ratio compares equal work.
+Same algorithm, same order and precision as :class:`warpsim.SolverVerlet` (air force per triangle, Verlet,
+Jacobi iterations with averaged mass-weighted corrections and Chebyshev weights, the momentum of free worlds
+kept, heightfield collision):
+positions, previous positions, nail targets and the projection's origins are float64; everything measured
+from positions (stick vectors, triangle edges, velocities, heights above the terrain) is a float64 difference
+rounded to float32, and the rest is float32. It is written the way a careful NumPy programmer would:
+whole-array operations, ``np.bincount`` for the per-particle sums (summed in float64, then rounded: the one
+place where its rounding differs from warpsim's float32 sums in stick order), no Python loop over particles
+or sticks. The tests check that it agrees with warpsim to float tolerance, so the speed ratio compares equal
+work.
 """
 
 from __future__ import annotations
@@ -17,12 +22,28 @@ from warpsim.kernels.constraints import chebyshev_weights
 from warpsim.runner import Simulation
 
 F32 = np.float32
+F64 = np.float64
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise dot product of ``[k, 3]`` arrays, summed in the kernels' order ``(x + y) + z``."""
+    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
+def _length(a: np.ndarray) -> np.ndarray:
+    """Row-wise length of a ``[k, 3]`` array, as ``wp.length``."""
+    return np.sqrt(_dot(a, a))
+
+
+def _f32(a: np.ndarray) -> np.ndarray:
+    """A float64 difference of positions rounded to float32, as ``wp.vec3(...)`` in the kernels."""
+    return a.astype(F32)
 
 
 class NumpyVerlet:
     """The step of ``sim`` (a :class:`warpsim.runner.Simulation` with the Verlet solver) in NumPy.
 
-    ``step()`` advances its own host copies ``q``, ``q_prev`` [m] by ``sim.dt`` seconds, reading the
+    ``step()`` advances its own float64 host copies ``q``, ``q_prev`` [m] by ``sim.dt`` seconds, reading the
     simulation's controls (rest lengths, nail targets, wind) as they were when it was made.
     """
 
@@ -30,8 +51,8 @@ class NumpyVerlet:
         m, solver = sim.model, sim.solver
         self.dt = F32(sim.dt)
         self.n = m.particle_count
-        self.q = sim.state.particle_q.numpy().copy()
-        self.q_prev = sim.state.particle_q_prev.numpy().copy()
+        self.q = sim.state.particle_q.numpy().astype(F64)  # copies
+        self.q_prev = sim.state.particle_q_prev.numpy().astype(F64)
         self.inv_mass = m.particle_inv_mass.numpy()
         nail = m.particle_nail.numpy()
         self.nailed = nail >= 0
@@ -61,8 +82,18 @@ class NumpyVerlet:
         self.damping = F32(cfg.damping)
         self.omegas = [F32(w) for w in chebyshev_weights(cfg.iterations, cfg.chebyshev)]
         self.rest = sim.control.stick_rest.numpy()[: m.stick_count]
-        self.nail_target = sim.control.nail_target.numpy().reshape(-1, 3)
+        self.nail_target = sim.control.nail_target.numpy().reshape(-1, 3).astype(F64)
         self.wind = sim.control.wind.numpy().reshape(-1, 3)
+        # the momentum keeper's worlds, read from it (solver.keep_momentum; none when it is off)
+        keeper = getattr(solver, "momentum", None)
+        if keeper is not None:
+            self.world_start = keeper.world_start.numpy()
+            self.world_particles = keeper.world_particles.numpy()
+            self.world_free = np.asarray(keeper.free, dtype=np.int32)
+        else:
+            self.world_start = np.zeros(1, dtype=np.int32)
+            self.world_particles = np.zeros(0, dtype=np.int32)
+            self.world_free = np.zeros(0, dtype=np.int32)
 
     # ------------------------------------------------------------------ pieces
     def _sum_per_particle(self, index: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -91,43 +122,46 @@ class NumpyVerlet:
         dhdx = ((one - ty) * (h10 - h00) + ty * (h11 - h01)) / self.cell[0]
         dhdy = ((one - tx) * (h01 - h00) + tx * (h11 - h10)) / self.cell[1]
         n = np.stack([-dhdx, -dhdy, np.ones_like(dhdx)], axis=1)
-        return n / np.linalg.norm(n, axis=1, keepdims=True)
+        return n / _length(n)[:, None]
 
     def air_force(self) -> np.ndarray:
         """Per-particle air force [N] ``[n, 3]``."""
         if len(self.tris) == 0:
             return np.zeros((self.n, 3), dtype=F32)
         q, qp, t = self.q, self.q_prev, self.tris
-        a, b, c = q[t[:, 0]], q[t[:, 1]], q[t[:, 2]]
-        cross = np.cross(b - a, c - b)
-        cross_len = np.linalg.norm(cross, axis=1)
+        a, b, c = q[t[:, 0]], q[t[:, 1]], q[t[:, 2]]  # float64
+        cross = np.cross(_f32(b - a), _f32(c - b))
+        cross_len = _length(cross)
         ok = cross_len > 0
         safe = np.where(ok, cross_len, F32(1.0))
         n = cross / safe[:, None]
         area = F32(0.5) * cross_len
-        velocity = ((a - qp[t[:, 0]]) + (b - qp[t[:, 1]]) + (c - qp[t[:, 2]])) / (F32(3.0) * self.dt)
-        centre = (a + b + c) / F32(3.0)
+        moved = (a - qp[t[:, 0]]) + (b - qp[t[:, 1]]) + (c - qp[t[:, 2]])
+        velocity = _f32(moved) / (F32(3.0) * self.dt)
         wind = self.wind[self.tri_world]
         shear = self.wind_profile
         if shear.shear_exponent != 0.0:
-            h = np.maximum(centre[:, 2] - self.height(centre[:, 0], centre[:, 1]), F32(0.1))
+            centre = (a + b + c) / F64(3.0)
+            ground = self.height(_f32(centre[:, 0]), _f32(centre[:, 1]))
+            h = np.maximum(_f32(centre[:, 2] - ground.astype(F64)), F32(0.1))
             wind = wind * ((h / F32(shear.reference_height)) ** F32(shear.shear_exponent))[:, None]
         w = wind - velocity
-        wn = np.einsum("ij,ij->i", n, w)
+        wn = _dot(n, w)
         if self.air.model == AeroModel.SAIL:
-            force = self._sail(n, area, w, q) * F32(self.air.scale / 3.0)
+            force = self._sail(n, area, w, q) * (F32(self.air.scale) / F32(3.0))
             force = np.where(ok[:, None], force, F32(0.0))
             return self._sum_per_particle(t.ravel(), np.repeat(force, 3, axis=0))
         if self.air.model == AeroModel.PAPER:
             mag = self.air_density * wn * np.abs(wn) * area
         else:
-            speed = np.linalg.norm(w, axis=1)
+            speed = _length(w)
             sin_alpha = np.abs(wn) / np.where(speed > 0, speed, F32(1.0))
             live = (speed > 0) & (sin_alpha >= F32(1e-6))
             sa = np.where(live, sin_alpha, F32(1.0))
             c_n = (F32(1.0) / (F32(0.222) + F32(0.283) / sa)) * (self.tri_loading + (F32(1.0) - self.tri_loading) * sa)
-            mag = np.where(live, F32(0.5) * self.air_density * speed * speed * area * c_n * np.sign(wn), F32(0.0))
-        force = np.where(ok[:, None], n * mag[:, None], F32(0.0)) * F32(self.air.scale / 3.0)
+            sign = np.where(wn < 0, F32(-1.0), F32(1.0))  # wp.sign: 1 at zero
+            mag = np.where(live, F32(0.5) * self.air_density * speed * speed * area * c_n * sign, F32(0.0))
+        force = np.where(ok[:, None], n * mag[:, None], F32(0.0)) * (F32(self.air.scale) / F32(3.0))
         return self._sum_per_particle(t.ravel(), np.repeat(force, 3, axis=0))
 
     def _sail(self, n, area, w, q) -> np.ndarray:
@@ -136,34 +170,35 @@ class NumpyVerlet:
         cl_slope, induced, cd0, stall = (self.tri_sail[:, k] for k in range(4))
         span = np.zeros_like(w)
         has = self.tri_span[:, 0] >= 0
-        edge = q[self.tri_span[has, 1]] - q[self.tri_span[has, 0]]
-        span[has] = edge / np.linalg.norm(edge, axis=1, keepdims=True)
-        speed = np.linalg.norm(w, axis=1)
+        edge = _f32(q[self.tri_span[has, 1]] - q[self.tri_span[has, 0]])
+        span[has] = edge / _length(edge)[:, None]
+        speed = _length(w)
         live = speed > 0
         w_hat = w / np.where(live, speed, one)[:, None]
         force = w_hat * (cd0 * speed * speed)[:, None]
         # attached flow on the wind across the leading edge
-        w_n = w - span * np.einsum("ij,ij->i", w, span)[:, None]
-        speed_n = np.linalg.norm(w_n, axis=1)
+        w_n = w - span * _dot(w, span)[:, None]
+        speed_n = _length(w_n)
         across = speed_n > F32(1e-6) * speed
         wn_hat = w_n / np.where(across, speed_n, one)[:, None]
-        d = np.einsum("ij,ij->i", n, wn_hat)
+        d = _dot(n, wn_hat)
         sin_n = np.minimum(np.abs(d), one)
         cos_n = np.sqrt(np.maximum(one - sin_n * sin_n, F32(0.0)))
         cl = cl_slope * np.arcsin(sin_n)
         tilted = cos_n > F32(1e-6)
-        lift_dir = (n * np.sign(d)[:, None] - wn_hat * sin_n[:, None]) / np.where(tilted, cos_n, one)[:, None]
+        sign_d = np.where(d < 0, -one, one)  # wp.sign: 1 at zero
+        lift_dir = (n * sign_d[:, None] - wn_hat * sin_n[:, None]) / np.where(tilted, cos_n, one)[:, None]
         lift_dir = np.where(tilted[:, None], lift_dir, F32(0.0))
         attached = (lift_dir * cl[:, None] + wn_hat * (induced * cl * cl)[:, None]) * (speed_n * speed_n)[:, None]
         attached = np.where(across[:, None], attached, F32(0.0))
         # separated flow: the plate's normal force, blended in past the stall
-        wn = np.einsum("ij,ij->i", n, w_hat)
+        wn = _dot(n, w_hat)
         sin_a = np.minimum(np.abs(wn), one)
         plate = one / (F32(0.222) + F32(0.283) / np.where(sin_a > F32(1e-6), sin_a, one))
-        separated = n * (np.sign(wn) * plate * speed * speed)[:, None]
+        separated = n * (np.where(wn < 0, -one, one) * plate * speed * speed)[:, None]
         separated = np.where((sin_a > F32(1e-6))[:, None], separated, F32(0.0))
         sigma = one / (one + np.exp(-F32(STALL_SHARPNESS) * (np.arcsin(sin_a) - stall)))
-        force = force + attached * (one - sigma)[:, None] + separated * sigma[:, None]
+        force = force + (attached * (one - sigma)[:, None] + separated * sigma[:, None])  # the kernel's +=
         scale = F32(0.5) * self.air_density * area * (self.tri_loading + (one - self.tri_loading) * sin_a)
         return np.where(live[:, None], force * scale[:, None], F32(0.0)).astype(F32)
 
@@ -173,42 +208,46 @@ class NumpyVerlet:
         if self.air.model != AeroModel.SAIL or len(self.drag_particles) == 0:
             return out
         i = self.drag_particles
-        x = self.q[i]
+        x = self.q[i]  # float64
         w = self.wind[self.particle_world[i]]
         shear = self.wind_profile
         if shear.shear_exponent != 0.0:
-            h = np.maximum(x[:, 2] - self.height(x[:, 0], x[:, 1]), F32(0.1))
+            ground = self.height(_f32(x[:, 0]), _f32(x[:, 1]))
+            h = np.maximum(_f32(x[:, 2] - ground.astype(F64)), F32(0.1))
             w = w * ((h / F32(shear.reference_height)) ** F32(shear.shear_exponent))[:, None]
-        w = w - (x - self.q_prev[i]) / self.dt
-        speed = np.linalg.norm(w, axis=1)
+        w = w - _f32(x - self.q_prev[i]) / self.dt
+        speed = _length(w)
         out[i] = w * (F32(0.5) * self.air_density * speed * self.drag_area * F32(self.air.scale))[:, None]
         return out
 
     def verlet(self, force: np.ndarray) -> None:
-        """Move every free particle by Verlet; nailed ones to their nails."""
+        """Move every free particle by Verlet (float64 positions, the float32 ``a dt^2`` added); nailed ones to
+        their nails."""
         x, xp = self.q, self.q_prev
         acc = self.gravity + force * self.inv_mass[:, None]
-        moved = x + (x - xp) * (F32(1.0) - self.damping) + acc * (self.dt * self.dt)
+        moved = x + (x - xp) * (F64(1.0) - F64(self.damping)) + (acc * (self.dt * self.dt)).astype(F64)
         moved = np.where((self.inv_mass == 0)[:, None], x, moved)
         moved[self.nailed] = self.nail_target[self.nail_of]
         self.q_prev = x
-        self.q = moved.astype(F32)
+        self.q = moved
 
     def project(self) -> None:
         """The Jacobi iterations on the sticks."""
         if len(self.ends) == 0:
             return
         a, b = self.ends[:, 0], self.ends[:, 1]
-        free = (self.scale != 0) & ~self.nailed
         step = (self.relaxation * self.scale)[:, None]
-        # the last iterate's increment, and the sum of the increments added to the starting positions
-        last = np.zeros_like(self.q)
-        offset = np.zeros_like(self.q)
+        free = step[:, 0] != 0  # nailed particles have scale 0 (as in warpsim's fused scheme)
+        pinned = self.nailed & ~free
+        # the last iterate's float32 increment, and the float32 sum of the increments added to the float64
+        # starting positions (the origin)
+        last = np.zeros(self.q.shape, dtype=F32)
+        offset = np.zeros(self.q.shape, dtype=F32)
         origin = self.q
         for omega in self.omegas:
             x = self.q
-            d = x[b] - x[a]
-            length = np.linalg.norm(d, axis=1)
+            d = _f32(x[b] - x[a])
+            length = _length(d)
             safe = np.where(length > 0, length, F32(1.0))
             c = d * np.where(length > 0, self.coef * (length - self.rest) / safe, F32(0.0))[:, None]
             total = self._sum_per_particle(np.concatenate([a, b]), np.concatenate([c, -c]))
@@ -216,36 +255,60 @@ class NumpyVerlet:
             if omega != 1.0:
                 inc = inc * omega + last * (omega - F32(1.0))
             moved = offset + inc
-            q = np.where(free[:, None], origin + moved, x)
-            q[self.nailed] = self.nail_target[self.nail_of]
+            q = np.where(free[:, None], origin + moved.astype(F64), x)
+            q[pinned] = self.nail_target[self.nail_of[pinned[self.nailed]]]
             offset = np.where(free[:, None], moved, offset)
             last = np.where(free[:, None], inc, last)
             self.q = q
 
+    def keep_momentum(self, predicted: np.ndarray) -> None:
+        """Give each free world back the linear and angular momentum the projection moved it by (``predicted``:
+        the positions before it), as :mod:`warpsim.kernels.momentum`, in float64."""
+        x, xp = self.q, self.q_prev
+        for w in np.flatnonzero(self.world_free):
+            i = self.world_particles[self.world_start[w] : self.world_start[w + 1]]
+            m = F64(1.0) / self.inv_mass[i].astype(F64)
+            mass = m.sum()
+            centre = (xp[i] * m[:, None]).sum(axis=0) / mass
+            r = xp[i] - centre
+            delta = x[i] - predicted[i]
+            d_p = (delta * m[:, None]).sum(axis=0)
+            d_l = (np.cross(r, delta) * m[:, None]).sum(axis=0)
+            inertia = np.eye(3) * (_dot(r, r) * m).sum() - (r * m[:, None]).T @ r
+            spin = np.zeros(3)
+            size = np.trace(inertia)
+            if np.linalg.det(inertia) > 1.0e-9 * size**3:  # not a line of particles
+                spin = np.linalg.solve(inertia, d_l)
+            x[i] = x[i] - d_p / mass - np.cross(spin, r)
+
     def collide(self) -> None:
         """Keep free particles at or above the terrain."""
-        x = self.q
-        h = self.height(x[:, 0], x[:, 1])
+        x = self.q  # float64; the terrain is looked up at float32 coordinates, the corrections made in float32
+        h = self.height(_f32(x[:, 0]), _f32(x[:, 1])).astype(F64)
         below = (x[:, 2] < h) & (self.inv_mass != 0)
         if not below.any():
             return
         p = x[below]
         hb = h[below]
         if self.ground.collision == CollisionMode.NORMAL:
-            n = self.normal(p[:, 0], p[:, 1])
-            depth = (hb - p[:, 2]) * n[:, 2]
-            p = p + n * depth[:, None]
-            move = p - self.q_prev[below]
-            slide = move - n * np.einsum("ij,ij->i", move, n)[:, None]
-            slide_len = np.linalg.norm(slide, axis=1)
-            cut = np.minimum(F32(1.0), F32(self.ground.friction) * depth / np.where(slide_len > 0, slide_len, 1.0))
-            p = p - slide * np.where(slide_len > 0, cut, F32(0.0))[:, None]
-            hb = self.height(p[:, 0], p[:, 1])
+            n = self.normal(_f32(p[:, 0]), _f32(p[:, 1]))
+            depth = _f32(hb - p[:, 2]) * n[:, 2]
+            p = p + (n * depth[:, None]).astype(F64)
+            move = _f32(p - self.q_prev[below])
+            slide = move - n * _dot(move, n)[:, None]
+            slide_len = _length(slide)
+            safe = np.where(slide_len > 0, slide_len, F32(1.0))
+            cut = np.minimum(F32(1.0), F32(self.ground.friction) * depth / safe)
+            p = p - (slide * np.where(slide_len > 0, cut, F32(0.0))[:, None]).astype(F64)
+            hb = self.height(_f32(p[:, 0]), _f32(p[:, 1])).astype(F64)
         p[:, 2] = np.maximum(p[:, 2], hb)
         x[below] = p
 
     def step(self) -> None:
-        """One step of ``dt``: air force, Verlet, constraints, terrain (the paper's order)."""
+        """One step of ``dt``: air force, Verlet, constraints (and the momentum kept), terrain (the paper's order)."""
         self.verlet(self.air_force() + self.body_drag())
+        predicted = self.q
         self.project()
+        if self.world_free.any():
+            self.keep_momentum(predicted)
         self.collide()

@@ -1,9 +1,10 @@
 """warpsim's step as a plain single-threaded C program (``step.c`` beside this file): the speed baseline.
 
 :func:`export` writes a simulation's model and state in the program's binary layout, :func:`build` compiles it
-with the system C compiler (``cc -O2``, plain C), and :func:`run` steps it and returns its stepping time and
-final positions. The program does the work of :class:`benchmarks.numpy_step.NumpyVerlet` in float32; what it
-reads comes from that class, so the two cannot read the model differently.
+with the system C compiler (``cc -O3 -march=native``, plain C), and :func:`run` steps it and returns its stepping
+time and final positions. The program does the work of :class:`benchmarks.numpy_step.NumpyVerlet` at warpsim's
+precision (float64 positions, float32 for everything measured from them); what it reads comes from that class,
+so the two cannot read the model differently.
 """
 
 from __future__ import annotations
@@ -22,8 +23,9 @@ from warpsim.runner import Simulation
 from ..numpy_step import F32, NumpyVerlet
 
 SOURCE = Path(__file__).with_name("step.c")
-FLAGS = ("-O2", "-std=c99")
-"""Plain C: no OpenMP, no ``-ffast-math``, no ``-march=native``."""
+FLAGS = ("-O3", "-march=native", "-std=c99", "-ffp-contract=off")
+"""Plain C for this machine's CPU, as Warp compiles its CPU kernels (``-march=native``); no fused multiply-adds
+(Warp's kernels have none, and the comparison is bit for bit), no OpenMP, no ``-ffast-math``."""
 
 
 def compiler() -> str | None:
@@ -57,40 +59,44 @@ def export(sim: Simulation, path: Path) -> None:
     ny, nx = ref.heights.shape
     ints = [n, len(ref.ends), len(ref.tris), len(ref.drag_particles), len(ref.omegas), ny, nx]
     ints += [laws[ref.air.model], 0 if ref.ground.collision == CollisionMode.NORMAL else 1, len(ref.nail_target)]
+    ints += [len(ref.world_free)]
     floats = [ref.dt, ref.air_density, ref.air.scale, ref.relaxation, ref.damping, *ref.gravity, ref.ground.friction]
     floats += [*ref.origin[:2], *ref.cell[:2], STALL_SHARPNESS]
+    i32, f32, f64 = np.int32, F32, np.float64  # positions and nail targets are double, as in warpsim
     arrays = [
-        np.array(ints, dtype=np.int32),
-        np.array(floats, dtype=F32),
-        ref.q,
-        ref.q_prev,
-        ref.inv_mass,
-        nail_of,
-        ref.nail_target,
-        ref.ends,
-        ref.coef,
-        ref.rest,
-        ref.scale,
-        np.array(ref.omegas, dtype=F32),
-        ref.tris,
-        ref.tri_loading,
-        ref.tri_sail,
-        ref.tri_span,
-        ref.wind[ref.tri_world],
-        ref.drag_particles,
-        ref.drag_area,
-        ref.wind[ref.particle_world[ref.drag_particles]],
-        ref.heights,
+        (ints, i32),
+        (floats, f32),
+        (ref.q, f64),
+        (ref.q_prev, f64),
+        (ref.inv_mass, f32),
+        (nail_of, i32),
+        (ref.nail_target, f64),
+        (ref.ends, i32),
+        (ref.coef, f32),
+        (ref.rest, f32),
+        (ref.scale, f32),
+        (ref.omegas, f32),
+        (ref.tris, i32),
+        (ref.tri_loading, f32),
+        (ref.tri_sail, f32),
+        (ref.tri_span, i32),
+        (ref.wind[ref.tri_world], f32),
+        (ref.drag_particles, i32),
+        (ref.drag_area, f32),
+        (ref.wind[ref.particle_world[ref.drag_particles]], f32),
+        (ref.heights, f32),
+        (ref.world_start, i32),
+        (ref.world_particles[: ref.world_start[-1]], i32),
+        (ref.world_free, i32),
     ]
     with open(path, "wb") as f:
-        for a in arrays:
-            kind = np.int32 if np.issubdtype(np.asarray(a).dtype, np.integer) else F32
+        for a, kind in arrays:
             f.write(np.ascontiguousarray(a, dtype=kind).tobytes())
 
 
 def run(program: Path, sim: Simulation, steps: int, parts: bool = False) -> tuple[float, np.ndarray, dict]:
     """Step ``sim``'s current state ``steps`` times with the C ``program``; returns the seconds the stepping
-    loop took (reading and writing aside), the final positions ``[n, 3]`` [m], and with ``parts`` the seconds
+    loop took (reading and writing aside), the final float64 positions ``[n, 3]`` [m], and with ``parts`` the seconds
     spent in each part of the step (``air``, ``verlet``, ``constraints``, ``terrain``; else empty)."""
     with tempfile.TemporaryDirectory() as tmp:
         model, out = Path(tmp) / "model.bin", Path(tmp) / "out.bin"
@@ -101,4 +107,4 @@ def run(program: Path, sim: Simulation, steps: int, parts: bool = False) -> tupl
             raise RuntimeError(f"the C reference failed: {done.stderr.strip()[:500]}")
         words = done.stdout.split()
         spent = {name: float(value) for name, value in zip(words[2::2], words[3::2], strict=True)}
-        return float(words[0]), np.fromfile(out, dtype=F32).reshape(-1, 3), spent
+        return float(words[0]), np.fromfile(out, dtype=np.float64).reshape(-1, 3), spent

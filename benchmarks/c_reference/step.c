@@ -1,15 +1,22 @@
 /* warpsim's step as a plain single-threaded C program: the speed baseline of `python -m benchmarks -k c-reference`.
  *
- * It does the work of benchmarks/numpy_step.py (and of warpsim's CPU step) in float32: the air force per triangle
- * (paper, plate or sail law, and drag bodies), Verlet with damping, K Jacobi iterations of the averaged stick
- * corrections (with the model's per-stick coefficients and per-particle scales, so mass splitting and stick
- * weights are the model's; Chebyshev weights per iteration; the increments carried apart from the starting
- * positions), nails, and the terrain (bilinear heightfield, normal push-out with friction, or a clamp).
+ * It does the work of benchmarks/numpy_step.py (and of warpsim's CPU step): the air force per triangle (paper,
+ * plate or sail law, and drag bodies), Verlet with damping, K Jacobi iterations of the averaged stick corrections
+ * (with the model's per-stick coefficients and per-particle scales, so mass splitting and stick weights are the
+ * model's; Chebyshev weights per iteration; the increments carried apart from the starting positions), nails,
+ * the momentum the projection moved given back to each free world (warpsim.kernels.momentum; solver.keep_momentum),
+ * and the terrain (bilinear heightfield, normal push-out with friction, or a clamp).
+ *
+ * Precision, as warpsim's kernels: positions, previous positions, nail targets and the projection's origins are
+ * double; everything measured from positions (stick vectors, triangle edges, velocities, penetration depth) is a
+ * double difference rounded to float, and all the rest is float, with the same operations in the same order as
+ * the kernels (so that it agrees with warpsim bit for bit where the sums' order is the same).
  *
  * Usage: step MODEL.bin STEPS OUT.bin [parts] -- reads the model written by benchmarks/c_reference, runs STEPS
- * steps, writes the final positions (float32 [n, 3]) to OUT.bin and prints "seconds steps" of the stepping loop
+ * steps, writes the final positions (float64 [n, 3]) to OUT.bin and prints "seconds steps" of the stepping loop
  * alone; with "parts", also the seconds spent in each part ("air S verlet S constraints S terrain S").
- * Build: cc -O2 -std=c99 -o step step.c -lm (plain C: no OpenMP, no -ffast-math, no -march=native).
+ * Build: cc -O3 -march=native -std=c99 -ffp-contract=off -o step step.c -lm (Warp compiles its CPU kernels for
+ * the host CPU too; no fused multiply-adds, as Warp's kernels have none; no OpenMP, no -ffast-math).
  */
 #define _POSIX_C_SOURCE 199309L
 #include <math.h>
@@ -23,11 +30,13 @@ enum { AIR_PAPER = 0, AIR_PLATE = 1, AIR_SAIL = 2 };
 enum { GROUND_NORMAL = 0, GROUND_CLAMP = 1 };
 
 typedef struct {
-    int32_t n, s, t, d, k, ny, nx, air, collision, nails;
+    int32_t n, s, t, d, k, ny, nx, air, collision, nails, worlds;
     float dt, density, air_scale, relaxation, damping, gx, gy, gz, friction, ox, oy, cx, cy, stall_sharpness;
-    float *q, *q_prev, *inv_mass, *nail_target, *coef, *rest, *scale, *omega, *loading, *sail, *tri_wind;
+    double *q, *q_prev, *nail_target; /* positions [m], as warpsim's State and Control */
+    float *inv_mass, *coef, *rest, *scale, *omega, *loading, *sail, *tri_wind;
     float *drag_area, *drag_wind, *heights;
     int32_t *nail_of, *ends, *tris, *span, *drag;
+    int32_t *world_start, *world_particles, *world_free; /* the momentum keeper's worlds (none: keep_momentum off) */
 } Model;
 
 static void *read_array(FILE *f, size_t count, size_t size) {
@@ -45,16 +54,16 @@ static void load(const char *path, Model *m) {
         perror(path);
         exit(2);
     }
-    int32_t *ints = read_array(f, 10, 4);
-    memcpy(&m->n, ints, 10 * sizeof(int32_t));
+    int32_t *ints = read_array(f, 11, 4);
+    memcpy(&m->n, ints, 11 * sizeof(int32_t));
     float *floats = read_array(f, 14, 4);
     memcpy(&m->dt, floats, 14 * sizeof(float));
     size_t n = m->n, s = m->s, t = m->t, d = m->d;
-    m->q = read_array(f, 3 * n, 4);
-    m->q_prev = read_array(f, 3 * n, 4);
+    m->q = read_array(f, 3 * n, 8);
+    m->q_prev = read_array(f, 3 * n, 8);
     m->inv_mass = read_array(f, n, 4);
     m->nail_of = read_array(f, n, 4);
-    m->nail_target = read_array(f, 3 * (size_t)m->nails, 4);
+    m->nail_target = read_array(f, 3 * (size_t)m->nails, 8);
     m->ends = read_array(f, 2 * s, 4);
     m->coef = read_array(f, s, 4);
     m->rest = read_array(f, s, 4);
@@ -69,6 +78,9 @@ static void load(const char *path, Model *m) {
     m->drag_area = read_array(f, d, 4);
     m->drag_wind = read_array(f, 3 * d, 4);
     m->heights = read_array(f, (size_t)m->ny * m->nx, 4);
+    m->world_start = read_array(f, (size_t)m->worlds + 1, 4);
+    m->world_particles = read_array(f, (size_t)m->world_start[m->worlds], 4);
+    m->world_free = read_array(f, (size_t)m->worlds, 4);
     fclose(f);
 }
 
@@ -95,6 +107,9 @@ static float terrain(const Model *m, float x, float y, float *normal) {
 
 static float dot3(const float *a, const float *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
+/* Warp's sign(): -1 below zero, else 1 (so 1 at zero) */
+static float sign1(float x) { return x < 0.0f ? -1.0f : 1.0f; }
+
 /* the sail law (warpsim.kernels.aero.sail_force), before the 1/3 share */
 static void sail_force(const Model *m, int tri, const float *n, float area, const float *w, const float *span,
                        float *out) {
@@ -114,7 +129,7 @@ static void sail_force(const Model *m, int tri, const float *n, float area, cons
         float sin_n = fminf(fabsf(d), 1.0f);
         float cos_n = sqrtf(fmaxf(1.0f - sin_n * sin_n, 0.0f));
         float cl = c[0] * asinf(sin_n);
-        float sign = (d > 0.0f) - (d < 0.0f);
+        float sign = sign1(d);
         for (int i = 0; i < 3; i++) {
             float lift_dir = cos_n > 1e-6f ? (n[i] * sign - wn_hat[i] * sin_n) / cos_n : 0.0f;
             attached[i] = (lift_dir * cl + wn_hat[i] * (c[1] * cl * cl)) * (speed_n * speed_n);
@@ -123,24 +138,24 @@ static void sail_force(const Model *m, int tri, const float *n, float area, cons
     float wn = dot3(n, w_hat);
     float sin_a = fminf(fabsf(wn), 1.0f);
     float sigma = 1.0f / (1.0f + expf(-m->stall_sharpness * (asinf(sin_a) - c[3])));
-    float plate = sin_a > 1e-6f ? 1.0f / (0.222f + 0.283f / sin_a) : 0.0f;
-    float sign = (wn > 0.0f) - (wn < 0.0f);
-    float scale = 0.5f * m->density * area * (m->loading[tri] + (1.0f - m->loading[tri]) * sin_a);
-    for (int i = 0; i < 3; i++) {
-        float separated = n[i] * (sign * plate * speed * speed);
-        out[i] = (force[i] + attached[i] * (1.0f - sigma) + separated * sigma) * scale;
+    float sign = sign1(wn), separated[3] = {0.0f, 0.0f, 0.0f};
+    if (sin_a > 1e-6f) {
+        float plate = 1.0f / (0.222f + 0.283f / sin_a);
+        for (int i = 0; i < 3; i++) separated[i] = n[i] * (sign * plate * speed * speed);
     }
+    float scale = 0.5f * m->density * area * (m->loading[tri] + (1.0f - m->loading[tri]) * sin_a);
+    for (int i = 0; i < 3; i++) out[i] = (force[i] + (attached[i] * (1.0f - sigma) + separated[i] * sigma)) * scale;
 }
 
 /* per-particle air force [N]: each triangle's force, a third to each corner, and the drag bodies */
 static void air_force(const Model *m, float *force) {
     memset(force, 0, sizeof(float) * 3 * (size_t)m->n);
-    const float *q = m->q, *qp = m->q_prev;
+    const double *q = m->q, *qp = m->q_prev;
     for (int t = 0; t < m->t; t++) {
         const int32_t *v = m->tris + 3 * t;
-        const float *a = q + 3 * v[0], *b = q + 3 * v[1], *c = q + 3 * v[2];
+        const double *a = q + 3 * v[0], *b = q + 3 * v[1], *c = q + 3 * v[2];
         float ab[3], bc[3], cr[3], vel[3], w[3], f[3];
-        for (int i = 0; i < 3; i++) ab[i] = b[i] - a[i], bc[i] = c[i] - b[i];
+        for (int i = 0; i < 3; i++) ab[i] = (float)(b[i] - a[i]), bc[i] = (float)(c[i] - b[i]);
         cr[0] = ab[1] * bc[2] - ab[2] * bc[1];
         cr[1] = ab[2] * bc[0] - ab[0] * bc[2];
         cr[2] = ab[0] * bc[1] - ab[1] * bc[0];
@@ -148,16 +163,17 @@ static void air_force(const Model *m, float *force) {
         if (len == 0.0f) continue;
         float n[3] = {cr[0] / len, cr[1] / len, cr[2] / len}, area = 0.5f * len;
         for (int i = 0; i < 3; i++) {
-            vel[i] = ((a[i] - qp[3 * v[0] + i]) + (b[i] - qp[3 * v[1] + i]) + (c[i] - qp[3 * v[2] + i])) / (3.0f * m->dt);
+            double moved = (a[i] - qp[3 * v[0] + i]) + (b[i] - qp[3 * v[1] + i]) + (c[i] - qp[3 * v[2] + i]);
+            vel[i] = (float)moved / (3.0f * m->dt);
             w[i] = m->tri_wind[3 * t + i] - vel[i];
         }
         if (m->air == AIR_SAIL) {
             float span[3] = {0.0f, 0.0f, 0.0f};
             const int32_t *e = m->span + 2 * t;
             if (e[0] >= 0) {
-                for (int i = 0; i < 3; i++) span[i] = q[3 * e[1] + i] - q[3 * e[0] + i];
+                for (int i = 0; i < 3; i++) span[i] = (float)(q[3 * e[1] + i] - q[3 * e[0] + i]);
                 float sl = sqrtf(dot3(span, span));
-                for (int i = 0; i < 3; i++) span[i] /= sl;
+                for (int i = 0; i < 3; i++) span[i] = sl > 0.0f ? span[i] / sl : 0.0f;
             }
             sail_force(m, t, n, area, w, span, f);
         } else {
@@ -169,7 +185,7 @@ static void air_force(const Model *m, float *force) {
                 float sin_alpha = speed > 0.0f ? fabsf(wn) / speed : 0.0f;
                 if (speed == 0.0f || sin_alpha < 1e-6f) continue;
                 float cn = (1.0f / (0.222f + 0.283f / sin_alpha)) * (m->loading[t] + (1.0f - m->loading[t]) * sin_alpha);
-                mag = 0.5f * m->density * speed * speed * area * cn * ((wn > 0.0f) - (wn < 0.0f));
+                mag = 0.5f * m->density * speed * speed * area * cn * sign1(wn);
             }
             for (int i = 0; i < 3; i++) f[i] = n[i] * mag;
         }
@@ -180,7 +196,7 @@ static void air_force(const Model *m, float *force) {
     for (int k = 0; k < m->d; k++) {
         int p = m->drag[k];
         float w[3];
-        for (int i = 0; i < 3; i++) w[i] = m->drag_wind[3 * k + i] - (q[3 * p + i] - qp[3 * p + i]) / m->dt;
+        for (int i = 0; i < 3; i++) w[i] = m->drag_wind[3 * k + i] - (float)(q[3 * p + i] - qp[3 * p + i]) / m->dt;
         float mag = 0.5f * m->density * sqrtf(dot3(w, w)) * m->drag_area[k] * m->air_scale;
         for (int i = 0; i < 3; i++) force[3 * p + i] += w[i] * mag;
     }
@@ -188,24 +204,25 @@ static void air_force(const Model *m, float *force) {
 
 static void verlet(Model *m, const float *force) {
     float g[3] = {m->gx, m->gy, m->gz}, dt2 = m->dt * m->dt;
+    double keep = 1.0 - (double)m->damping;
     for (int p = 0; p < m->n; p++) {
-        float *x = m->q + 3 * p, *xp = m->q_prev + 3 * p;
+        double *x = m->q + 3 * p, *xp = m->q_prev + 3 * p;
         if (m->nail_of[p] >= 0) {
             for (int i = 0; i < 3; i++) xp[i] = x[i], x[i] = m->nail_target[3 * m->nail_of[p] + i];
             continue;
         }
         for (int i = 0; i < 3; i++) {
-            float now = x[i];
-            if (m->inv_mass[p] != 0.0f)
-                x[i] = now + (now - xp[i]) * (1.0f - m->damping) + (g[i] + force[3 * p + i] * m->inv_mass[p]) * dt2;
+            double now = x[i];
+            if (m->inv_mass[p] != 0.0f) /* the float a dt^2 added to the double positions */
+                x[i] = now + (now - xp[i]) * keep + (double)((g[i] + force[3 * p + i] * m->inv_mass[p]) * dt2);
             xp[i] = now;
         }
     }
 }
 
-static void project(Model *m, float *origin, float *offset, float *last, float *total) {
+static void project(Model *m, double *origin, float *offset, float *last, float *total) {
     size_t n3 = 3 * (size_t)m->n;
-    memcpy(origin, m->q, n3 * sizeof(float));
+    memcpy(origin, m->q, n3 * sizeof(double));
     memset(offset, 0, n3 * sizeof(float));
     memset(last, 0, n3 * sizeof(float));
     for (int it = 0; it < m->k; it++) {
@@ -213,48 +230,123 @@ static void project(Model *m, float *origin, float *offset, float *last, float *
         memset(total, 0, n3 * sizeof(float));
         for (int s = 0; s < m->s; s++) {
             int a = m->ends[2 * s], b = m->ends[2 * s + 1];
-            float d[3] = {m->q[3 * b] - m->q[3 * a], m->q[3 * b + 1] - m->q[3 * a + 1], m->q[3 * b + 2] - m->q[3 * a + 2]};
+            const double *qa = m->q + 3 * a, *qb = m->q + 3 * b;
+            float d[3] = {(float)(qb[0] - qa[0]), (float)(qb[1] - qa[1]), (float)(qb[2] - qa[2])};
             float len = sqrtf(dot3(d, d));
             float k = len > 0.0f ? m->coef[s] * (len - m->rest[s]) / len : 0.0f;
             for (int i = 0; i < 3; i++) total[3 * a + i] += d[i] * k, total[3 * b + i] -= d[i] * k;
         }
         for (int p = 0; p < m->n; p++) {
-            if (m->nail_of[p] >= 0) {
-                for (int i = 0; i < 3; i++) m->q[3 * p + i] = m->nail_target[3 * m->nail_of[p] + i];
+            float step = m->relaxation * m->scale[p];
+            if (step == 0.0f) { /* nailed particles have scale 0 (as in warpsim's fused scheme) */
+                if (m->nail_of[p] >= 0)
+                    for (int i = 0; i < 3; i++) m->q[3 * p + i] = m->nail_target[3 * m->nail_of[p] + i];
                 continue;
             }
-            if (m->scale[p] == 0.0f) continue;
-            float step = m->relaxation * m->scale[p];
             for (int i = 0; i < 3; i++) {
                 float inc = total[3 * p + i] * step;
                 if (omega != 1.0f) inc = inc * omega + last[3 * p + i] * (omega - 1.0f);
                 offset[3 * p + i] += inc;
                 last[3 * p + i] = inc;
-                m->q[3 * p + i] = origin[3 * p + i] + offset[3 * p + i];
+                m->q[3 * p + i] = origin[3 * p + i] + (double)offset[3 * p + i];
             }
         }
     }
 }
 
+/* the terrain is looked up at the float-rounded position, the corrections made in float and added in double */
+static void cross3d(const double *a, const double *b, double *out) {
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* warpsim.kernels.momentum: give each free world back the linear and angular momentum the projection moved
+ * (x -= dP / M + I^-1 dL x r), in double, with the kernel's operations in its order; `predicted` holds the
+ * positions before the projection */
+static void keep_momentum(Model *m, const double *predicted) {
+    const double *qp = m->q_prev;
+    for (int w = 0; w < m->worlds; w++) {
+        if (m->world_free[w] == 0) continue;
+        int start = m->world_start[w], end = m->world_start[w + 1];
+        double mass = 0.0, centre[3] = {0.0, 0.0, 0.0};
+        for (int k = start; k < end; k++) { /* mass centre at the step's start */
+            int i = m->world_particles[k];
+            double mi = 1.0 / (double)m->inv_mass[i];
+            mass += mi;
+            for (int c = 0; c < 3; c++) centre[c] += qp[3 * i + c] * mi;
+        }
+        for (int c = 0; c < 3; c++) centre[c] = centre[c] / mass;
+        double dp[3] = {0.0, 0.0, 0.0}, dl[3] = {0.0, 0.0, 0.0}, inertia[3][3] = {{0.0}};
+        for (int k = start; k < end; k++) { /* momentum the projection added, inertia about the centre */
+            int i = m->world_particles[k];
+            double mi = 1.0 / (double)m->inv_mass[i], r[3], delta[3], turn[3];
+            for (int c = 0; c < 3; c++) r[c] = qp[3 * i + c] - centre[c], delta[c] = m->q[3 * i + c] - predicted[3 * i + c];
+            cross3d(r, delta, turn);
+            double rr = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+            for (int c = 0; c < 3; c++) dp[c] += delta[c] * mi, dl[c] += turn[c] * mi;
+            for (int a = 0; a < 3; a++)
+                for (int b = 0; b < 3; b++) inertia[a][b] += ((a == b ? rr : 0.0) - r[a] * r[b]) * mi;
+        }
+        double spin[3] = {0.0, 0.0, 0.0}, shift[3], row12[3];
+        double size = inertia[0][0] + inertia[1][1] + inertia[2][2];
+        cross3d(inertia[1], inertia[2], row12);
+        double det = inertia[0][0] * row12[0] + inertia[0][1] * row12[1] + inertia[0][2] * row12[2];
+        if (det > 1.0e-9 * size * size * size) { /* not a line of particles: spin = I^-1 dL (Warp's inverse) */
+            const double(*I)[3] = inertia;
+            double inv[3][3] = {
+                {I[1][1] * I[2][2] - I[1][2] * I[2][1], I[0][2] * I[2][1] - I[0][1] * I[2][2], I[0][1] * I[1][2] - I[0][2] * I[1][1]},
+                {I[1][2] * I[2][0] - I[1][0] * I[2][2], I[0][0] * I[2][2] - I[0][2] * I[2][0], I[0][2] * I[1][0] - I[0][0] * I[1][2]},
+                {I[1][0] * I[2][1] - I[1][1] * I[2][0], I[0][1] * I[2][0] - I[0][0] * I[2][1], I[0][0] * I[1][1] - I[0][1] * I[1][0]},
+            };
+            double rcp = 1.0 / det;
+            for (int a = 0; a < 3; a++) {
+                for (int b = 0; b < 3; b++) inv[a][b] = inv[a][b] * rcp;
+                spin[a] = inv[a][0] * dl[0] + inv[a][1] * dl[1] + inv[a][2] * dl[2];
+            }
+        }
+        for (int c = 0; c < 3; c++) shift[c] = dp[c] / mass;
+        for (int k = start; k < end; k++) {
+            int i = m->world_particles[k];
+            double r[3], turn[3];
+            for (int c = 0; c < 3; c++) r[c] = qp[3 * i + c] - centre[c];
+            cross3d(spin, r, turn);
+            for (int c = 0; c < 3; c++) m->q[3 * i + c] = m->q[3 * i + c] - shift[c] - turn[c];
+        }
+    }
+}
+
+/* the projection, with the momentum kept where a world is free (as SolverVerlet: both are "constraints") */
+static void constrain(Model *m, double *origin, float *offset, float *last, float *total, double *predicted) {
+    int any_free = 0;
+    for (int w = 0; w < m->worlds; w++) any_free |= m->world_free[w] != 0;
+    if (any_free) memcpy(predicted, m->q, 3 * (size_t)m->n * sizeof(double));
+    project(m, origin, offset, last, total);
+    if (any_free) keep_momentum(m, predicted);
+}
+
 static void collide(Model *m) {
     for (int p = 0; p < m->n; p++) {
-        float *x = m->q + 3 * p;
-        float nrm[3], h = terrain(m, x[0], x[1], nrm);
-        if (!(x[2] < h) || m->inv_mass[p] == 0.0f) continue;
+        if (m->inv_mass[p] == 0.0f) continue;
+        double *x = m->q + 3 * p;
+        double h = terrain(m, (float)x[0], (float)x[1], NULL);
+        if (x[2] >= h) continue;
         if (m->collision == GROUND_NORMAL) {
-            float depth = (h - x[2]) * nrm[2], move[3];
-            for (int i = 0; i < 3; i++) x[i] += nrm[i] * depth;
-            for (int i = 0; i < 3; i++) move[i] = x[i] - m->q_prev[3 * p + i];
-            float along = dot3(move, nrm), slide[3];
+            float nrm[3], move[3], slide[3];
+            terrain(m, (float)x[0], (float)x[1], nrm);
+            float depth = (float)(h - x[2]) * nrm[2];
+            for (int i = 0; i < 3; i++) x[i] += (double)(nrm[i] * depth);
+            for (int i = 0; i < 3; i++) move[i] = (float)(x[i] - m->q_prev[3 * p + i]);
+            float along = dot3(move, nrm);
             for (int i = 0; i < 3; i++) slide[i] = move[i] - nrm[i] * along;
             float sl = sqrtf(dot3(slide, slide));
             if (sl > 0.0f) {
                 float cut = fminf(1.0f, m->friction * depth / sl);
-                for (int i = 0; i < 3; i++) x[i] -= slide[i] * cut;
+                for (int i = 0; i < 3; i++) x[i] -= (double)(slide[i] * cut);
             }
-            h = terrain(m, x[0], x[1], NULL);
+            h = terrain(m, (float)x[0], (float)x[1], NULL);
         }
-        x[2] = fmaxf(x[2], h);
+        x[2] = fmax(x[2], h);
     }
 }
 
@@ -268,7 +360,8 @@ int main(int argc, char **argv) {
     load(argv[1], &m);
     long steps = atol(argv[2]);
     size_t n3 = 3 * (size_t)m.n;
-    float *force = malloc(n3 * sizeof(float)), *origin = malloc(n3 * sizeof(float));
+    float *force = malloc(n3 * sizeof(float));
+    double *origin = malloc(n3 * sizeof(double)), *predicted = malloc(n3 * sizeof(double));
     float *offset = malloc(n3 * sizeof(float)), *last = malloc(n3 * sizeof(float)), *total = malloc(n3 * sizeof(float));
     struct timespec t0, t1, a, b;
     double spent[4] = {0.0, 0.0, 0.0, 0.0};
@@ -277,7 +370,7 @@ int main(int argc, char **argv) {
         for (long i = 0; i < steps; i++) {
             air_force(&m, force);
             verlet(&m, force);
-            project(&m, origin, offset, last, total);
+            constrain(&m, origin, offset, last, total, predicted);
             collide(&m);
         }
     } else { /* the same loop, each part timed (the clock reads cost a little) */
@@ -286,7 +379,7 @@ int main(int argc, char **argv) {
                 clock_gettime(CLOCK_MONOTONIC, &a);
                 if (part == 0) air_force(&m, force);
                 if (part == 1) verlet(&m, force);
-                if (part == 2) project(&m, origin, offset, last, total);
+                if (part == 2) constrain(&m, origin, offset, last, total, predicted);
                 if (part == 3) collide(&m);
                 clock_gettime(CLOCK_MONOTONIC, &b);
                 spent[part] += (b.tv_sec - a.tv_sec) + 1e-9 * (b.tv_nsec - a.tv_nsec);
@@ -295,7 +388,7 @@ int main(int argc, char **argv) {
     }
     clock_gettime(CLOCK_MONOTONIC, &t1);
     FILE *f = fopen(argv[3], "wb");
-    if (!f || fwrite(m.q, sizeof(float), n3, f) != n3) {
+    if (!f || fwrite(m.q, sizeof(double), n3, f) != n3) {
         perror(argv[3]);
         return 2;
     }

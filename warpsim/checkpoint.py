@@ -30,6 +30,7 @@ class Checkpoint:
         time: ``[1]`` float64 simulated time [s].
         steps: ``[1]`` int64 solver steps taken since the scene started.
         stick_rest: ``[M]`` float32 current rest lengths [m] (the pilot's control sticks change).
+        stick_rest_target: ``[M]`` float32 rest lengths [m] the control sticks are ramping to.
         nail_target: ``[N, 3]`` float64 where each nailed particle is held [m] (the kite's anchor moves).
         wind: ``[W, 3]`` float32 current wind of each world [m/s].
         gust_active: ``[W]`` uint8, 1 where the world has gusts.
@@ -49,6 +50,7 @@ class Checkpoint:
     time: np.ndarray
     steps: np.ndarray
     stick_rest: np.ndarray
+    stick_rest_target: np.ndarray
     nail_target: np.ndarray
     wind: np.ndarray
     gust_active: np.ndarray

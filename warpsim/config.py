@@ -178,6 +178,9 @@ class SolverConfig(Checked):
             False = the paper's projection alone.
         damping: fraction of the velocity removed per step, in [0, 1) (0 = none, the paper).
         max_stretch: blow-up limit on a stick's relative stretch ``|l - r|/r`` (0 = no limit).
+        control_rate: the fastest a control stick's rest length moves to a new control's value [m/s] (the hang
+            glider's arms: 0.8 m/s takes the pilot across the bar's full roll travel, 0.4 m, in about 0.5 s, as
+            the viewer's keys ramp); 0 = at once.
         spring_stiffness: spring constant of every stick [N/m] (``euler`` only).
         spring_damping: spring damping [N s/m] (``euler`` only).
     """
@@ -191,6 +194,7 @@ class SolverConfig(Checked):
     keep_momentum: bool = True
     damping: float = number(0.0, Bounds(0.0, 1.0, high_open=True))
     max_stretch: float = number(1.0, NON_NEGATIVE)
+    control_rate: float = number(0.8, NON_NEGATIVE)
     spring_stiffness: float = number(5000.0, POSITIVE)
     spring_damping: float = number(5.0, NON_NEGATIVE)
 

@@ -63,8 +63,9 @@ class Inputs:
         if set(values) <= {"wind"}:
             return
         object_values = {k: v for k, v in self.in_force.items() if k != "wind"}
+        rest = self.control.stick_rest if self.control.stick_rest_target is None else self.control.stick_rest_target
         targets = {
-            "stick_rest": self.control.stick_rest.numpy().copy(),
+            "stick_rest": rest.numpy().copy(),
             "nail_target": self.control.nail_target.numpy().copy(),
             "terrain": self.model.terrain,
         }
@@ -72,7 +73,7 @@ class Inputs:
             spec = registry.OBJECTS[record.kind]
             if spec.apply_controls is not None:
                 spec.apply_controls(record, targets, object_values)
-        self.control.stick_rest.assign(targets["stick_rest"])
+        rest.assign(targets["stick_rest"])  # the solver ramps the rest lengths there (SolverConfig.control_rate)
         self.control.nail_target.assign(targets["nail_target"])
 
     def frame_start(self, time: float, interval: float) -> None:

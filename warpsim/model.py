@@ -167,6 +167,7 @@ class Model:
         """A new :class:`Control` with the built rest lengths, nail targets and zero wind."""
         return Control(
             stick_rest=wp.array(self.stick_rest.numpy(), dtype=wp.float32, device=self.device),
+            stick_rest_target=wp.array(self.stick_rest.numpy(), dtype=wp.float32, device=self.device),
             nail_target=wp.array(
                 self.nail_target0.reshape(-1, 3) if self.nail_count else np.zeros((1, 3)),
                 dtype=wp.vec3d,
@@ -250,6 +251,9 @@ class Control:
 
     Attributes:
         stick_rest: ``[stick_count]`` current rest lengths [m] (the hang glider's control sticks change).
+        stick_rest_target: ``[stick_count]`` rest lengths [m] the control sticks move to, at most
+            ``SolverConfig.control_rate`` [m/s] (the solver moves ``stick_rest`` each step); None: controls write
+            ``stick_rest`` at once.
         nail_target: ``[max(nail_count, 1)]`` float64 vec3d nail positions [m] (the kite's rope anchor moves).
         wind: ``[world_count]`` vec3 wind velocity [m/s] at the reference height.
     """
@@ -257,6 +261,7 @@ class Control:
     stick_rest: wp.array
     nail_target: wp.array
     wind: wp.array
+    stick_rest_target: wp.array | None = None
 
     def set_wind(self, wind) -> None:
         """Set the wind [m/s]: one 3-vector for every world, or an array ``[world_count, 3]``."""

@@ -263,7 +263,8 @@ class Simulation:
         if self._saved_version != self.inputs.version:  # the controls changed since the last good frame
             self._saved_version = self.inputs.version
             c = self.control
-            self._saved = (self.inputs.save(), *(a.numpy().copy() for a in (c.stick_rest, c.nail_target, c.wind)))
+            saved = (c.stick_rest_target, c.nail_target, c.wind)
+            self._saved = (self.inputs.save(), *(a.numpy().copy() for a in saved))
 
     def blowup(self, frame: Frame) -> tuple[str, str] | None:
         """``(object name, what is wrong)`` when ``frame`` shows a blow-up (non-finite values, or a stick past
@@ -279,6 +280,7 @@ class Simulation:
             time=np.array([self.state.time], dtype=np.float64),
             steps=np.array([self.steps_taken], dtype=np.int64),
             stick_rest=self.control.stick_rest.numpy().copy(),
+            stick_rest_target=self.control.stick_rest_target.numpy().copy(),
             nail_target=self.control.nail_target.numpy().copy(),
             wind=self.control.wind.numpy().copy(),
             **self.inputs.save(),
@@ -297,6 +299,7 @@ class Simulation:
         self.state.time = float(checkpoint.time[0])
         self.steps_taken = int(checkpoint.steps[0])
         self.control.stick_rest.assign(checkpoint.stick_rest)
+        self.control.stick_rest_target.assign(checkpoint.stick_rest_target)
         self.control.nail_target.assign(checkpoint.nail_target)
         self.control.wind.assign(checkpoint.wind)
         self.inputs.load(checkpoint)
@@ -347,9 +350,9 @@ class Simulation:
         """Put the state, the control arrays and the inputs back to the last good frame (:meth:`advance` and
         :meth:`start_frames` check every frame they return, and the probe keeps its positions)."""
         self._release()
-        inputs, stick_rest, nail_target, wind = self._saved
+        inputs, stick_rest_target, nail_target, wind = self._saved
         _, time, steps, slot = self._good
-        q, q_prev = self.probe.kept(slot)
+        q, q_prev, stick_rest = self.probe.kept(slot)  # the rest lengths ramp every step: the probe keeps them
         self.restore(
             Checkpoint(
                 q=q,
@@ -357,6 +360,7 @@ class Simulation:
                 time=np.array([time], dtype=np.float64),
                 steps=np.array([steps], dtype=np.int64),
                 stick_rest=stick_rest,
+                stick_rest_target=stick_rest_target,
                 nail_target=nail_target,
                 wind=wind,
                 **inputs,

@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
 import warp as wp
 
 from .config import AirConfig, GroundConfig, SolverConfig, WindConfig
 from .kernels import MODULES, aero, collision, constraints, momentum, springs, verlet
 from .kernels.aero import body_drag, triangle_air_force
 from .kernels.collision import collide_heightfield
-from .kernels.constraints import make_projector
+from .kernels.constraints import make_projector, ramp_rest_lengths
 from .kernels.momentum import MomentumKeeper
 from .kernels.springs import integrate_euler_springs
 from .kernels.verlet import integrate_verlet
@@ -77,10 +78,18 @@ class _Solver:
         self.use_graph = bool(use_graph)
         self.tri_force = wp.zeros(max(model.tri_count, 1), dtype=wp.vec3, device=model.device)
         self.particle_air = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)  # drag bodies' drag
+        sticks = [np.asarray(r.control_sticks) for r in model.objects if getattr(r, "control_sticks", None) is not None]
+        sticks = np.unique(np.concatenate(sticks)) if sticks else np.zeros(0)
+        self.control_sticks = wp.array(sticks.astype(np.int32), dtype=wp.int32, device=model.device)
+        """``[K]`` the sticks whose rest lengths the controls set (they ramp: :func:`ramp_rest_lengths`)."""
         self._graphs: dict = {}
 
     def _launch(self, state: State, control: Control, dt: float) -> None:
         raise NotImplementedError
+
+    def _ramp_controls(self, control: Control, dt: float) -> None:
+        """Move the control sticks' rest lengths toward their targets, at most ``control_rate * dt`` [m]."""
+        ramp_rest_lengths(self.model, control, self.control_sticks, self.config.control_rate * dt)
 
     def launch(self, state: State, control: Control, dt: float) -> None:
         """Launch one step's kernels on ``state`` (no graph, ``state.time`` left alone): what a caller records
@@ -143,6 +152,7 @@ class SolverVerlet(_Solver):
 
     def _launch(self, state: State, control: Control, dt: float) -> None:
         m, cfg = self.model, self.config
+        self._ramp_controls(control, dt)
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
         body_drag(m, state, control, dt, self.air, self.wind, self.particle_air)
         integrate_verlet(m, state, control, self.tri_force, self.particle_air, dt, cfg.damping)
@@ -167,6 +177,7 @@ class SolverEuler(_Solver):
 
     def _launch(self, state: State, control: Control, dt: float) -> None:
         m, cfg = self.model, self.config
+        self._ramp_controls(control, dt)
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
         body_drag(m, state, control, dt, self.air, self.wind, self.particle_air)
         integrate_euler_springs(

@@ -348,6 +348,35 @@ def _fused_projection(
 
 
 @wp.kernel
+def _ramp_rest(
+    sticks: wp.array(dtype=wp.int32),
+    stick_rest_target: wp.array(dtype=wp.float32),
+    most: float,
+    stick_rest_out: wp.array(dtype=wp.float32),
+):
+    k = wp.tid()
+    s = sticks[k]
+    rest = stick_rest_out[s]
+    change = stick_rest_target[s] - rest
+    if most > 0.0:
+        change = wp.clamp(change, -most, most)
+    stick_rest_out[s] = rest + change
+
+
+def ramp_rest_lengths(model, control, sticks: wp.array, most: float) -> None:
+    """Move the rest lengths of ``sticks`` (``[K]`` int32 indices, the control sticks) toward
+    ``control.stick_rest_target`` by at most ``most`` [m] (0: all the way), in place in ``control.stick_rest``."""
+    if control.stick_rest_target is not None and sticks.shape[0]:
+        wp.launch(
+            _ramp_rest,
+            sticks.shape[0],
+            [sticks, control.stick_rest_target, float(most)],
+            [control.stick_rest],
+            device=model.device,
+        )
+
+
+@wp.kernel
 def _copy_positions(src: wp.array(dtype=wp.vec3d), dst_out: wp.array(dtype=wp.vec3d)):
     i = wp.tid()
     dst_out[i] = src[i]

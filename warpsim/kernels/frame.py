@@ -53,6 +53,7 @@ def _frame_measure(
     report_out: wp.array(dtype=wp.float32),
     snap_q_out: wp.array(dtype=wp.vec3d),
     snap_q_prev_out: wp.array(dtype=wp.vec3d),
+    snap_rest_out: wp.array(dtype=wp.float32),
 ):
     i = wp.tid()
     if i < particle_q.shape[0]:
@@ -65,6 +66,7 @@ def _frame_measure(
             clearance = float(x[2] - wp.float64(terrain_height(hf, float(x[0]), float(x[1]))))
             wp.atomic_min(report_out, 2 * world_count + particle_owner[i], clearance)
     if i < stick_particles.shape[0]:
+        snap_rest_out[i] = stick_rest[i]
         ends = stick_particles[i]
         length = wp.length(wp.vec3(particle_q[ends[1]] - particle_q[ends[0]]))
         rest = wp.max(stick_rest[i], 1.0e-12)
@@ -92,8 +94,12 @@ class FrameProbe:
         self.world_count = model.world_count
         self.object_count = len(model.objects)
         self.slots = [
-            tuple(wp.zeros(model.particle_count, dtype=wp.vec3d, device=device) for _ in range(2)) for _ in range(2)
-        ]  # per slot: (positions, previous positions)
+            (
+                *(wp.zeros(model.particle_count, dtype=wp.vec3d, device=device) for _ in range(2)),
+                wp.zeros(max(model.stick_count, 1), dtype=wp.float32, device=device),
+            )
+            for _ in range(2)
+        ]  # per slot: (positions, previous positions, rest lengths)
         self.report = wp.zeros(2 * self.world_count + max(self.object_count, 1), dtype=wp.float32, device=device)
         self.owner = wp.array(np.asarray(owner, dtype=np.int32), dtype=wp.int32, device=device)
         ends = model.stick_particles_np
@@ -143,6 +149,8 @@ class FrameProbe:
         w = self.world_count
         return report[:w], report[w : 2 * w], report[2 * w : 2 * w + self.object_count]
 
-    def kept(self, slot: int) -> tuple[np.ndarray, np.ndarray]:
-        """Host copies of the ``(positions, previous positions)`` ``[P, 3]`` kept in ``slot``."""
-        return tuple(a.numpy().copy() for a in self.slots[slot])
+    def kept(self, slot: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Host copies of the ``(positions, previous positions)`` ``[P, 3]`` [m] and the rest lengths ``[M]`` [m]
+        kept in ``slot``."""
+        q, q_prev, rest = (a.numpy().copy() for a in self.slots[slot])
+        return q, q_prev, rest[: self.model.stick_count]

@@ -87,9 +87,9 @@ class NumpyVerlet:
         # the momentum keeper's worlds, read from it (solver.keep_momentum; none when it is off)
         keeper = getattr(solver, "momentum", None)
         if keeper is not None:
-            self.world_start = keeper.world_start.numpy()
-            self.world_particles = keeper.world_particles.numpy()
-            self.world_free = np.asarray(keeper.free, dtype=np.int32)
+            self.world_start = keeper.body_start.numpy()  # the keeper's free bodies, each one "world" here
+            self.world_particles = keeper.body_particles.numpy()
+            self.world_free = np.ones(keeper.body_count, dtype=np.int32)
         else:
             self.world_start = np.zeros(1, dtype=np.int32)
             self.world_particles = np.zeros(0, dtype=np.int32)
@@ -277,8 +277,8 @@ class NumpyVerlet:
             inertia = np.eye(3) * (_dot(r, r) * m).sum() - (r * m[:, None]).T @ r
             spin = np.zeros(3)
             size = np.trace(inertia)
-            if np.linalg.det(inertia) > 1.0e-9 * size**3:  # not a line of particles
-                spin = np.linalg.solve(inertia, d_l)
+            if size > 0.0:  # as the kernel: 1e-9 tr(I) on the diagonal (a line of particles has no inertia about it)
+                spin = np.linalg.solve(inertia + np.eye(3) * (size * 1.0e-9), d_l)
             x[i] = x[i] - d_p / mass - np.cross(spin, r)
 
     def collide(self) -> None:

@@ -55,9 +55,10 @@ def test_hands_off_glide_is_the_same_anywhere():
                 "hang_glider": {"position": [x - 300.0, y], "altitude": 300.0},
             }
         )
-        assert there[0] == pytest.approx(here[0], rel=0.01), (x, y, base)
-        assert there[1] == pytest.approx(here[1], rel=0.01), (x, y, base)
-        assert abs(there[2] - here[2]) < 1.0, (x, y, base)
+        # the issue asks for 1 %; float64 gives the same flight to rounding (2e-8 measured)
+        assert there[0] == pytest.approx(here[0], rel=1e-6), (x, y, base)
+        assert there[1] == pytest.approx(here[1], rel=1e-6), (x, y, base)
+        assert abs(there[2] - here[2]) < 1e-3, (x, y, base)
 
 
 def _momenta(mass: np.ndarray, q: np.ndarray, q_prev: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -80,11 +81,11 @@ def _spin(sim, omega) -> np.ndarray:
     return mass
 
 
-@pytest.mark.parametrize("keep, band", [(True, 0.01), (False, None)])
+@pytest.mark.parametrize("keep, band", [(True, 1e-6), (False, None)])
 def test_spinning_hang_glider_keeps_angular_momentum_in_vacuum(keep, band):
     """A hang glider tumbling in free fall, air off, 60 s: uniform gravity exerts no torque, so its angular
-    momentum about the mass centre is kept within 1 %; without the momentum projection it loses over 10 %
-    (30 % measured at dt 0.01)."""
+    momentum about the mass centre is kept (the issue asks for 1 %; 6e-10 measured); without the momentum
+    projection it loses over 10 % (30 % measured at dt 0.01)."""
     sim = Simulation(
         _scene("hang-glider", VACUUM, {"solver": {"keep_momentum": keep}, "hang_glider": {"altitude": 90000.0}})
     )
@@ -148,3 +149,59 @@ def test_pilot_moving_alone_keeps_the_gliders_linear_momentum():
     gained = mass.sum() * np.array([0.0, 0.0, -ws.GRAVITY]) * steps * sim.dt
     assert np.linalg.norm(p1 - p0 - gained) < 1e-6 * np.linalg.norm(p0)
     assert np.linalg.norm(l1) < 1e-6 * np.linalg.norm(p0) * 10.0  # [kg m^2/s] against a 10 m body's scale
+
+
+def _vacuum_solver(b, **config):
+    m = b.finalize("cpu")
+    return m, ws.SolverVerlet(m, ws.SolverConfig(damping=0.0, **config), air=ws.AirConfig(scale=0.0))
+
+
+def test_two_bodies_in_one_world_keep_their_own_momentum():
+    """A spinning cloth and a still one in the same world, apart: the projection's momentum is given back to each
+    body (the particles its sticks connect), so the still cloth stays still and the spinning one keeps its spin."""
+    b = ws.ModelBuilder()
+    b.set_terrain(ws.Heightfield.flat(height=-1.0e6))
+    spin_ids, _, _ = b.add_grid((0.0, 0.0, 0.0), (0.25, 0.0, 0.0), (0.0, 0.25, 0.0), 7, 7, mass=1.0)
+    still_ids, _, _ = b.add_grid((10.0, 0.0, 0.0), (0.25, 0.0, 0.0), (0.0, 0.25, 0.0), 5, 5, mass=1.0)
+    m, solver = _vacuum_solver(b)
+    s, c = m.state(), m.control()
+    dt, mass = 0.01, 1.0 / m.particle_inv_mass.numpy()
+    spinning, still = spin_ids.ravel(), still_ids.ravel()
+    q = s.positions()
+    v = np.zeros_like(q)
+    centre = q[spinning].mean(0)
+    v[spinning] = np.cross([0.5, 0.3, 2.0], q[spinning] - centre)
+    s.set_velocity(v, dt)
+    solver.step(s, c, dt)
+    _, l0 = _momenta(mass[spinning], s.positions()[spinning], s.particle_q_prev.numpy()[spinning], dt)
+    for _ in range(3000):
+        solver.step(s, c, dt)
+    q, qp = s.positions(), s.particle_q_prev.numpy()
+    _, l1 = _momenta(mass[spinning], q[spinning], qp[spinning], dt)
+    p_still, l_still = _momenta(mass[still], q[still], qp[still], dt)
+    assert np.linalg.norm(l1 - l0) < 1e-6 * np.linalg.norm(l0)
+    fall = mass[still].sum() * ws.GRAVITY * 3001 * dt  # momentum gravity gave the still cloth [kg m/s]
+    assert np.linalg.norm(p_still[:2]) < 1e-9 * fall and np.linalg.norm(l_still) < 1e-9 * np.linalg.norm(l0)
+
+
+def test_a_spinning_rope_keeps_its_angular_momentum():
+    """Particles on a line have no inertia about it: the projection is solved with that direction left alone, and a
+    free 8-link rope spinning end over end keeps its angular momentum (it lost 46 % in 30 s when a line's rotation
+    was skipped)."""
+    b = ws.ModelBuilder()
+    b.set_terrain(ws.Heightfield.flat(height=-1.0e6))
+    ids = [b.add_particle((0.25 * k, 0.0, 0.0), 0.1 if k else 2.0) for k in range(9)]
+    for i, j in zip(ids, ids[1:], strict=False):
+        b.add_stick(i, j)
+    m, solver = _vacuum_solver(b, mass_splitting=False)
+    s, c = m.state(), m.control()
+    dt, mass = 0.01, 1.0 / m.particle_inv_mass.numpy()
+    q = s.positions()
+    centre = (mass[:, None] * q).sum(0) / mass.sum()
+    s.set_velocity(np.cross([0.0, 0.0, 3.0], q - centre), dt)
+    solver.step(s, c, dt)
+    _, l0 = _momenta(mass, s.positions(), s.particle_q_prev.numpy(), dt)
+    for _ in range(3000):
+        solver.step(s, c, dt)
+    _, l1 = _momenta(mass, s.positions(), s.particle_q_prev.numpy(), dt)
+    assert np.linalg.norm(l1 - l0) < 1e-6 * np.linalg.norm(l0)

@@ -173,9 +173,9 @@ class SolverConfig(Checked):
             semi-iterative acceleration (Wang 2015); 0 = plain Jacobi, the paper. Same cost per iteration.
         mass_splitting: split each particle's mass over its sticks so that constraints conserve momentum
             (see :mod:`warpsim.kernels.constraints`); False = the paper's plain average.
-        keep_momentum: after the projection, give each free world (no nailed particle) back the linear and
-            angular momentum the projection's numerical error took or gave (:mod:`warpsim.kernels.momentum`);
-            False = the paper's projection alone.
+        keep_momentum: after the projection, give each free body (the particles sticks connect, none nailed) back
+            the linear and angular momentum the projection's numerical error took or gave
+            (:mod:`warpsim.kernels.momentum`); False = the paper's projection alone.
         damping: fraction of the velocity removed per step, in [0, 1) (0 = none, the paper).
         max_stretch: blow-up limit on a stick's relative stretch ``|l - r|/r`` (0 = no limit).
         control_rate: the fastest a control stick's rest length moves to a new control's value [m/s] (the hang

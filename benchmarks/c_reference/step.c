@@ -290,9 +290,10 @@ static void keep_momentum(Model *m, const double *predicted) {
         }
         double spin[3] = {0.0, 0.0, 0.0}, shift[3], row12[3];
         double size = inertia[0][0] + inertia[1][1] + inertia[2][2];
+        for (int a = 0; a < 3; a++) inertia[a][a] = inertia[a][a] + size * 1.0e-9; /* a line has no inertia about it */
         cross3d(inertia[1], inertia[2], row12);
         double det = inertia[0][0] * row12[0] + inertia[0][1] * row12[1] + inertia[0][2] * row12[2];
-        if (det > 1.0e-9 * size * size * size) { /* not a line of particles: spin = I^-1 dL (Warp's inverse) */
+        if (size > 0.0) { /* spin = I^-1 dL (Warp's inverse) */
             const double(*I)[3] = inertia;
             double inv[3][3] = {
                 {I[1][1] * I[2][2] - I[1][2] * I[2][1], I[0][2] * I[2][1] - I[0][1] * I[2][2], I[0][1] * I[1][2] - I[0][2] * I[1][1]},

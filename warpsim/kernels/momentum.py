@@ -1,4 +1,4 @@
-"""Momentum of free worlds: the constraint projection's numerical error in linear and angular momentum, removed.
+"""Momentum of free bodies: the constraint projection's numerical error in linear and angular momentum, removed.
 
 The sticks are internal forces: they cannot change a free body's linear momentum, nor its angular momentum
 (central forces). The Jacobi projection keeps linear momentum with mass splitting, but neither scheme keeps
@@ -13,15 +13,19 @@ Numerical Integration*, 2nd ed., Section IV.4: projection methods), by the small
     x_i += -dP / M - I^-1 dL x r_i
 
 where ``dP = sum m_i (x_i - x*_i)`` and ``dL = sum m_i r_i x (x_i - x*_i)`` are the momentum the projection
-moved the world's particles by (``x*`` the positions before it, ``x`` after), ``r_i`` the particles' offsets
+moved the body's particles by (``x*`` the positions before it, ``x`` after), ``r_i`` the particles' offsets
 from the mass centre at the step's start and ``I`` the inertia tensor about it. The correction is a uniform
 shift and a small rigid rotation: it changes no stick's length to first order. The discrete angular momentum
 of Verlet, ``sum m x_n x (x_{n+1} - x_n) / dt``, changes then only by the torque of gravity and the air over
 the step (and of the terrain, applied after).
 
-Only *free* worlds are corrected: a world with a nailed or an immovable particle is held from outside (the
-flag's pole, the kite's anchor), and its momentum is not the sticks' alone to keep. One thread per world sums
-over that world's particles in a fixed order, so the result is deterministic on every device.
+The correction is made per *body*: the particles the sticks connect (a connected piece of the stick graph), so
+that two objects in one world keep their momenta apart. Only *free* bodies are corrected: a body with a nailed or
+an immovable particle is held from outside (the flag's pole, the kite's anchor), and its momentum is not the
+sticks' alone to keep. A body whose particles lie on a line (a rope, a dumbbell) has no inertia about that line
+and no angular momentum about it either: ``I`` is solved with ``1e-9 tr(I)`` added to its diagonal, exact to 1e-9
+for other bodies. One thread per body sums over its particles in a fixed order, so the result is deterministic
+on every device.
 """
 
 from __future__ import annotations
@@ -40,25 +44,22 @@ def _copy(src: wp.array(dtype=wp.vec3d), dst_out: wp.array(dtype=wp.vec3d)):
 
 @wp.kernel
 def _restore_momentum(
-    world_start: wp.array(dtype=wp.int32),
-    world_particles: wp.array(dtype=wp.int32),
-    world_free: wp.array(dtype=wp.int32),
+    body_start: wp.array(dtype=wp.int32),
+    body_particles: wp.array(dtype=wp.int32),
     particle_inv_mass: wp.array(dtype=wp.float32),
     particle_q_prev: wp.array(dtype=wp.vec3d),
     predicted: wp.array(dtype=wp.vec3d),
     particle_q_out: wp.array(dtype=wp.vec3d),
 ):
-    w = wp.tid()
-    if world_free[w] == 0:
-        return
-    start = world_start[w]
-    end = world_start[w + 1]
+    b = wp.tid()
+    start = body_start[b]
+    end = body_start[b + 1]
     zero = wp.float64(0.0)
     mass = zero
     centre = wp.vec3d(zero, zero, zero)
     k = start
     while k < end:  # mass centre at the step's start
-        i = world_particles[k]
+        i = body_particles[k]
         m = wp.float64(1.0) / wp.float64(particle_inv_mass[i])
         mass += m
         centre += particle_q_prev[i] * m
@@ -70,7 +71,7 @@ def _restore_momentum(
     eye = wp.identity(n=3, dtype=wp.float64)
     k = start
     while k < end:  # momentum the projection added, inertia about the centre
-        i = world_particles[k]
+        i = body_particles[k]
         m = wp.float64(1.0) / wp.float64(particle_inv_mass[i])
         r = particle_q_prev[i] - centre
         delta = particle_q_out[i] - predicted[i]
@@ -80,18 +81,45 @@ def _restore_momentum(
         k += 1
     spin = wp.vec3d(zero, zero, zero)
     size = inertia[0, 0] + inertia[1, 1] + inertia[2, 2]
-    if wp.determinant(inertia) > wp.float64(1.0e-9) * size * size * size:  # not a line of particles
-        spin = wp.inverse(inertia) @ d_l
+    if size > zero:  # more than one place; a line of particles has no inertia (and no momentum) about itself
+        spin = wp.inverse(inertia + eye * (size * wp.float64(1.0e-9))) @ d_l
     shift = d_p / mass
     k = start
     while k < end:
-        i = world_particles[k]
+        i = body_particles[k]
         particle_q_out[i] = particle_q_out[i] - shift - wp.cross(spin, particle_q_prev[i] - centre)
         k += 1
 
 
+def free_bodies(model) -> list[np.ndarray]:
+    """The model's free bodies: each a host array of particle indices [int32] (increasing) that the sticks connect,
+    of more than one particle, none nailed or immovable."""
+    n = model.particle_count
+    parent = np.arange(n)
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a, b in model.stick_particles_np:
+        ra, rb = root(int(a)), root(int(b))
+        if ra != rb:
+            parent[max(ra, rb)] = min(ra, rb)
+    roots = np.array([root(i) for i in range(n)], dtype=np.int64)
+    held = (model.particle_nail.numpy() >= 0) | (model.particle_inv_mass.numpy() == 0.0)
+    bad = set(roots[held].tolist())
+    bodies = []
+    for r in np.unique(roots):
+        members = np.flatnonzero(roots == r).astype(np.int32)
+        if len(members) > 1 and int(r) not in bad:
+            bodies.append(members)
+    return bodies
+
+
 class MomentumKeeper:
-    """Removes the constraint projection's change of each free world's linear and angular momentum (see the
+    """Removes the constraint projection's change of each free body's linear and angular momentum (see the
     module's docstring): :meth:`before` keeps the positions the projection starts from, :meth:`after` corrects.
 
     Args:
@@ -101,25 +129,21 @@ class MomentumKeeper:
     def __init__(self, model):
         device = model.device
         self.model = model
-        world = model.particle_world_np
-        order = np.argsort(world, kind="stable").astype(np.int32)
-        counts = np.bincount(world, minlength=model.world_count)
-        start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
-        held = (model.particle_nail.numpy() >= 0) | (model.particle_inv_mass.numpy() == 0.0)
-        free = np.ones(model.world_count, dtype=np.int32)
-        free[np.unique(world[held])] = 0
-        free[counts == 0] = 0
-        self.free = free
-        """Host ``[W]``: 1 where the world is corrected (no nailed or immovable particle)."""
-        self.world_start = wp.array(start, dtype=wp.int32, device=device)
-        self.world_particles = wp.array(order, dtype=wp.int32, device=device)
-        self.world_free = wp.array(free, dtype=wp.int32, device=device)
+        bodies = free_bodies(model)
+        self.body_count = len(bodies)
+        """How many free bodies the model has (each corrected by one thread)."""
+        order = np.concatenate(bodies) if bodies else np.zeros(0, dtype=np.int32)
+        start = np.concatenate([[0], np.cumsum([len(b) for b in bodies])]).astype(np.int32)
+        self.body_start = wp.array(start, dtype=wp.int32, device=device)
+        """``[B + 1]`` where each body's particles start in :attr:`body_particles`."""
+        self.body_particles = wp.array(order.astype(np.int32), dtype=wp.int32, device=device)
+        """``[sum of the bodies' sizes]`` the bodies' particles, body by body."""
         self.predicted = wp.zeros(model.particle_count, dtype=wp.vec3d, device=device)
 
     @property
     def active(self) -> bool:
-        """Whether any world is free (otherwise :meth:`before` and :meth:`after` launch nothing)."""
-        return bool(self.free.any())
+        """Whether the model has a free body (otherwise :meth:`before` and :meth:`after` launch nothing)."""
+        return self.body_count > 0
 
     def before(self, state) -> None:
         """Keep ``state``'s positions [m] before the projection."""
@@ -133,11 +157,10 @@ class MomentumKeeper:
             m = self.model
             wp.launch(
                 _restore_momentum,
-                m.world_count,
+                self.body_count,
                 [
-                    self.world_start,
-                    self.world_particles,
-                    self.world_free,
+                    self.body_start,
+                    self.body_particles,
                     m.particle_inv_mass,
                     state.particle_q_prev,
                     self.predicted,

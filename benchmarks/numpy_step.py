@@ -71,9 +71,11 @@ class NumpyVerlet:
         self.wind_profile = solver.wind
         self.ground = solver.ground
         t = m.terrain
-        self.heights = t.heights.astype(F32)
-        self.origin = np.asarray(t.origin, dtype=F32)
-        self.cell = np.asarray(t.cell, dtype=F32)
+        heights = np.asarray(t.heights, dtype=F64)  # as Heightfield.device_data: float32 above a float64 base
+        self.base = 0.5 * (float(heights.min()) + float(heights.max()))
+        self.heights = (heights - self.base).astype(F32)
+        self.origin = np.asarray(t.origin, dtype=F64)
+        self.cell = np.asarray(t.cell, dtype=F64)
         self.ends = m.stick_particles_np
         self.coef = solver.projector.stick_coef.numpy()[: m.stick_count]
         self.scale = solver.projector.particle_scale.numpy()
@@ -101,26 +103,27 @@ class NumpyVerlet:
 
     def _cell(self, x, y):
         ny, nx = self.heights.shape
-        fx = np.clip((x - self.origin[0]) / self.cell[0], F32(0.0), F32(nx - 1))
-        fy = np.clip((y - self.origin[1]) / self.cell[1], F32(0.0), F32(ny - 1))
+        x, y = np.asarray(x, dtype=F64), np.asarray(y, dtype=F64)
+        fx = np.clip((x - self.origin[0]) / self.cell[0], 0.0, F64(nx - 1))
+        fy = np.clip((y - self.origin[1]) / self.cell[1], 0.0, F64(ny - 1))
         # the last cell reaches the far edge inclusive: no sample past the grid is read
         ix = np.minimum(np.floor(fx).astype(np.int64), nx - 2)
         iy = np.minimum(np.floor(fy).astype(np.int64), ny - 2)
         h = self.heights
-        return fx - ix, fy - iy, h[iy, ix], h[iy, ix + 1], h[iy + 1, ix], h[iy + 1, ix + 1]
+        return _f32(fx - ix), _f32(fy - iy), h[iy, ix], h[iy, ix + 1], h[iy + 1, ix], h[iy + 1, ix + 1]
 
     def height(self, x, y):
-        """Bilinear terrain height [m] (float32, as the kernel computes it)."""
+        """Bilinear terrain height [m], float64 (the float32 interpolation is of heights above the base)."""
         tx, ty, h00, h10, h01, h11 = self._cell(x, y)
         one = F32(1.0)
-        return (one - ty) * ((one - tx) * h00 + tx * h10) + ty * ((one - tx) * h01 + tx * h11)
+        return self.base + ((one - ty) * ((one - tx) * h00 + tx * h10) + ty * ((one - tx) * h01 + tx * h11)).astype(F64)
 
     def normal(self, x, y):
         """Unit upward terrain normal."""
         tx, ty, h00, h10, h01, h11 = self._cell(x, y)
         one = F32(1.0)
-        dhdx = ((one - ty) * (h10 - h00) + ty * (h11 - h01)) / self.cell[0]
-        dhdy = ((one - tx) * (h01 - h00) + tx * (h11 - h10)) / self.cell[1]
+        dhdx = ((one - ty) * (h10 - h00) + ty * (h11 - h01)) / F32(self.cell[0])
+        dhdy = ((one - tx) * (h01 - h00) + tx * (h11 - h10)) / F32(self.cell[1])
         n = np.stack([-dhdx, -dhdy, np.ones_like(dhdx)], axis=1)
         return n / _length(n)[:, None]
 
@@ -142,8 +145,8 @@ class NumpyVerlet:
         shear = self.wind_profile
         if shear.shear_exponent != 0.0:
             centre = (a + b + c) / F64(3.0)
-            ground = self.height(_f32(centre[:, 0]), _f32(centre[:, 1]))
-            h = np.maximum(_f32(centre[:, 2] - ground.astype(F64)), F32(0.1))
+            ground = self.height(centre[:, 0], centre[:, 1])
+            h = np.maximum(_f32(centre[:, 2] - ground), F32(0.1))
             wind = wind * ((h / F32(shear.reference_height)) ** F32(shear.shear_exponent))[:, None]
         w = wind - velocity
         wn = _dot(n, w)
@@ -212,8 +215,8 @@ class NumpyVerlet:
         w = self.wind[self.particle_world[i]]
         shear = self.wind_profile
         if shear.shear_exponent != 0.0:
-            ground = self.height(_f32(x[:, 0]), _f32(x[:, 1]))
-            h = np.maximum(_f32(x[:, 2] - ground.astype(F64)), F32(0.1))
+            ground = self.height(x[:, 0], x[:, 1])
+            h = np.maximum(_f32(x[:, 2] - ground), F32(0.1))
             w = w * ((h / F32(shear.reference_height)) ** F32(shear.shear_exponent))[:, None]
         w = w - _f32(x - self.q_prev[i]) / self.dt
         speed = _length(w)
@@ -283,15 +286,15 @@ class NumpyVerlet:
 
     def collide(self) -> None:
         """Keep free particles at or above the terrain."""
-        x = self.q  # float64; the terrain is looked up at float32 coordinates, the corrections made in float32
-        h = self.height(_f32(x[:, 0]), _f32(x[:, 1])).astype(F64)
+        x = self.q  # float64; the terrain is looked up in float64, the corrections made in float32
+        h = self.height(x[:, 0], x[:, 1])
         below = (x[:, 2] < h) & (self.inv_mass != 0)
         if not below.any():
             return
         p = x[below]
         hb = h[below]
         if self.ground.collision == CollisionMode.NORMAL:
-            n = self.normal(_f32(p[:, 0]), _f32(p[:, 1]))
+            n = self.normal(p[:, 0], p[:, 1])
             depth = _f32(hb - p[:, 2]) * n[:, 2]
             p = p + (n * depth[:, None]).astype(F64)
             move = _f32(p - self.q_prev[below])
@@ -300,7 +303,7 @@ class NumpyVerlet:
             safe = np.where(slide_len > 0, slide_len, F32(1.0))
             cut = np.minimum(F32(1.0), F32(self.ground.friction) * depth / safe)
             p = p - (slide * np.where(slide_len > 0, cut, F32(0.0))[:, None]).astype(F64)
-            hb = self.height(_f32(p[:, 0]), _f32(p[:, 1])).astype(F64)
+            hb = self.height(p[:, 0], p[:, 1])
         p[:, 2] = np.maximum(p[:, 2], hb)
         x[below] = p
 

@@ -29,7 +29,7 @@ class Heightfield:
     """
 
     def __init__(self, heights: np.ndarray, size: tuple[float, float], origin: tuple[float, float] | None = None):
-        heights = np.asarray(heights, dtype=np.float32)
+        heights = np.asarray(heights, dtype=np.float64)
         if heights.ndim != 2 or min(heights.shape) < 2:
             raise ValueError(f"heights must be a 2-D array of at least 2x2 samples, got shape {heights.shape}")
         if not np.all(np.isfinite(heights)):
@@ -49,7 +49,7 @@ class Heightfield:
     @classmethod
     def flat(cls, size: float = 1000.0, height: float = 0.0, resolution: int = DEFAULT_RESOLUTION) -> Heightfield:
         """A level terrain at ``height`` metres covering ``size`` x ``size`` metres."""
-        return cls(np.full((resolution, resolution), height, dtype=np.float32), (size, size))
+        return cls(np.full((resolution, resolution), height, dtype=np.float64), (size, size))
 
     @classmethod
     def procedural(
@@ -80,7 +80,7 @@ class Heightfield:
                 phase = rng.uniform(0.0, 2.0 * np.pi)
                 h += np.cos(2.0 * np.pi * freq * (np.cos(angle) * gx + np.sin(angle) * gy) + phase) / octave**1.5
         h *= amplitude / max(np.abs(h).max(), 1e-9)
-        return cls((h + base_height).astype(np.float32), (size, size))
+        return cls(h + base_height, (size, size))
 
     @classmethod
     def load(cls, path: str | Path, size: float = 1000.0, vertical_scale: float = 1.0) -> Heightfield:
@@ -134,9 +134,12 @@ class Heightfield:
         data = self._device_data.get(device.alias)
         if data is None:
             data = HeightfieldData()
-            data.heights = wp.array(self.heights, dtype=wp.float32, device=device)
-            data.origin = wp.vec2(*self.origin)
-            data.cell = wp.vec2(*self.cell)
+            heights = np.asarray(self.heights, dtype=np.float64)
+            base = 0.5 * (float(heights.min()) + float(heights.max())) if heights.size else 0.0
+            data.heights = wp.array((heights - base).astype(np.float32), dtype=wp.float32, device=device)
+            data.base = base
+            data.origin = wp.vec2d(*(float(v) for v in self.origin))
+            data.cell = wp.vec2d(*(float(v) for v in self.cell))
             self._device_data[device.alias] = data
         return data
 

@@ -66,6 +66,7 @@ def export(sim: Simulation, path: Path) -> None:
     arrays = [
         (ints, i32),
         (floats, f32),
+        ([ref.base, *ref.origin[:2], *ref.cell[:2]], f64),  # the terrain's float64 base, origin and cell
         (ref.q, f64),
         (ref.q_prev, f64),
         (ref.inv_mass, f32),

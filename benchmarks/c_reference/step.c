@@ -37,6 +37,7 @@ typedef struct {
     float *drag_area, *drag_wind, *heights;
     int32_t *nail_of, *ends, *tris, *span, *drag;
     int32_t *world_start, *world_particles, *world_free; /* the momentum keeper's worlds (none: keep_momentum off) */
+    double base, gox, goy, gcx, gcy; /* the terrain: heights above base [m], grid origin and cell [m], float64 */
 } Model;
 
 static void *read_array(FILE *f, size_t count, size_t size) {
@@ -58,6 +59,8 @@ static void load(const char *path, Model *m) {
     memcpy(&m->n, ints, 11 * sizeof(int32_t));
     float *floats = read_array(f, 14, 4);
     memcpy(&m->dt, floats, 14 * sizeof(float));
+    double *grid = read_array(f, 5, 8);
+    m->base = grid[0], m->gox = grid[1], m->goy = grid[2], m->gcx = grid[3], m->gcy = grid[4];
     size_t n = m->n, s = m->s, t = m->t, d = m->d;
     m->q = read_array(f, 3 * n, 8);
     m->q_prev = read_array(f, 3 * n, 8);
@@ -84,25 +87,26 @@ static void load(const char *path, Model *m) {
     fclose(f);
 }
 
-/* bilinear terrain height [m] and its upward unit normal */
-static float terrain(const Model *m, float x, float y, float *normal) {
-    float fx = (x - m->ox) / m->cx, fy = (y - m->oy) / m->cy;
-    fx = fminf(fmaxf(fx, 0.0f), (float)(m->nx - 1));
-    fy = fminf(fmaxf(fy, 0.0f), (float)(m->ny - 1));
-    int ix = (int)floorf(fx), iy = (int)floorf(fy);
+/* bilinear terrain height [m] (float64: float32 heights above a double base, the cell found in double) and its
+ * upward unit normal */
+static double terrain(const Model *m, double x, double y, float *normal) {
+    double fx = (x - m->gox) / m->gcx, fy = (y - m->goy) / m->gcy;
+    fx = fmin(fmax(fx, 0.0), (double)(m->nx - 1));
+    fy = fmin(fmax(fy, 0.0), (double)(m->ny - 1));
+    int ix = (int)floor(fx), iy = (int)floor(fy);
     if (ix > m->nx - 2) ix = m->nx - 2;
     if (iy > m->ny - 2) iy = m->ny - 2;
-    float tx = fx - ix, ty = fy - iy;
+    float tx = (float)(fx - (double)ix), ty = (float)(fy - (double)iy);
     const float *h = m->heights;
     float h00 = h[iy * m->nx + ix], h10 = h[iy * m->nx + ix + 1];
     float h01 = h[(iy + 1) * m->nx + ix], h11 = h[(iy + 1) * m->nx + ix + 1];
     if (normal) {
-        float dx = ((1.0f - ty) * (h10 - h00) + ty * (h11 - h01)) / m->cx;
-        float dy = ((1.0f - tx) * (h01 - h00) + tx * (h11 - h10)) / m->cy;
+        float dx = ((1.0f - ty) * (h10 - h00) + ty * (h11 - h01)) / (float)m->gcx;
+        float dy = ((1.0f - tx) * (h01 - h00) + tx * (h11 - h10)) / (float)m->gcy;
         float len = sqrtf(dx * dx + dy * dy + 1.0f);
         normal[0] = -dx / len, normal[1] = -dy / len, normal[2] = 1.0f / len;
     }
-    return (1.0f - ty) * ((1.0f - tx) * h00 + tx * h10) + ty * ((1.0f - tx) * h01 + tx * h11);
+    return m->base + (double)((1.0f - ty) * ((1.0f - tx) * h00 + tx * h10) + ty * ((1.0f - tx) * h01 + tx * h11));
 }
 
 static float dot3(const float *a, const float *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -330,11 +334,11 @@ static void collide(Model *m) {
     for (int p = 0; p < m->n; p++) {
         if (m->inv_mass[p] == 0.0f) continue;
         double *x = m->q + 3 * p;
-        double h = terrain(m, (float)x[0], (float)x[1], NULL);
+        double h = terrain(m, x[0], x[1], NULL);
         if (x[2] >= h) continue;
         if (m->collision == GROUND_NORMAL) {
             float nrm[3], move[3], slide[3];
-            terrain(m, (float)x[0], (float)x[1], nrm);
+            terrain(m, x[0], x[1], nrm);
             float depth = (float)(h - x[2]) * nrm[2];
             for (int i = 0; i < 3; i++) x[i] += (double)(nrm[i] * depth);
             for (int i = 0; i < 3; i++) move[i] = (float)(x[i] - m->q_prev[3 * p + i]);
@@ -345,7 +349,7 @@ static void collide(Model *m) {
                 float cut = fminf(1.0f, m->friction * depth / sl);
                 for (int i = 0; i < 3; i++) x[i] -= (double)(slide[i] * cut);
             }
-            h = terrain(m, (float)x[0], (float)x[1], NULL);
+            h = terrain(m, x[0], x[1], NULL);
         }
         x[2] = fmax(x[2], h);
     }

@@ -6,8 +6,8 @@ Layout (``F`` frames, ``N`` particles, ``M`` sticks, ``T`` triangles, ``O`` obje
     /positions                   [F, N, 3]  float64  particle positions [m] (chunk = 1 frame, gzip)
     /diagnostics/worst_stretch   [F]        float32  largest |l - r| / r over all sticks
     /diagnostics/kinetic_energy  [F]        float64  kinetic energy of the free particles [J]
-    /diagnostics/centre          [F, O, 3]  float32  mass centre of each object [m]
-    /diagnostics/altitude        [F, O]     float32  height of that centre above the terrain [m]
+    /diagnostics/centre          [F, O, 3]  float64  mass centre of each object [m]
+    /diagnostics/altitude        [F, O]     float64  height of that centre above the terrain [m]
     /diagnostics/airspeed        [F, O]     float32  |mean velocity - wind| of each object [m/s]
     /controls                    [F, C, 3]  float64  the controls in force while each frame was stepped, one row
                                                      per name of ``/checkpoint`` attr ``control_names`` (a unit
@@ -73,7 +73,7 @@ from .h5safe import (
 
 EXTENSIONS = (".h5", ".hdf5")
 FORMAT = "warpsim-recording"
-FORMAT_VERSION = 4
+FORMAT_VERSION = 5
 SLOTS = ("slot0", "slot1")
 _CHECKSUM = {"fletcher32": True}
 
@@ -87,8 +87,8 @@ def _frame_layout(particles: int, objects: int, controls: int) -> dict[str, tupl
         "positions": ((particles, 3), "f8", 1),
         "diagnostics/worst_stretch": ((), "f4", 256),
         "diagnostics/kinetic_energy": ((), "f8", 256),
-        "diagnostics/centre": ((objects, 3), "f4", 64),
-        "diagnostics/altitude": ((objects,), "f4", 64),
+        "diagnostics/centre": ((objects, 3), "f8", 64),
+        "diagnostics/altitude": ((objects,), "f8", 64),
         "diagnostics/airspeed": ((objects,), "f4", 64),
     }
 

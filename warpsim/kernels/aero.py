@@ -191,8 +191,7 @@ def _triangle_air_force(
     moved = (a - particle_q_prev[idx[0]]) + (b - particle_q_prev[idx[1]]) + (c - particle_q_prev[idx[2]])
     velocity = wp.vec3(moved) / (3.0 * dt)
     centre = (a + b + c) / wp.float64(3.0)
-    ground = terrain_height(hf, float(centre[0]), float(centre[1]))
-    height = float(centre[2] - wp.float64(ground))
+    height = float(centre[2] - terrain_height(hf, centre[0], centre[1]))
     w = wind_at(wind[particle_world[idx[0]]], height, shear_reference_height, shear_exponent)
     n = cross / cross_len
     if aero_model == AeroModel.SAIL:
@@ -225,8 +224,9 @@ def _body_drag(
     k = wp.tid()
     i = drag_particles[k]
     x = particle_q[i]
-    ground = terrain_height(hf, float(x[0]), float(x[1]))
-    w = wind_at(wind[particle_world[i]], float(x[2] - wp.float64(ground)), shear_reference_height, shear_exponent)
+    w = wind_at(
+        wind[particle_world[i]], float(x[2] - terrain_height(hf, x[0], x[1])), shear_reference_height, shear_exponent
+    )
     w = w - wp.vec3(x - particle_q_prev[i]) / dt
     particle_air_out[i] = w * (0.5 * air_density * wp.length(w) * drag_area[k] * aero_scale)
 

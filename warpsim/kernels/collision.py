@@ -30,48 +30,52 @@ class CollisionMode(enum.IntEnum):
 
 @wp.struct
 class HeightfieldData:
-    """Device view of a :class:`warpsim.terrain.Heightfield` (heights [m], origin [m], cell size [m])."""
+    """Device view of a :class:`warpsim.terrain.Heightfield`: float32 heights [m] above a float64 ``base`` [m] (the
+    middle of their range, so that a terrain 3 km up is looked up as finely as one at sea level), float64 grid
+    origin [m] and cell size [m] (so that a point 10 km out finds its place in the cell to float64 precision)."""
 
     heights: wp.array2d(dtype=wp.float32)
-    origin: wp.vec2
-    cell: wp.vec2
+    base: wp.float64
+    origin: wp.vec2d
+    cell: wp.vec2d
 
 
 @wp.func
-def _cell(hf: HeightfieldData, x: float, y: float):
-    """The grid cell ``(ix, iy)`` under ``(x, y)`` [m] and the fractions ``(tx, ty)`` in [0, 1] across it. Points
-    outside the grid take the nearest edge's height: the coordinate is clamped onto the grid, and the last cell
-    is used up to and including the far edge (so no sample past the array is ever read)."""
+def _cell(hf: HeightfieldData, x: wp.float64, y: wp.float64):
+    """The grid cell ``(ix, iy)`` under ``(x, y)`` [m] and the float32 fractions ``(tx, ty)`` in [0, 1] across it,
+    found in float64. Points outside the grid take the nearest edge's height: the coordinate is clamped onto the
+    grid, and the last cell is used up to and including the far edge (so no sample past the array is ever read)."""
     ny = hf.heights.shape[0]
     nx = hf.heights.shape[1]
-    fx = wp.clamp((x - hf.origin[0]) / hf.cell[0], 0.0, float(nx - 1))
-    fy = wp.clamp((y - hf.origin[1]) / hf.cell[1], 0.0, float(ny - 1))
+    fx = wp.clamp((x - hf.origin[0]) / hf.cell[0], wp.float64(0.0), wp.float64(nx - 1))
+    fy = wp.clamp((y - hf.origin[1]) / hf.cell[1], wp.float64(0.0), wp.float64(ny - 1))
     ix = wp.min(int(wp.floor(fx)), nx - 2)
     iy = wp.min(int(wp.floor(fy)), ny - 2)
-    return ix, iy, fx - float(ix), fy - float(iy)
+    return ix, iy, float(fx - wp.float64(ix)), float(fy - wp.float64(iy))
 
 
 @wp.func
-def terrain_height(hf: HeightfieldData, x: float, y: float) -> float:
-    """Bilinear terrain height [m] at ``(x, y)``."""
+def terrain_height(hf: HeightfieldData, x: wp.float64, y: wp.float64) -> wp.float64:
+    """Bilinear terrain height [m] at ``(x, y)`` [m], float64 (the float32 interpolation is of heights above the
+    base)."""
     ix, iy, tx, ty = _cell(hf, x, y)
     h00 = hf.heights[iy, ix]
     h10 = hf.heights[iy, ix + 1]
     h01 = hf.heights[iy + 1, ix]
     h11 = hf.heights[iy + 1, ix + 1]
-    return (1.0 - ty) * ((1.0 - tx) * h00 + tx * h10) + ty * ((1.0 - tx) * h01 + tx * h11)
+    return hf.base + wp.float64((1.0 - ty) * ((1.0 - tx) * h00 + tx * h10) + ty * ((1.0 - tx) * h01 + tx * h11))
 
 
 @wp.func
-def terrain_normal(hf: HeightfieldData, x: float, y: float) -> wp.vec3:
+def terrain_normal(hf: HeightfieldData, x: wp.float64, y: wp.float64) -> wp.vec3:
     """Unit upward normal of the bilinear surface at ``(x, y)``."""
     ix, iy, tx, ty = _cell(hf, x, y)
     h00 = hf.heights[iy, ix]
     h10 = hf.heights[iy, ix + 1]
     h01 = hf.heights[iy + 1, ix]
     h11 = hf.heights[iy + 1, ix + 1]
-    dhdx = ((1.0 - ty) * (h10 - h00) + ty * (h11 - h01)) / hf.cell[0]
-    dhdy = ((1.0 - tx) * (h01 - h00) + tx * (h11 - h10)) / hf.cell[1]
+    dhdx = ((1.0 - ty) * (h10 - h00) + ty * (h11 - h01)) / float(hf.cell[0])
+    dhdy = ((1.0 - tx) * (h01 - h00) + tx * (h11 - h10)) / float(hf.cell[1])
     return wp.normalize(wp.vec3(-dhdx, -dhdy, 1.0))
 
 
@@ -87,12 +91,12 @@ def _collide_heightfield(
     i = wp.tid()
     if particle_inv_mass[i] == 0.0:
         return
-    x = particle_q_out[i]  # float64; the terrain is looked up and corrections made in float32
-    h = wp.float64(terrain_height(hf, float(x[0]), float(x[1])))
+    x = particle_q_out[i]  # float64; the terrain is looked up in float64, corrections made in float32
+    h = terrain_height(hf, x[0], x[1])
     if x[2] >= h:
         return
     if mode == CollisionMode.NORMAL:
-        n = terrain_normal(hf, float(x[0]), float(x[1]))
+        n = terrain_normal(hf, x[0], x[1])
         depth = float(h - x[2]) * n[2]
         x = x + wp.vec3d(n * depth)
         # friction on the tangential part of this step's trajectory
@@ -101,15 +105,15 @@ def _collide_heightfield(
         slide_len = wp.length(slide)
         if slide_len > 0.0:
             x = x - wp.vec3d(slide * wp.min(1.0, friction * depth / slide_len))
-        h = wp.float64(terrain_height(hf, float(x[0]), float(x[1])))
+        h = terrain_height(hf, x[0], x[1])
     particle_q_out[i] = wp.vec3d(x[0], x[1], wp.max(x[2], h))
 
 
 @wp.kernel
 def _sample_terrain(
     hf: HeightfieldData,
-    points: wp.array(dtype=wp.vec2),
-    height_out: wp.array(dtype=wp.float32),
+    points: wp.array(dtype=wp.vec2d),
+    height_out: wp.array(dtype=wp.float64),
     normal_out: wp.array(dtype=wp.vec3),
 ):
     i = wp.tid()
@@ -130,16 +134,16 @@ class TerrainSampler:
         self._launch = None
 
     def _record(self, capacity: int) -> None:
-        self.points = np.zeros((capacity, 2), dtype=np.float32)
-        self.height = np.zeros(capacity, dtype=np.float32)
+        self.points = np.zeros((capacity, 2), dtype=np.float64)
+        self.height = np.zeros(capacity, dtype=np.float64)
         self.normal = np.zeros((capacity, 3), dtype=np.float32)
         cpu = "cpu"
         self._launch = wp.launch(
             _sample_terrain,
             capacity,
-            [self.hf, wp.array(self.points, dtype=wp.vec2, device=cpu, copy=False)],
+            [self.hf, wp.array(self.points, dtype=wp.vec2d, device=cpu, copy=False)],
             [
-                wp.array(self.height, dtype=wp.float32, device=cpu, copy=False),
+                wp.array(self.height, dtype=wp.float64, device=cpu, copy=False),
                 wp.array(self.normal, dtype=wp.vec3, device=cpu, copy=False),
             ],
             device=cpu,
@@ -149,7 +153,7 @@ class TerrainSampler:
 
     def __call__(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Heights [m] ``[n]`` and unit normals ``[n, 3]`` at the points ``(x, y)`` [m] (two ``[n]`` arrays): the
-        kernel's float32 values, in new float64 arrays."""
+        kernel's float64 heights and float32 normals, in new float64 arrays."""
         n = len(x)
         if n == 0:
             return np.zeros(0), np.zeros((0, 3))

@@ -63,7 +63,7 @@ def _frame_measure(
         if not (_finite(x) and _finite(x - particle_q_prev[i])):  # a position or a velocity
             wp.atomic_add(report_out, world_count + particle_world[i], 1.0)
         elif particle_owner[i] >= 0:
-            clearance = float(x[2] - wp.float64(terrain_height(hf, float(x[0]), float(x[1]))))
+            clearance = float(x[2] - terrain_height(hf, x[0], x[1]))
             wp.atomic_min(report_out, 2 * world_count + particle_owner[i], clearance)
     if i < stick_particles.shape[0]:
         snap_rest_out[i] = stick_rest[i]

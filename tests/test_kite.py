@@ -65,7 +65,7 @@ def test_moving_the_anchor_moves_the_kite():
         sim = Simulation(defaults("kite"))
         sim.step(500)
         sim.set_controls(anchor=anchor)
-        sim.step(1000)
+        sim.step(1100)  # the anchor walks there at solver.nail_rate, 2 m/s: 10 m in 5 s
         rec = sim.model.objects[0]
         q = sim.state.positions()
         assert np.array_equal(q[rec.anchor_particle, :2], np.float32(anchor))
@@ -80,3 +80,24 @@ def test_anchor_control_is_checked():
         sim.set_controls(anchor=(1.0, 2.0, 3.0))
     with pytest.raises(ValueError, match="controls are: anchor, wind"):
         sim.set_controls(pitch=0.5)
+
+
+def test_the_anchor_walks_instead_of_jumping():
+    """Issue 33 (review): set_controls(anchor=(3, 0)) moved the anchor 3 m in one step and threw the rope's next
+    particle at 42 m/s. The anchor now walks at solver.nail_rate (2 m/s): 1 cm per 5 ms step, there in 1.5 s, and
+    the rope's particles stay slower than 6 m/s (about 1.2 m/s before the walk, measured)."""
+    sim = Simulation(defaults("kite"))
+    sim.step(1000)
+    rec = sim.model.objects[0]
+    rope = rec.parts["rope"]
+    start = sim.state.positions()[rec.anchor_particle].copy()
+    sim.set_controls(anchor=(3.0, 0.0))
+    path, fastest = [], 0.0
+    for _ in range(400):
+        sim.step(1)
+        path.append(sim.state.positions()[rec.anchor_particle].copy())
+        fastest = max(fastest, float(np.linalg.norm(sim.state.velocities(sim.dt)[rope], axis=1).max()))
+    steps = np.linalg.norm(np.diff(np.vstack([start, path]), axis=0), axis=1)
+    assert steps.max() <= 2.0 * sim.dt * (1 + 1e-9) and np.linalg.norm(path[-1][:2] - (3.0, 0.0)) < 1e-9
+    assert np.linalg.norm(path[299][:2] - (3.0, 0.0)) < 1e-9 and np.linalg.norm(path[297][:2] - (3.0, 0.0)) > 0.0
+    assert fastest < 6.0

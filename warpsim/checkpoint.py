@@ -32,6 +32,7 @@ class Checkpoint:
         stick_rest: ``[M]`` float32 current rest lengths [m] (the pilot's control sticks change).
         stick_rest_target: ``[M]`` float32 rest lengths [m] the control sticks are ramping to.
         nail_target: ``[N, 3]`` float64 where each nailed particle is held [m] (the kite's anchor moves).
+        nail_target_goal: ``[N, 3]`` float64 where the controlled nails are moving to [m].
         wind: ``[W, 3]`` float32 current wind of each world [m/s].
         gust_active: ``[W]`` uint8, 1 where the world has gusts.
         gust_g: ``[W, 3]`` float64 the gust processes' current values (dimensionless).
@@ -52,6 +53,7 @@ class Checkpoint:
     stick_rest: np.ndarray
     stick_rest_target: np.ndarray
     nail_target: np.ndarray
+    nail_target_goal: np.ndarray
     wind: np.ndarray
     gust_active: np.ndarray
     gust_g: np.ndarray

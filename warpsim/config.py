@@ -181,6 +181,8 @@ class SolverConfig(Checked):
         control_rate: the fastest a control stick's rest length moves to a new control's value [m/s] (the hang
             glider's arms: 0.8 m/s takes the pilot across the bar's full roll travel, 0.4 m, in about 0.5 s, as
             the viewer's keys ramp); 0 = at once.
+        nail_rate: the fastest a controlled nail (the kite's anchor) moves to a new control's place [m/s] (2 m/s, a
+            brisk walk); 0 = at once.
         spring_stiffness: spring constant of every stick [N/m] (``euler`` only).
         spring_damping: spring damping [N s/m] (``euler`` only).
     """
@@ -195,6 +197,7 @@ class SolverConfig(Checked):
     damping: float = number(0.0, Bounds(0.0, 1.0, high_open=True))
     max_stretch: float = number(1.0, NON_NEGATIVE)
     control_rate: float = number(0.8, NON_NEGATIVE)
+    nail_rate: float = number(2.0, NON_NEGATIVE)
     spring_stiffness: float = number(5000.0, POSITIVE)
     spring_damping: float = number(5.0, NON_NEGATIVE)
 

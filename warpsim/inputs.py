@@ -63,18 +63,20 @@ class Inputs:
         if set(values) <= {"wind"}:
             return
         object_values = {k: v for k, v in self.in_force.items() if k != "wind"}
-        rest = self.control.stick_rest if self.control.stick_rest_target is None else self.control.stick_rest_target
+        c = self.control  # controls set where the ramps go (SolverConfig.control_rate, nail_rate)
+        rest = c.stick_rest if c.stick_rest_target is None else c.stick_rest_target
+        nails = c.nail_target if c.nail_target_goal is None else c.nail_target_goal
         targets = {
             "stick_rest": rest.numpy().copy(),
-            "nail_target": self.control.nail_target.numpy().copy(),
+            "nail_target": nails.numpy().copy(),
             "terrain": self.model.terrain,
         }
         for record in self.model.objects:
             spec = registry.OBJECTS[record.kind]
             if spec.apply_controls is not None:
                 spec.apply_controls(record, targets, object_values)
-        rest.assign(targets["stick_rest"])  # the solver ramps the rest lengths there (SolverConfig.control_rate)
-        self.control.nail_target.assign(targets["nail_target"])
+        rest.assign(targets["stick_rest"])
+        nails.assign(targets["nail_target"])
 
     def frame_start(self, time: float, interval: float) -> None:
         """Apply the schedule at ``time`` [s] and advance the gusts by ``interval`` [s] (one frame).

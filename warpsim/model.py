@@ -165,7 +165,7 @@ class Model:
 
     def control(self) -> Control:
         """A new :class:`Control` with the built rest lengths, nail targets and zero wind."""
-        return Control(
+        c = Control(
             stick_rest=wp.array(self.stick_rest.numpy(), dtype=wp.float32, device=self.device),
             stick_rest_target=wp.array(self.stick_rest.numpy(), dtype=wp.float32, device=self.device),
             nail_target=wp.array(
@@ -175,6 +175,8 @@ class Model:
             ),
             wind=wp.zeros(self.world_count, dtype=wp.vec3, device=self.device),
         )
+        c.nail_target_goal = wp.clone(c.nail_target)
+        return c
 
     def constraint_weights(self, mass_splitting: bool) -> tuple[np.ndarray, np.ndarray]:
         """Per-particle factors of the Jacobi constraint solver, host ``(share, scale)`` ``[particle_count]``.
@@ -254,6 +256,8 @@ class Control:
         stick_rest_target: ``[stick_count]`` rest lengths [m] the control sticks move to, at most
             ``SolverConfig.control_rate`` [m/s] (the solver moves ``stick_rest`` each step); None: controls write
             ``stick_rest`` at once.
+        nail_target_goal: ``[max(nail_count, 1)]`` float64 vec3d where the controlled nails (the kite's anchor) move
+            to, at most ``SolverConfig.nail_rate`` [m/s]; None: controls write ``nail_target`` at once.
         nail_target: ``[max(nail_count, 1)]`` float64 vec3d nail positions [m] (the kite's rope anchor moves).
         wind: ``[world_count]`` vec3 wind velocity [m/s] at the reference height.
     """
@@ -262,6 +266,7 @@ class Control:
     nail_target: wp.array
     wind: wp.array
     stick_rest_target: wp.array | None = None
+    nail_target_goal: wp.array | None = None
 
     def set_wind(self, wind) -> None:
         """Set the wind [m/s]: one 3-vector for every world, or an array ``[world_count, 3]``."""

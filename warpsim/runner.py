@@ -263,7 +263,7 @@ class Simulation:
         if self._saved_version != self.inputs.version:  # the controls changed since the last good frame
             self._saved_version = self.inputs.version
             c = self.control
-            saved = (c.stick_rest_target, c.nail_target, c.wind)
+            saved = (c.stick_rest_target, c.nail_target_goal, c.wind)
             self._saved = (self.inputs.save(), *(a.numpy().copy() for a in saved))
 
     def blowup(self, frame: Frame) -> tuple[str, str] | None:
@@ -282,6 +282,7 @@ class Simulation:
             stick_rest=self.control.stick_rest.numpy().copy(),
             stick_rest_target=self.control.stick_rest_target.numpy().copy(),
             nail_target=self.control.nail_target.numpy().copy(),
+            nail_target_goal=self.control.nail_target_goal.numpy().copy(),
             wind=self.control.wind.numpy().copy(),
             **self.inputs.save(),
             control_names=self.inputs.names,
@@ -301,6 +302,7 @@ class Simulation:
         self.control.stick_rest.assign(checkpoint.stick_rest)
         self.control.stick_rest_target.assign(checkpoint.stick_rest_target)
         self.control.nail_target.assign(checkpoint.nail_target)
+        self.control.nail_target_goal.assign(checkpoint.nail_target_goal)
         self.control.wind.assign(checkpoint.wind)
         self.inputs.load(checkpoint)
 
@@ -350,9 +352,10 @@ class Simulation:
         """Put the state, the control arrays and the inputs back to the last good frame (:meth:`advance` and
         :meth:`start_frames` check every frame they return, and the probe keeps its positions)."""
         self._release()
-        inputs, stick_rest_target, nail_target, wind = self._saved
+        inputs, stick_rest_target, nail_target_goal, wind = self._saved
         _, time, steps, slot = self._good
-        q, q_prev, stick_rest = self.probe.kept(slot)  # the rest lengths ramp every step: the probe keeps them
+        # the rest lengths and nail targets ramp every step: the probe keeps them with the positions
+        q, q_prev, stick_rest, nail_target = self.probe.kept(slot)
         self.restore(
             Checkpoint(
                 q=q,
@@ -362,6 +365,7 @@ class Simulation:
                 stick_rest=stick_rest,
                 stick_rest_target=stick_rest_target,
                 nail_target=nail_target,
+                nail_target_goal=nail_target_goal,
                 wind=wind,
                 **inputs,
                 control_names=self.inputs.names,

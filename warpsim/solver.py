@@ -19,7 +19,7 @@ from .config import AirConfig, GroundConfig, SolverConfig, WindConfig
 from .kernels import MODULES, aero, collision, constraints, momentum, springs, verlet
 from .kernels.aero import body_drag, triangle_air_force
 from .kernels.collision import collide_heightfield
-from .kernels.constraints import make_projector, ramp_rest_lengths
+from .kernels.constraints import make_projector, ramp_nail_targets, ramp_rest_lengths
 from .kernels.momentum import MomentumKeeper
 from .kernels.springs import integrate_euler_springs
 from .kernels.verlet import integrate_verlet
@@ -82,14 +82,19 @@ class _Solver:
         sticks = np.unique(np.concatenate(sticks)) if sticks else np.zeros(0)
         self.control_sticks = wp.array(sticks.astype(np.int32), dtype=wp.int32, device=model.device)
         """``[K]`` the sticks whose rest lengths the controls set (they ramp: :func:`ramp_rest_lengths`)."""
+        nails = [r.anchor_nail for r in model.objects if getattr(r, "anchor_nail", None) is not None]
+        self.control_nails = wp.array(np.array(nails, dtype=np.int32), dtype=wp.int32, device=model.device)
+        """``[N]`` the nails the controls move (the kites' anchors; they ramp: :func:`ramp_nail_targets`)."""
         self._graphs: dict = {}
 
     def _launch(self, state: State, control: Control, dt: float) -> None:
         raise NotImplementedError
 
     def _ramp_controls(self, control: Control, dt: float) -> None:
-        """Move the control sticks' rest lengths toward their targets, at most ``control_rate * dt`` [m]."""
+        """Move the control sticks' rest lengths toward their targets, at most ``control_rate * dt`` [m], and the
+        controlled nails toward theirs, at most ``nail_rate * dt`` [m]."""
         ramp_rest_lengths(self.model, control, self.control_sticks, self.config.control_rate * dt)
+        ramp_nail_targets(self.model, control, self.control_nails, self.config.nail_rate * dt)
 
     def launch(self, state: State, control: Control, dt: float) -> None:
         """Launch one step's kernels on ``state`` (no graph, ``state.time`` left alone): what a caller records

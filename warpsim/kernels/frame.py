@@ -49,13 +49,17 @@ def _frame_measure(
     stick_rest: wp.array(dtype=wp.float32),
     stick_pretension: wp.array(dtype=wp.float32),
     stick_world: wp.array(dtype=wp.int32),
+    nail_target: wp.array(dtype=wp.vec3d),
     world_count: int,
     report_out: wp.array(dtype=wp.float32),
     snap_q_out: wp.array(dtype=wp.vec3d),
     snap_q_prev_out: wp.array(dtype=wp.vec3d),
     snap_rest_out: wp.array(dtype=wp.float32),
+    snap_nail_out: wp.array(dtype=wp.vec3d),
 ):
     i = wp.tid()
+    if i < nail_target.shape[0]:
+        snap_nail_out[i] = nail_target[i]
     if i < particle_q.shape[0]:
         x = particle_q[i]
         snap_q_out[i] = x
@@ -97,9 +101,10 @@ class FrameProbe:
             (
                 *(wp.zeros(model.particle_count, dtype=wp.vec3d, device=device) for _ in range(2)),
                 wp.zeros(max(model.stick_count, 1), dtype=wp.float32, device=device),
+                wp.zeros(max(model.nail_count, 1), dtype=wp.vec3d, device=device),
             )
             for _ in range(2)
-        ]  # per slot: (positions, previous positions, rest lengths)
+        ]  # per slot: (positions, previous positions, rest lengths, nail targets)
         self.report = wp.zeros(2 * self.world_count + max(self.object_count, 1), dtype=wp.float32, device=device)
         self.owner = wp.array(np.asarray(owner, dtype=np.int32), dtype=wp.int32, device=device)
         ends = model.stick_particles_np
@@ -136,6 +141,7 @@ class FrameProbe:
                 control.stick_rest,
                 self.stick_pretension,
                 self.stick_world,
+                control.nail_target,
                 self.world_count,
             ],
             outputs=[self.report, *self.slots[slot]],
@@ -149,8 +155,8 @@ class FrameProbe:
         w = self.world_count
         return report[:w], report[w : 2 * w], report[2 * w : 2 * w + self.object_count]
 
-    def kept(self, slot: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Host copies of the ``(positions, previous positions)`` ``[P, 3]`` [m] and the rest lengths ``[M]`` [m]
-        kept in ``slot``."""
-        q, q_prev, rest = (a.numpy().copy() for a in self.slots[slot])
-        return q, q_prev, rest[: self.model.stick_count]
+    def kept(self, slot: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Host copies of the ``(positions, previous positions)`` ``[P, 3]`` [m], the rest lengths ``[M]`` [m] and
+        the nail targets ``[max(N, 1), 3]`` [m] kept in ``slot``."""
+        q, q_prev, rest, nails = (a.numpy().copy() for a in self.slots[slot])
+        return q, q_prev, rest[: self.model.stick_count], nails

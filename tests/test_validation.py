@@ -92,6 +92,10 @@ def test_glider_converges_as_dt_halves_and_iterations_double():
     220 iterations), each refinement closer (measured +3.3 % and +3.4 %)."""
     rows = _rows("convergence-glide")
     assert len(rows) == 2 and all(r.ok and not r.model_limit for r in rows.values()), list(rows.values())
+    for row in rows.values():  # each refinement closer to the finest (within 0.1 % of it)
+        values = [float(v) for v in row.measured.split(", ")]
+        gaps = [abs(v / values[-1] - 1.0) for v in values]
+        assert all(a >= b - 1e-3 for a, b in zip(gaps, gaps[1:], strict=False)), row.measured
 
 
 @pytest.mark.slow

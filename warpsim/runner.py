@@ -123,6 +123,16 @@ class _Pace:
         return time.perf_counter() - self.start
 
 
+FRAME_GRAPH_BYTES_PER_STEP = 16 * 1024
+"""Memory [bytes] one solver step takes in a captured frame graph (measured: a kite frame of 1,000 steps adds
+about 15 MB per graph on the CPU, whatever ``solver.iterations``); capturing it takes about 0.6 ms per step."""
+
+MAX_FRAME_GRAPH_STEPS = (4 << 20) // FRAME_GRAPH_BYTES_PER_STEP
+"""Most steps a frame may have and still be captured as one graph (256: 4 MB and about 0.15 s per graph). A
+longer frame (``fps`` below about 0.4 at ``dt`` = 0.01 s) replays the solver's one-step graph once per step,
+which computes the same bits; without this bound ``--fps 0.001`` captured 100,000 steps twice, gigabytes."""
+
+
 class Simulation:
     """A scene ready to run: model, state, control, solver and inputs built from a validated descriptor.
 
@@ -171,8 +181,11 @@ class Simulation:
         self._keep_good(first)
         del first
         self.steps_per_frame = cfg.scene.steps_per_frame(self.dt)
-        # per probe slot, the whole frame (probe, steps, probe) as one graph
-        self._graphs = (self._capture_frame(0), self._capture_frame(1)) if self.solver.use_graph else None
+        # per probe slot, the whole frame (probe, steps, probe) as one graph; a frame of more steps than
+        # MAX_FRAME_GRAPH_STEPS (a low --fps) is stepped through the solver's one-step graph instead, so that the
+        # graphs' memory and capture time stay bounded whatever the frame rate
+        whole = self.solver.use_graph and self.steps_per_frame <= MAX_FRAME_GRAPH_STEPS
+        self._graphs = (self._capture_frame(0), self._capture_frame(1)) if whole else None
         wp.synchronize_device(self.model.device)
         self.startup_time = time.perf_counter() - started  # [s] model build, kernel load/compilation
 

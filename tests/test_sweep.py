@@ -287,6 +287,7 @@ def test_sweep_table_in_a_descriptor(tmp_path):
         (["--vary", "wind.speed=4,8", "--resume"], "holds no rows yet"),
         (["--vary", "wind.speed=4,8", "--worlds", "3"], "unrecognized arguments"),
         (["--vary", "wind.speed=4,8", "--workers", "2", "--scheduler", "tcp://127.0.0.1:9"], "--workers sizes"),
+        (["--vary", "wind.speed=4,8", "--workers", "1000"], "is more than this machine can run"),
     ],
 )
 def test_bad_sweeps_end_with_one_line(tmp_path, capsys, args, message):
@@ -303,6 +304,23 @@ def test_bad_sweeps_end_with_one_line(tmp_path, capsys, args, message):
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1 and err.startswith("warpsim"), err
     assert not list(tmp_path.glob("s.parquet*"))
+
+
+def test_local_workers_are_bounded_by_cores_and_memory(monkeypatch):
+    """`--workers 1000` took more than 10 GB within a minute: the local cluster takes at most 4 workers per core and
+    no more than 80 % of the available memory holds at `WORKER_BYTES` each."""
+    from warpsim import builder
+
+    monkeypatch.setattr(sweeps, "cores", lambda: 2)
+    monkeypatch.setattr(builder, "available_memory", lambda: 100 * sweeps.WORKER_BYTES)
+    assert sweeps.max_local_workers() == 8
+    monkeypatch.setattr(builder, "available_memory", lambda: 5 * sweeps.WORKER_BYTES)
+    assert sweeps.max_local_workers() == 4  # 80 % of 5 workers' worth
+    sweeps.check_workers(4)
+    with pytest.raises(sweeps.SweepError, match="--workers 5 is more than this machine can run \\(4"):
+        sweeps.check_workers(5)
+    monkeypatch.setattr(builder, "available_memory", lambda: 0)
+    assert sweeps.max_local_workers() == 1  # one worker is always allowed
 
 
 def test_list_metrics_names_units(capsys):

@@ -822,6 +822,8 @@ def cmd_sweep(args) -> int:
     try:
         axes = sweeps.parse_axes(descriptor, args.vary)
         plan = sweeps.SweepPlan(descriptor, axes, args.seconds, args.window, args.metrics)
+        if not args.scheduler:
+            sweeps.check_workers(args.workers)
     except sweeps.SweepError as err:
         raise UsageError(str(err)) from None
     h5_dir = Path(args.h5_dir) if args.h5_dir else None

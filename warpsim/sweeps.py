@@ -705,6 +705,8 @@ def run_sweep(
     ``interrupted``.
     """
     require("distributed")
+    if scheduler is None:
+        check_workers(workers)
     results = _Results(out, plan, restart)
     todo = [i for i in range(len(plan.cases)) if not results.done(i)]
     started = time.perf_counter()
@@ -734,13 +736,52 @@ def run_sweep(
     return SweepOutcome(table, ran, len(plan.cases) - len(todo), wall, used, interrupted, failures)
 
 
+WORKER_BYTES = 384 << 20
+"""Memory [bytes] one local worker process takes: about 220 MB at rest (Python, Warp, NumPy, Dask, pandas;
+measured RSS of a worker running kite chunks on the CPU) and room for a chunk of up to :data:`MAX_CHUNK` worlds."""
+
+WORKERS_PER_CORE = 4
+"""Most local worker processes per core: each is single-threaded and CPU-bound, so more only time-slice."""
+
+
+def cores() -> int:
+    """Cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def max_local_workers() -> int:
+    """Most worker processes a local cluster may start here: :data:`WORKERS_PER_CORE` per core, and no more than
+    80 % of the available memory holds at :data:`WORKER_BYTES` each (at least 1)."""
+    from .builder import available_memory
+
+    limit = WORKERS_PER_CORE * cores()
+    available = available_memory()
+    if available is not None:
+        limit = min(limit, int(0.8 * available) // WORKER_BYTES)
+    return max(1, limit)
+
+
+def check_workers(workers: int | None) -> None:
+    """Raise :class:`SweepError` when ``workers`` local processes are more than :func:`max_local_workers` (a
+    thousand workers took more than 10 GB within a minute; 64 ended in Dask tracebacks)."""
+    if workers is None:
+        return
+    limit = max_local_workers()
+    if workers > limit:
+        raise SweepError(
+            f"--workers {workers} is more than this machine can run ({limit}: {WORKERS_PER_CORE} per core on "
+            f"{cores()} cores, about {WORKER_BYTES >> 20} MB each of the memory available); use --workers {limit} "
+            "or fewer, or a --scheduler with workers on more machines"
+        )
+
+
 def _connect(scheduler, workers: int | None):
     """``(client, whether this sweep made it, worker threads)`` for a running ``scheduler``; ``(None, False,
     worker processes to start)`` for the local cluster."""
     if scheduler is None:
         if workers is not None:
             return None, False, workers
-        return None, False, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+        return None, False, min(cores(), max_local_workers())
     from dask.distributed import Client
 
     if workers is not None:

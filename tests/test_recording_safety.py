@@ -482,3 +482,58 @@ def test_empty_and_skeleton_recordings_are_refused(tmp_path, capsys):
         assert "->" not in captured.out
         _one_error_line(captured.err.strip().splitlines(), message)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["empty.h5", "skeleton.h5"]
+
+
+def _crafted(tmp_path, name: str) -> Path:
+    """A closed flag recording of a few frames, to be edited by hand the way an attacker would."""
+    d = defaults("flag")
+    d["scene"]["seconds"] = 0.1
+    path = tmp_path / name
+    sim = Simulation(d)
+    with H5Recorder(path, sim.model, d, sim.checkpoint, to_toml(d), "flag") as recorder:
+        sim.run(0.1, on_frame=recorder.write)
+    return path
+
+
+def test_recordings_declaring_more_than_they_hold_are_refused_before_any_build(tmp_path, capsys):
+    """A 187 KB file that declared 10 M frames (its checkpoint's digest recomputed) kept `convert` busy for minutes
+    and `--replay` at 4 GB; a descriptor of 4,096 worlds was built before its particles were compared; a dataset
+    chunked in blocks of a million frames holds them in a few bytes. Each is one line and exit 2, in seconds."""
+    many = _crafted(tmp_path, "many.h5")
+    with Recording(many) as r:
+        cp, slot = r.checkpoint(), r._slot
+    declared = 10_000_000
+    with h5py.File(many, "r+") as f:
+        for name in ("time", "positions", "controls", "diagnostics/worst_stretch", "diagnostics/kinetic_energy"):
+            f[name].resize(declared, axis=0)
+        for name in ("diagnostics/centre", "diagnostics/altitude", "diagnostics/airspeed"):
+            f[name].resize(declared, axis=0)
+        f[f"checkpoint/slot{slot}/frame"][0] = declared - 1
+        f[f"checkpoint/slot{slot}/digest"][...] = cp.digest(declared - 1)
+    worlds = _crafted(tmp_path, "worlds.h5")
+    with h5py.File(worlds, "r+") as f:
+        d = load_text(str(f.attrs["descriptor"]), "test")
+        d["worlds"] = {"count": 4096}
+        f.attrs["descriptor"] = to_toml(d)
+    chunked = _crafted(tmp_path, "chunked.h5")
+    with h5py.File(chunked, "r+") as f:
+        times = f["time"][()]
+        del f["time"]
+        f.create_dataset("time", data=times, maxshape=(None,), chunks=(1_000_000,))
+    cases = [
+        (many, "declares 10,000,000 frames but dataset"),
+        (worlds, "asks for 4,096 worlds, its frames hold 1 objects"),
+        (chunked, "dataset time is not stored as warpsim writes it"),
+    ]
+    for path, message in cases:
+        for argv in (
+            ["convert", path, tmp_path / "out.usda"],
+            ["render", path, tmp_path / "out.png"],
+            ["run", "--replay", path, "--quiet"],
+            ["run", "--resume", path, "--quiet"],
+        ):
+            started = time.perf_counter()
+            assert main([str(a) for a in argv]) == EXIT_USAGE, argv
+            assert time.perf_counter() - started < 10.0, argv
+            _one_error_line(capsys.readouterr().err.strip().splitlines(), message)
+    assert not (tmp_path / "out.usda").exists() and not (tmp_path / "out.png").exists()

@@ -616,7 +616,6 @@ class _RunInputs:
 
 def _resolve_run(args) -> _RunInputs:
     """The scene of the command line, or the one a ``--resume`` recording holds with its checkpoint."""
-    from .descriptor import load_text
     from .io.hdf5 import Recording, RecordingError
 
     if args.replay:
@@ -625,10 +624,10 @@ def _resolve_run(args) -> _RunInputs:
                 if recording.frame_count == 0:
                     raise RecordingError(f"{args.replay}: the recording has no frames")
                 controls = recording.controls()
-                text, length = recording.descriptor_text, float(recording.time[-1])
+                descriptor = recording.descriptor(f"{args.replay} (replayed)")
+                length = float(recording.time[-1])
         except RecordingError as err:
             raise UsageError(f"--replay {err}") from None
-        descriptor = load_text(text, f"{args.replay} (replayed)")
         seconds = args.seconds if args.seconds is not None else length
         return _RunInputs(descriptor, f"{args.replay} (replayed)", seconds, controls=controls)
     if not args.resume:
@@ -637,10 +636,10 @@ def _resolve_run(args) -> _RunInputs:
     try:
         with Recording(args.resume, owner=True) as recording:
             checkpoint, frame = recording.checkpoint(), recording.checkpoint_frame
-            text, where = recording.descriptor_text, f"{args.resume} (resumed)"
+            where = f"{args.resume} (resumed)"
+            descriptor = recording.descriptor(where)
     except RecordingError as err:
         raise UsageError(f"--resume {err}") from None
-    descriptor = load_text(text, where)
     seconds = args.seconds if args.seconds is not None else descriptor["scene"]["seconds"]
     return _RunInputs(descriptor, where, seconds, checkpoint, frame)
 

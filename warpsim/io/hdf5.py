@@ -538,6 +538,7 @@ class Recording:
             raise RecordingError(f"{path}: the checkpoint holds {self._checkpoint.q.shape[0]} particles, not {n}")
         written = min(f[name].shape[0] for name in _FRAME_DATASETS)
         self.frame_count = min(written, self.checkpoint_frame + 1)
+        self._check_stored(n)
         if self.owner and self.frame_count:  # a resume appends: read what it will rewrite now, not half-way through
             for name in _FRAME_DATASETS:
                 f[name].id.get_num_chunks()  # the whole chunk index
@@ -545,6 +546,26 @@ class Recording:
         self.time = f["time"][: self.frame_count]
         if not np.isfinite(self.time).all():
             raise RecordingError(f"{path}: frame times are not finite")
+
+    def _check_stored(self, particles: int) -> None:
+        """Trust the declared frame count only as far as the file holds it: every frame dataset must be chunked as
+        warpsim writes it (one chunk's rows bounded by the layout) and hold enough stored chunks for every frame
+        shown. A crafted file of 187 KB that declared 10 M frames kept `convert` busy for minutes and `--replay`
+        at 4 GB; a file must now be about as large as the frames it shows."""
+        f, path = self.file, self.path
+        objects, controls = len(f["topology"].attrs.get("objects", [])), f["controls"].shape[1:2]
+        layout = _frame_layout(particles, objects, controls[0] if controls else 0)
+        for name, (frame_shape, _, rows) in layout.items():
+            d = f[name]
+            if d.shape[1:] != frame_shape or d.chunks is None or d.chunks[0] > rows or d.chunks[1:] != frame_shape:
+                raise RecordingError(
+                    f"{path}: dataset {name} is not stored as warpsim writes it (shape {d.shape}, chunks {d.chunks})"
+                )
+            if self.frame_count and d.id.get_num_chunks() * d.chunks[0] < self.frame_count:
+                raise RecordingError(
+                    f"{path}: declares {self.frame_count:,} frames but dataset {name} holds data for only "
+                    f"{d.id.get_num_chunks() * d.chunks[0]:,}"
+                )
 
     @property
     def particle_count(self) -> int:
@@ -582,13 +603,26 @@ class Recording:
             raise RecordingError(f"{self.path}: the recording has no frame to resume from")
         return self._checkpoint
 
+    def descriptor(self, where: str | None = None) -> dict:
+        """The recorded scene's validated descriptor, checked against what the file holds before anything is built
+        from it: one world per recorded object (a crafted descriptor of 4,096 worlds was built for minutes before
+        its particle count was compared). ``where`` names it in errors (default: the file's descriptor)."""
+        from ..descriptor import load_text
+
+        descriptor = load_text(self.descriptor_text, where or f"{self.path}: descriptor")
+        objects = len(self.file["topology"].attrs.get("objects", []))
+        if descriptor["worlds"]["count"] != objects:
+            raise RecordingError(
+                f"{self.path}: its descriptor asks for {descriptor['worlds']['count']:,} worlds, its frames hold "
+                f"{objects:,} objects"
+            )
+        return descriptor
+
     def build_model(self, device: str = "cpu"):
         """The recorded scene's :class:`warpsim.Model`, checked against the recorded particle count."""
-        from ..descriptor import load_text
         from ..scene import build_model
 
-        descriptor = load_text(self.descriptor_text, f"{self.path}: descriptor")
-        model = build_model(descriptor, device, str(self.path))
+        model = build_model(self.descriptor(), device, str(self.path))
         if model.particle_count != self.particle_count:
             raise RecordingError(
                 f"{self.path}: its descriptor builds {model.particle_count} particles, its frames hold "

@@ -216,7 +216,6 @@ def render_recording(
     or the whole run to an animated .gif (every k-th frame so that at most ``max_frames`` are drawn, played
     at the simulated speed). Returns the path written.
     """
-    from ..descriptor import load_text
     from .hdf5 import Recording, RecordingError
 
     output = check_picture_path(output)
@@ -225,7 +224,7 @@ def render_recording(
         count = recording.frame_count
         if count == 0:
             raise RecordingError(f"{recording_path}: the recording has no frames")
-        descriptor = load_text(recording.descriptor_text, f"{recording_path}: descriptor")
+        descriptor = recording.descriptor()
         scene = Scene(recording.build_model())
         name = descriptor["scene"]["object"]
         if output.suffix.lower() == ".png":

@@ -3,6 +3,7 @@ rows, bad input as one line, the table and the plot read back as a person would 
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import signal
@@ -501,3 +502,187 @@ def test_sweep_and_plot_command_lines_never_traceback(tmp_path, monkeypatch):
     codes: list = []
     check()
     assert codes.count(0) >= 5  # some sweeps and plots did run (the explicit examples at least)
+
+
+# ---------------------------------------------------------------------------------------- one owner, nothing lost
+
+
+def _here(monkeypatch) -> list:
+    """Run sweeps' tasks in this process (no cluster); returns the list of the cases each run ran."""
+    ran: list = []
+
+    def in_process(client, tasks, results, total, started, on_progress):
+        for task in tasks:
+            ran.extend(task.cases)
+            results.add(sweeps.run_chunk(task))
+
+    monkeypatch.setattr(sweeps, "_run_tasks", in_process)
+    monkeypatch.setattr(sweeps, "_local_cluster", lambda count: (None, None))
+    monkeypatch.setattr(sweeps, "_warm_kernels", lambda tasks, device: None)
+    return ran
+
+
+def _quick(out, *extra) -> list[str]:
+    return ["sweep", "kite", "--vary", "wind.speed=4.0,6.0,8.0", "--seconds", "0.05", "--out", str(out), *extra]
+
+
+def test_two_sweeps_on_one_out_the_second_is_refused(tmp_path, monkeypatch, capsys):
+    """Two sweeps on one --out both ended 0 and the table kept only the last one's rows: the table is owned by one
+    sweep at a time (a lock beside it, taken before anything is read), the second ends with one line, exit 2."""
+    from warpsim.io import OutputLock
+
+    ran = _here(monkeypatch)
+    out = tmp_path / "t.parquet"
+    lock = OutputLock(out)  # what a running sweep on `out` holds
+    try:
+        assert main(_quick(out, "--quiet")) == 2
+        assert "another warpsim sweep is writing this table" in capsys.readouterr().err
+        assert ran == [] and not out.exists()
+    finally:
+        lock.release()
+    assert main(_quick(out, "--quiet")) == 0 and ran == [0, 1, 2]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.parquet"]  # the lock file went with the sweep
+
+
+def test_links_at_the_outputs_are_never_written_through(tmp_path, monkeypatch, capsys):
+    """A link planted at the temporary name (or at OUT.partial, then --restart) made the sweep write into the
+    linked file and turned OUT into a link to it. Temporaries are made with O_EXCL | O_NOFOLLOW and a planted one is
+    removed; a link at OUT.partial is refused, or removed (not followed) by --restart."""
+    from warpsim.io import temporary_path
+
+    _here(monkeypatch)
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    out = tmp_path / "t.parquet"
+    temporary_path(out).symlink_to(victim)
+    assert main(_quick(out, "--quiet")) == 0
+    assert victim.read_text() == "precious" and not out.is_symlink() and len(pd.read_parquet(out)) == 3
+    assert not temporary_path(out).exists()
+    partial = tmp_path / "t.parquet.partial"
+    partial.symlink_to(victim)
+    assert main(_quick(out, "--quiet", "--vary", "kite.tow_point=0.3,0.4")) == 2
+    assert "is a link" in capsys.readouterr().err
+    assert main(_quick(out, "--quiet", "--vary", "kite.tow_point=0.3,0.4", "--restart")) == 0
+    assert victim.read_text() == "precious" and not out.is_symlink() and len(pd.read_parquet(out)) == 6
+    assert not os.path.lexists(partial)
+
+
+def test_a_csv_sweep_over_a_vector_key_runs_each_case_once(tmp_path, monkeypatch):
+    """CSV holds wind.velocity as text; a rerun did not recognise its rows, ran every case again and doubled them."""
+    ran = _here(monkeypatch)
+    out = tmp_path / "v.csv"
+    argv = ["sweep", "kite", "--vary", "wind.velocity=[[4.0,0.0,0.0],[6.0,0.0,0.0]]", "--seconds", "0.05"]
+    assert main([*argv, "--out", str(out), "--quiet"]) == 0 and ran == [0, 1]
+    assert main([*argv, "--out", str(out), "--quiet"]) == 0 and ran == [0, 1]  # nothing ran again
+    table = sweeps.read_csv(out)
+    assert len(table) == 2 and list(table["wind.velocity"]) == ["[4.0, 0.0, 0.0]", "[6.0, 0.0, 0.0]"]
+
+
+SPOILS = {
+    "definition not a dict": lambda d, rows: ['{"definition": [1, 2]}'],
+    "row missing an axis": lambda d, rows: [d, json.dumps({k: v for k, v in rows[0].items() if k != "wind.speed"})],
+    "axis of the wrong type": lambda d, rows: [d, json.dumps({**rows[0], "wind.speed": {"a": 1}})],
+    "metric missing": lambda d, rows: [d, json.dumps({k: v for k, v in rows[0].items() if k != "altitude_mean"})],
+    "row not a dict": lambda d, rows: [d, "[1, 2, 3]"],
+}
+
+
+@pytest.mark.parametrize("spoil", [*SPOILS, "deeply nested", "a directory", "empty"])
+def test_a_spoiled_journal_is_one_line_before_anything_runs(spoil, tmp_path, monkeypatch, capsys):
+    """Spoiled journals ended in tracebacks, some only after every case had run, and again on every rerun."""
+    import json
+
+    ran = _here(monkeypatch)
+    out = tmp_path / "t.parquet"
+    partial = tmp_path / "t.parquet.partial"
+    assert main(_quick(out, "--quiet")) == 0
+    rows = pd.read_parquet(out).to_dict("records")
+    rows = [{k: (v.item() if hasattr(v, "item") else v) for k, v in r.items()} for r in rows]
+    out.unlink()
+    ran.clear()
+    definition = json.dumps({"definition": _quick_definition()})
+    if spoil == "deeply nested":
+        lines = [definition, "[" * 100_000 + "]" * 100_000]
+    elif spoil in SPOILS:
+        lines = SPOILS[spoil](definition, rows)
+    if spoil == "a directory":
+        partial.mkdir()
+    elif spoil == "empty":
+        partial.write_text("")
+    else:
+        partial.write_text("\n".join(lines) + "\n")
+    code = main(_quick(out, "--quiet"))
+    err = capsys.readouterr().err
+    if spoil in ("deeply nested", "empty"):  # a line that cannot be read is where a crash cut the journal
+        assert code == 0 and ran == [0, 1, 2], err
+        return
+    assert code == 2 and ran == [] and err.count("\n") == 1 and "Traceback" not in err, err
+    assert str(partial) in err
+
+
+def _quick_definition() -> dict:
+    d = desc_mod.defaults("kite")
+    return sweeps.SweepPlan(d, sweeps.parse_axes(d, ["wind.speed=4.0,6.0,8.0"]), 0.05).definition()
+
+
+@pytest.mark.parametrize("where", ["journal", "table"])
+def test_a_full_disk_under_the_sweep_is_exit_4_and_one_line(where, tmp_path, monkeypatch, capsys):
+    """A write that fails (a file-size limit here, as a full disk fails it) ended in exit 1 and a traceback; now
+    exit 4, one line naming the file and what is kept, and a rerun once there is room finishes the sweep."""
+    import resource
+
+    ran = _here(monkeypatch)
+    out = tmp_path / "t.parquet"
+    limit = 2500 if where == "journal" else 9000  # the journal's definition fits 2,500 bytes; the table does not
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    previous = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (limit, hard))
+    try:
+        code = main(_quick(out, "--quiet"))
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+        signal.signal(signal.SIGXFSZ, previous)
+    err = capsys.readouterr().err
+    assert code == 4 and err.count("\n") == 1 and "Traceback" not in err, err
+    assert "File too large" in err and "run the same command again" in err
+    assert str(tmp_path / "t.parquet.partial") in err
+    assert ("writing the sweep's journal failed" in err) == (where == "journal")
+    assert not out.exists() and not [p for p in tmp_path.iterdir() if ".tmp" in p.name]
+    first = len(ran)
+    assert main(_quick(out, "--quiet")) == 0
+    assert len(pd.read_parquet(out)) == 3
+    if where == "table":  # every row was in the journal: the rerun only writes the table
+        assert first == 3 and len(ran) == 3
+    else:  # the journal kept the rows before the failed one; the rerun runs the others
+        assert 3 <= len(ran) and len(ran) - first >= 1
+
+
+def test_h5_dir_never_touches_a_recording_a_run_is_writing(tmp_path, monkeypatch, capsys):
+    """With `run --h5 DIR/cases-000000-000002.h5` writing, a sweep with --h5-dir DIR removed that file and wrote its
+    chunk in its place. The sweep now looks for a writer's lock before it starts (and each chunk's recorder takes
+    the lock before it truncates); a folder under a file is said before anything runs."""
+    from warpsim.io.hdf5 import claim
+
+    ran = _here(monkeypatch)
+    rec_dir = tmp_path / "recs"
+    rec_dir.mkdir()
+    live = rec_dir / "cases-000000-000002.h5"
+    live.write_bytes(b"a live run's frames")
+    lock = claim(live, create=False)  # what `warpsim run --h5` holds while it writes
+    try:
+        assert main(_quick(tmp_path / "t.parquet", "--chunk", "3", "--h5-dir", str(rec_dir), "--quiet")) == 2
+        err = capsys.readouterr().err
+        assert "is being written by another warpsim run" in err and err.count("\n") == 1
+        assert live.read_bytes() == b"a live run's frames" and ran == []
+    finally:
+        lock.release()
+    (tmp_path / "file").write_text("")
+    for bad, message in ((tmp_path / "file" / "recs", "lies under"), (tmp_path / "file", "is not a folder")):
+        assert main(_quick(tmp_path / "t.parquet", "--h5-dir", str(bad), "--quiet")) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, err
+    assert main(_quick(tmp_path / "t.parquet", "--chunk", "3", "--h5-dir", str(rec_dir), "--quiet")) == 0
+    from warpsim.io.hdf5 import Recording
+
+    with Recording(live) as recording:  # no run holds it any more: the sweep's chunk is written there
+        assert recording.frame_count > 1

@@ -825,9 +825,8 @@ def cmd_sweep(args) -> int:
             sweeps.check_workers(args.workers)
     except sweeps.SweepError as err:
         raise UsageError(str(err)) from None
-    h5_dir = Path(args.h5_dir) if args.h5_dir else None
-    if h5_dir is not None and h5_dir.exists() and not h5_dir.is_dir():
-        raise UsageError(f"--h5-dir {h5_dir} is a file, not a folder")
+    h5_dir = _check_h5_dir(args.h5_dir) if args.h5_dir and not args.scheduler else args.h5_dir
+    h5_dir = Path(h5_dir) if h5_dir else None
     total = len(plan.cases)
     if not args.quiet:
         sizes = " x ".join(f"{len(a.values)} {a.name}" for a in plan.axes)
@@ -860,6 +859,31 @@ def cmd_sweep(args) -> int:
     if outcome.failures:
         return 1
     return EXIT_INTERRUPTED if outcome.interrupted else 0
+
+
+def _check_h5_dir(text: str) -> Path:
+    """The ``--h5-dir`` of a local sweep, checked before anything runs: a folder (or one that can be made in the
+    nearest folder that exists) that takes new files and has room (a full disk, a file in the way or a read-only
+    folder ended in a Dask traceback once the workers tried)."""
+    import os
+
+    from .io import OutputPathError, check_output_path
+
+    h5_dir = Path(text)
+    existing = h5_dir
+    while not existing.exists() and existing != existing.parent and not existing.is_symlink():
+        existing = existing.parent
+    if not existing.is_dir():
+        what = "is" if existing == h5_dir else f"lies under {existing}, which is"
+        raise UsageError(f"--h5-dir {h5_dir} {what} not a folder")
+    try:
+        check_output_path(existing / "cases-000000-000000.h5", (".h5",), "HDF5")
+    except OutputPathError:
+        raise UsageError(f"--h5-dir {h5_dir}: recordings cannot be written in {existing}") from None
+    info = os.statvfs(existing)
+    if info.f_bavail * info.f_frsize < 1 << 20:
+        raise UsageError(f"--h5-dir {h5_dir}: no space left on its disk (less than 1 MiB free)")
+    return h5_dir
 
 
 def _sweep_progress(done: int, total: int, wall: float) -> None:

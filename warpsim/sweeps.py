@@ -448,11 +448,55 @@ def _chunk_recorder(task: ChunkTask, sim):
 
     path = Path(task.h5)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.unlink(missing_ok=True)
+    # the recorder takes the file's writer lock before it truncates it: a run writing it is never overwritten
     return H5Recorder(path, sim.model, sim.descriptor, sim.checkpoint, to_toml(sim.descriptor), "warpsim sweep")
 
 
 # ---------------------------------------------------------------------------------------------------- the rows
+
+
+def _check_plain_file(path: Path, links: bool = False) -> None:
+    """Raise :class:`SweepError` when ``path`` exists and is not a regular file (a folder, a FIFO, or unless
+    ``links``, a link)."""
+    import stat
+
+    try:
+        info = os.lstat(path)
+    except FileNotFoundError:
+        return
+    except OSError as err:
+        raise SweepError(f"{path}: cannot be read ({err.strerror or err})") from None
+    if stat.S_ISLNK(info.st_mode) and not links:
+        raise SweepError(f"{path} is a link; a sweep never writes through one: remove it, or choose another --out")
+    if not (stat.S_ISREG(info.st_mode) or stat.S_ISLNK(info.st_mode)):
+        raise SweepError(f"{path} is not a regular file; remove it, or choose another --out")
+
+
+def _plain_value(value, depth: int = 0) -> bool:
+    """True for what a swept value may be in a row: a number, a boolean, text, or a short list of them."""
+    if isinstance(value, (bool, int, float, str)):
+        return True
+    return isinstance(value, list) and depth < 2 and len(value) <= 16 and all(_plain_value(v, depth + 1) for v in value)
+
+
+def _check_row(row, axes: list[str], metrics: tuple[str, ...], source: Path, number: int) -> None:
+    """Raise :class:`SweepError` unless ``row`` (the ``number``-th of ``source``) is a row of this sweep."""
+    problem = None
+    if not isinstance(row, dict):
+        problem = "is not a row"
+    else:
+        missing = [c for c in (*axes, *metrics) if c not in row]
+        if missing:
+            problem = f"lacks {', '.join(missing[:3])}"
+        elif not all(_plain_value(row[a]) for a in axes):
+            problem = "has a swept value that is not a number, text or list"
+        elif not all(row[m] is None or isinstance(row[m], (bool, int, float, str)) for m in metrics):
+            problem = "has a metric that is not a number or text"
+    if problem:
+        raise SweepError(
+            f"{source}: row {number + 1} {problem}; the file is not this sweep's or is spoiled: choose another "
+            "--out, or --restart to replace it"
+        )
 
 
 class _Results:
@@ -473,25 +517,32 @@ class _Results:
         self.partial = out.with_name(out.name + ".partial")
         self.sidecar = out.with_name(out.name + ".json")
         definition = plan.definition()
+        for path in (out, self.partial, self.sidecar):  # outputs are never written or read through links
+            _check_plain_file(path, links=restart)  # --restart replaces a link; it never reads or writes through it
         if restart:  # the old rows are not read; the files are replaced once this run has rows of its own
             return
         if out.exists():
             found, rows = self._read_output()
             self._check(found, definition, out)
-            self._keep(rows)
+            self._keep(rows, out)
         if self.partial.exists():
             found, rows = self._read_journal()
-            self._check(found, definition, self.partial)
-            self._keep(rows)
+            if self.journal_size:  # an empty journal (a sweep stopped before its first line) holds nothing
+                self._check(found, definition, self.partial)
+                self._keep(rows, self.partial)
 
-    def _keep(self, rows: list[dict]) -> None:
+    def _keep(self, rows: list[dict], source: Path | None = None) -> None:
+        """Keep ``rows`` by case; rows read from ``source`` are checked first: every column of this sweep, swept
+        values of JSON's plain types, metrics numbers, booleans or text (a spoiled file is one line, at once)."""
         names = [a.name for a in self.plan.axes]
-        for row in rows:
+        for number, row in enumerate(rows):
+            if source is not None:
+                _check_row(row, names, self.plan.metrics, source, number)
             self.rows[case_key([row[n] for n in names])] = row
 
     @staticmethod
     def _check(found: dict | None, definition: dict, path: Path) -> None:
-        if found is None:
+        if not isinstance(found, dict):
             raise SweepError(f"{path} is not the output of a warpsim sweep; choose another --out")
         for key in ("seconds", "window", "axes", "metrics", "scene"):  # the most telling first
             if found.get(key) != definition[key]:
@@ -519,29 +570,57 @@ class _Results:
         if found is not None and "blowup_reason" in frame:
             reasons = frame["blowup_reason"]
             frame["blowup_reason"] = [r if isinstance(r, str) else "" for r in reasons]  # CSV: '' reads as NaN
+        if self.format == "csv":  # CSV holds a vector value (wind.velocity) as text: read it back as the list
+            for axis in self.plan.axes:
+                if axis.name in frame:
+                    frame[axis.name] = [_vector(v) for v in frame[axis.name]]
         return found, [{k: _plain(v) for k, v in row.items()} for row in frame.to_dict("records")]
 
     def _read_journal(self) -> tuple[dict | None, list[dict]]:
         found, rows = None, []
-        with open(self.partial, "rb") as journal:
+        try:
+            journal = open(self.partial, "rb")  # noqa: SIM115
+        except OSError as err:
+            raise SweepError(f"{self.partial}: cannot be read ({err.strerror or err}); choose another --out") from None
+        with journal:
             for number, line in enumerate(journal):
                 try:
                     item = json.loads(line) if line.endswith(b"\n") else None
-                except ValueError:
+                except (ValueError, RecursionError):  # RecursionError: JSON nested thousands deep
                     item = None
                 if item is None:  # a line cut by a crash: the rows before it are whole
                     break
                 self.journal_size += len(line)
                 if number == 0:
                     found = item.get("definition") if isinstance(item, dict) else None
-                elif isinstance(item, dict):
+                else:
                     rows.append(item)
         return found, rows
 
     def _append(self, item: dict) -> None:
+        """Write ``item`` as the journal's next line, synced; a failed write (disk full) raises
+        :class:`~warpsim.io.OutputWriteError` saying what is kept."""
+        from .io import OutputWriteError, reason, with_disk_state
+
+        try:
+            self._write_line(item)
+        except OSError as err:
+            kept = len(self.rows) - 1  # the row being written is not in the journal
+            raise OutputWriteError(
+                f"{self.partial}: writing the sweep's journal failed ({with_disk_state(reason(err), self.partial)}); "
+                f"the sweep stopped with {kept} rows kept; run the same command again to continue once fixed"
+            ) from None
+
+    def _write_line(self, item: dict) -> None:
         if self.journal is None:  # opened with the first rows: a sweep that never starts leaves no file
-            fresh = self.restart or not self.partial.exists()
-            self.journal = open(self.partial, "w" if fresh else "r+", encoding="utf-8")  # noqa: SIM115
+            fresh = self.restart or self.journal_size == 0
+            nofollow = getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+            if fresh:  # a file (or link) left there is removed, never written through
+                self.partial.unlink(missing_ok=True)
+                fd = os.open(self.partial, os.O_RDWR | os.O_CREAT | os.O_EXCL | nofollow, 0o666)
+            else:
+                fd = os.open(self.partial, os.O_RDWR | nofollow)
+            self.journal = open(fd, "r+", encoding="utf-8")  # noqa: SIM115
             if fresh:
                 self._append({"definition": self.plan.definition()})
             else:
@@ -579,26 +658,53 @@ class _Results:
     def finish(self):
         """Write the output (atomically: a temporary file renamed over it) and drop the journal; returns the
         DataFrame."""
+        from .io import OutputWriteError
+
         table = self.frame()
         if self.journal is not None:
-            self.journal.close()
+            with contextlib.suppress(OSError):  # after a failed write: its error is reported already
+                self.journal.close()
             self.journal = None
         if self.out is not None and (self.added or self.journal_size):  # else the output stays as it was
-            tmp = self.out.with_name(f".{self.out.name}.tmp")
-            meta = json.dumps(self.plan.definition())
-            if self.format == "parquet":
-                import pyarrow as pa
-                import pyarrow.parquet as pq
-
-                arrow = pa.Table.from_pandas(table, preserve_index=False)
-                arrow = arrow.replace_schema_metadata({**(arrow.schema.metadata or {}), b"warpsim.sweep": meta})
-                pq.write_table(arrow, tmp)
-            else:
-                table.to_csv(tmp, index=False)
-                self.sidecar.write_text(meta, encoding="utf-8")
-            os.replace(tmp, self.out)
+            try:
+                self._write_output(table)
+            except OutputWriteError as err:
+                raise OutputWriteError(
+                    f"{err}; the rows are kept in {self.partial}: run the same command again once fixed"
+                ) from None
             self.partial.unlink(missing_ok=True)
         return table
+
+    def _write_output(self, table) -> None:
+        """Write ``table`` (and a CSV's definition beside it), each whole or not at all."""
+        from .io import replacing
+
+        meta = json.dumps(self.plan.definition())
+        if self.format == "parquet":
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+
+            arrow = pa.Table.from_pandas(table, preserve_index=False)
+            arrow = arrow.replace_schema_metadata({**(arrow.schema.metadata or {}), b"warpsim.sweep": meta})
+            with replacing(self.out, "table") as file:
+                pq.write_table(arrow, file)
+        else:
+            with replacing(self.sidecar, "table's definition") as file:
+                file.write(meta.encode("utf-8"))
+            with replacing(self.out, "table") as file:
+                table.to_csv(file, index=False)
+
+
+def _vector(value):
+    """``value`` read from a CSV cell: a list when it is the text of one (``[4.0, 0.0, 0.0]``), else itself."""
+    if isinstance(value, str) and value.startswith("["):
+        try:
+            parsed = json.loads(value)
+        except ValueError:
+            return value
+        if isinstance(parsed, list):
+            return parsed
+    return value
 
 
 def read_csv(path):
@@ -638,6 +744,16 @@ def _ignore_interrupt_plugin():
                 signal.signal(signal.SIGINT, signal.SIG_IGN)
 
     return IgnoreInterrupt()
+
+
+def _check_recordings_free(tasks: Sequence[ChunkTask]) -> None:
+    """Raise :class:`SweepError` when a run is writing one of the recordings the tasks will write (``--h5-dir``):
+    a sweep once deleted a live run's recording and wrote its chunk in its place."""
+    from .io.h5safe import writer_active
+
+    for task in tasks:
+        if task.h5 and writer_active(task.h5):
+            raise SweepError(f"--h5-dir: {task.h5} is being written by another warpsim run; wait for it to end")
 
 
 def _warm_kernels(tasks: Sequence[ChunkTask], device: str) -> None:
@@ -707,6 +823,36 @@ def run_sweep(
     require("distributed")
     if scheduler is None:
         check_workers(workers)
+    with _owning(out):
+        return _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress)
+
+
+@contextlib.contextmanager
+def _owning(out: Path | None):
+    """Hold ``out``'s :class:`~warpsim.io.OutputLock` inside the block (one sweep per table and journal: two sweeps
+    on one ``--out`` each wrote the table, and the last to finish kept only its own rows)."""
+    if out is None:
+        yield
+        return
+    from .io import OutputLock, OutputLockedError, reason
+
+    try:
+        lock = OutputLock(out)
+    except OutputLockedError:
+        raise SweepError(f"--out {out}: another warpsim sweep is writing this table; wait for it to end") from None
+    except OSError as err:
+        raise SweepError(f"--out {out}: cannot be locked for writing ({reason(err)})") from None
+    try:
+        yield
+    finally:
+        lock.release()
+
+
+def _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress) -> SweepOutcome:
+    """:func:`run_sweep` once ``out`` is this sweep's own."""
+    from .io import OutputWriteError
+
+    failed_write = None
     results = _Results(out, plan, restart)
     todo = [i for i in range(len(plan.cases)) if not results.done(i)]
     started = time.perf_counter()
@@ -718,6 +864,7 @@ def run_sweep(
             client, own_client, used = _connect(scheduler, workers)
             size = chunk or max(1, min(MAX_CHUNK, math.ceil(len(todo) / (4 * max(used, 1)))))
             tasks = plan.chunks(size, set(range(len(plan.cases))) - set(todo), device, h5_dir)
+            _check_recordings_free(tasks)
             if client is None:  # the local cluster: kernels compiled once, here, then the workers start
                 _warm_kernels(tasks, device)
                 client, cluster = _local_cluster(used)
@@ -727,10 +874,17 @@ def run_sweep(
         interrupted = True
     except _TaskFailedError as err:  # e.g. a task that killed its workers again and again
         failures.append(err.__cause__)
+    except OutputWriteError as err:  # the journal could not be written (disk full): stop, keep what is kept
+        failed_write = err
     finally:
         if own_client:
             _close(client, cluster)
-        table = results.finish()
+        try:
+            table = results.finish()
+        except OutputWriteError as err:
+            raise (failed_write or err) from None
+    if failed_write is not None:
+        raise failed_write
     ran = sum(1 for i in todo if results.done(i))
     wall = time.perf_counter() - started
     return SweepOutcome(table, ran, len(plan.cases) - len(todo), wall, used, interrupted, failures)

@@ -686,3 +686,32 @@ def test_h5_dir_never_touches_a_recording_a_run_is_writing(tmp_path, monkeypatch
 
     with Recording(live) as recording:  # no run holds it any more: the sweep's chunk is written there
         assert recording.frame_count > 1
+
+
+def test_plot_on_a_full_disk_keeps_the_old_picture_and_a_text_metric_is_one_line(tmp_path, reference, capsys):
+    """`warpsim plot` wrote in place: on a full disk a traceback and the previous PNG replaced by a cut one. It now
+    writes a temporary and renames it (exit 4, one line, the old picture intact); `--metric blowup_reason` (text)
+    was a TypeError traceback."""
+    import resource
+
+    table, png = tmp_path / "s.parquet", tmp_path / "p.png"
+    reference.to_parquet(table)
+    argv = ["plot", str(table), str(png), "--x", "kite.tow_point", "--metric", "altitude_mean"]
+    assert main(argv) == 0
+    before = png.read_bytes()
+    assert main([*argv[:-1], "line_angle_mean"]) == 0 and png.read_bytes() != before  # it does redraw
+    before = png.read_bytes()
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    previous = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (4096, hard))
+    try:
+        code = main(argv)
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+        signal.signal(signal.SIGXFSZ, previous)
+    err = capsys.readouterr().err
+    assert code == 4 and err.count("\n") == 1 and "File too large" in err and str(png) in err, err
+    assert png.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["p.png", "s.parquet"]
+    assert main([*argv[:-1], "blowup_reason"]) == 2
+    err = capsys.readouterr().err
+    assert "--metric blowup_reason is not a number" in err and err.count("\n") == 1

@@ -537,3 +537,30 @@ def test_recordings_declaring_more_than_they_hold_are_refused_before_any_build(t
             assert time.perf_counter() - started < 10.0, argv
             _one_error_line(capsys.readouterr().err.strip().splitlines(), message)
     assert not (tmp_path / "out.usda").exists() and not (tmp_path / "out.png").exists()
+
+
+def test_a_writer_killed_in_plain_write_mode_is_recovered(tmp_path):
+    """`run --resume` opens the file in plain (not SWMR) write mode while it checks the layout; a kill -9 there left
+    the superblock marked open for write, and `convert`, `render` and `--resume` called the whole recording damaged
+    (only `h5clear -s` saved it, and nothing said so). They now clear the flags under the writer's lock."""
+    from warpsim.io.h5safe import status_flags
+
+    rec = tmp_path / "k.h5"
+    assert main(["run", "kite", "--seconds", "0.2", "--h5", str(rec), "--quiet"]) == 0
+    with Recording(rec) as r:
+        frames = r.frame_count
+    kill = "import h5py, os, sys; f = h5py.File(sys.argv[1], 'r+', locking=False); f.flush(); os.kill(os.getpid(), 9)"
+    for command in ("convert", "render", "resume"):
+        victim = tmp_path / f"{command}.h5"
+        shutil.copy(rec, victim)
+        subprocess.run([sys.executable, "-c", kill, str(victim)], check=False)
+        assert status_flags(victim) & 1  # what the killed writer left
+        argv = {
+            "convert": ["convert", victim, tmp_path / "k.usda"],
+            "render": ["render", victim, tmp_path / "k.png"],
+            "resume": ["run", "--resume", victim, "--seconds", "0.1", "--quiet"],
+        }[command]
+        assert main([str(a) for a in argv]) == 0, command
+        assert status_flags(victim) == 0
+        with h5py.File(victim, "r") as f:  # plain HDF5 opens it again
+            assert f["time"].shape[0] >= frames

@@ -68,6 +68,7 @@ from .h5safe import (
     extend_to_stored_end,
     open_for_reading,
     open_for_writing,
+    status_flags,
     writer_active,
 )
 
@@ -501,9 +502,11 @@ class Recording:
             try:
                 self.file = open_for_reading(self.path, self.live)
             except OSError:
-                if _is_hdf5(self.path):
+                if not _is_hdf5(self.path):
+                    raise RecordingError(f"{path}: not an HDF5 file (expected a warpsim recording)") from None
+                if self.live or not _recover_killed_writer(self.path, owner):
                     raise
-                raise RecordingError(f"{path}: not an HDF5 file (expected a warpsim recording)") from None
+                self.file = open_for_reading(self.path, False)
         try:
             with _reading(path):
                 self._check()
@@ -639,6 +642,29 @@ class Recording:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def _recover_killed_writer(path: Path, owner: bool) -> bool:
+    """Clear the "open for write" flags a writer killed while it held the file in plain (not SWMR) write mode left
+    set (a ``run --resume`` killed at start-up, while it checks the layout), which SWMR readers refuse: what
+    ``h5clear -s`` does, under the writer's lock (``owner``: the caller holds it). Returns True when cleared;
+    raises :class:`RecordingError` saying to run ``h5clear -s`` when the file cannot be changed here."""
+    if not status_flags(path):
+        return False
+    try:
+        lock = None if owner else WriterLock(path, create=False)
+    except LockedError:  # a writer started meanwhile: its flags are its own
+        return False
+    except OSError as err:
+        raise RecordingError(
+            f"{path}: a writer was killed while it had the file open and left it marked open for writing, and it "
+            f"cannot be cleared here ({reason(err)}); run `h5clear -s {path}` (HDF5's tool) where it can"
+        ) from None
+    try:
+        return clear_status_flags(path)
+    finally:
+        if lock is not None:
+            lock.release()
 
 
 def _is_hdf5(path) -> bool:

@@ -564,3 +564,31 @@ def test_a_writer_killed_in_plain_write_mode_is_recovered(tmp_path):
         assert status_flags(victim) == 0
         with h5py.File(victim, "r") as f:  # plain HDF5 opens it again
             assert f["time"].shape[0] >= frames
+
+
+def test_the_terrain_is_part_of_the_recording_and_found_beside_its_scene(tmp_path, monkeypatch):
+    """After the scene's terrain .npy was edited, `run --resume` exited 0 with half the frames differing from an
+    uninterrupted run; `terrain.file` was looked up from the current directory, not the scene file's. The heights
+    are now stored in the recording (resume, replay, convert and render use them) and the path is the scene's."""
+    scenes = tmp_path / "scenes"
+    scenes.mkdir()
+    rng = np.random.default_rng(7)
+    np.save(scenes / "hills.npy", rng.normal(0.0, 3.0, (48, 48)))
+    scene = scenes / "hills.toml"
+    scene.write_text("[scene]\nobject = 'kite'\n[terrain]\nkind = 'file'\nfile = 'hills.npy'\nsize = 200\n")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)  # the scene is run from another folder, by its path
+    whole, cut = tmp_path / "whole.h5", tmp_path / "cut.h5"
+    assert main(["run", str(scene), "--seconds", "0.6", "--h5", str(whole), "--quiet"]) == 0
+    assert main(["run", str(scene), "--seconds", "0.3", "--h5", str(cut), "--quiet"]) == 0
+    np.save(scenes / "hills.npy", np.zeros((48, 48)))  # the terrain file edited ...
+    assert main(["run", "--resume", str(cut), "--seconds", "0.3", "--quiet"]) == 0
+    with Recording(whole) as a, Recording(cut) as b:
+        assert a.frame_count == b.frame_count > 10
+        np.testing.assert_array_equal(a.positions(), b.positions())  # ... and the resume flew the recorded hills
+        assert a.terrain().heights.std() > 1.0
+    (scenes / "hills.npy").unlink()  # ... and gone: the recording still converts and renders
+    assert main(["convert", str(cut), str(tmp_path / "c.usda")]) == 0
+    assert main(["render", str(cut), str(tmp_path / "c.png")]) == 0
+    assert main(["run", "--replay", str(cut), "--seconds", "0.1", "--quiet"]) == 0

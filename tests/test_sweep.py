@@ -715,3 +715,24 @@ def test_plot_on_a_full_disk_keeps_the_old_picture_and_a_text_metric_is_one_line
     assert main([*argv[:-1], "blowup_reason"]) == 2
     err = capsys.readouterr().err
     assert "--metric blowup_reason is not a number" in err and err.count("\n") == 1
+
+
+def test_a_sweep_over_an_edited_terrain_file_is_not_resumed(tmp_path, monkeypatch, capsys):
+    """A sweep's resume check stored only the terrain's path, so rows flown over old heights were kept after the
+    file changed; the definition now holds the heights' digest, and the file is found beside its scene."""
+    _here(monkeypatch)
+    np.save(tmp_path / "hills.npy", np.random.default_rng(3).normal(0.0, 2.0, (32, 32)))
+    scene = tmp_path / "hills.toml"
+    scene.write_text("[scene]\nobject = 'kite'\n[terrain]\nkind = 'file'\nfile = 'hills.npy'\nsize = 200\n")
+    monkeypatch.chdir(ROOT_DIR)  # not the scene's folder
+    argv = ["sweep", str(scene), "--vary", "wind.speed=4.0,6.0", "--seconds", "0.05", "--quiet"]
+    out = tmp_path / "t.parquet"
+    assert main([*argv, "--out", str(out)]) == 0
+    assert main([*argv, "--out", str(out)]) == 0  # the same heights: nothing to run, accepted
+    np.save(tmp_path / "hills.npy", np.zeros((32, 32)))
+    assert main([*argv, "--out", str(out)]) == 2
+    assert "whose terrain heights differ" in capsys.readouterr().err
+    assert main([*argv, "--out", str(out), "--restart"]) == 0
+
+
+ROOT_DIR = Path(__file__).resolve().parent.parent

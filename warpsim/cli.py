@@ -612,6 +612,7 @@ class _RunInputs:
     checkpoint: object = None
     frame: int = -1
     controls: list | None = None  # --replay: the recorded controls of each frame
+    terrain: object = None  # --resume/--replay: the recording's own terrain (a Heightfield; None: the descriptor's)
 
 
 def _resolve_run(args) -> _RunInputs:
@@ -625,11 +626,11 @@ def _resolve_run(args) -> _RunInputs:
                     raise RecordingError(f"{args.replay}: the recording has no frames")
                 controls = recording.controls()
                 descriptor = recording.descriptor(f"{args.replay} (replayed)")
-                length = float(recording.time[-1])
+                length, terrain = float(recording.time[-1]), recording.terrain()
         except RecordingError as err:
             raise UsageError(f"--replay {err}") from None
         seconds = args.seconds if args.seconds is not None else length
-        return _RunInputs(descriptor, f"{args.replay} (replayed)", seconds, controls=controls)
+        return _RunInputs(descriptor, f"{args.replay} (replayed)", seconds, controls=controls, terrain=terrain)
     if not args.resume:
         descriptor, _, where = _load(args)
         return _RunInputs(descriptor, where, descriptor["scene"]["seconds"])
@@ -637,11 +638,11 @@ def _resolve_run(args) -> _RunInputs:
         with Recording(args.resume, owner=True) as recording:
             checkpoint, frame = recording.checkpoint(), recording.checkpoint_frame
             where = f"{args.resume} (resumed)"
-            descriptor = recording.descriptor(where)
+            descriptor, terrain = recording.descriptor(where), recording.terrain()
     except RecordingError as err:
         raise UsageError(f"--resume {err}") from None
     seconds = args.seconds if args.seconds is not None else descriptor["scene"]["seconds"]
-    return _RunInputs(descriptor, where, seconds, checkpoint, frame)
+    return _RunInputs(descriptor, where, seconds, checkpoint, frame, terrain=terrain)
 
 
 def _start(run: _RunInputs, device: str, args):
@@ -649,7 +650,7 @@ def _start(run: _RunInputs, device: str, args):
     ``--quiet``."""
     from .runner import Simulation
 
-    sim = Simulation(run.descriptor, device=device, where=run.where)
+    sim = Simulation(run.descriptor, device=device, where=run.where, terrain=run.terrain)
     if run.checkpoint is not None:
         try:
             sim.restore(run.checkpoint)

@@ -141,15 +141,23 @@ class Simulation:
         device: Warp device (``cpu`` default, ``cuda`` when present).
         use_graph: replay the step as a captured graph (default True).
         where: origin of the descriptor for error messages.
+        terrain: heights to use instead of the descriptor's ``[terrain]`` (a recording's stored terrain).
     """
 
-    def __init__(self, descriptor: dict, device: str | None = "cpu", use_graph: bool = True, where: str = "scene"):
+    def __init__(
+        self,
+        descriptor: dict,
+        device: str | None = "cpu",
+        use_graph: bool = True,
+        where: str = "scene",
+        terrain=None,
+    ):
         started = time.perf_counter()
         self.descriptor = descriptor
         self.settings = cfg = settings(descriptor)
         # every kernel module the run launches, compiled together on a cold cache before anything else uses one
         load_modules((*SOLVERS[cfg.solver.method].modules, frame_kernels), device)
-        self.model = build_model(descriptor, device, where)
+        self.model = build_model(descriptor, device, where, terrain)
         self.dt = cfg.solver.dt
         self.solver = make_solver(
             self.model, cfg.solver, air=cfg.air, wind=cfg.wind, ground=cfg.ground, use_graph=use_graph

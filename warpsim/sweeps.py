@@ -236,6 +236,7 @@ class SweepPlan:
         if count > MAX_CASES:
             raise SweepError(f"{count:,} cases is more than a sweep takes ({MAX_CASES:,}); sweep fewer values")
         self.cases = list(itertools.product(*(a.values for a in self.axes)))
+        self._terrain = _terrain_digest(self.base)  # read once: a terrain file may be hundreds of MB
         variable = (_object_section(self.kind), *VARIABLE_SECTIONS)
         # an object's design also sets shared sections (air, solver): like them, it splits the chunks
         self._per_world = [a.section in variable and a.key != "design" for a in self.axes]
@@ -254,6 +255,7 @@ class SweepPlan:
         a sweep may gain values and keep the rows it has)."""
         return {
             "scene": to_toml(self.base),
+            "terrain": self._terrain,
             "seconds": self.seconds,
             "window": list(self.window),
             "axes": [a.name for a in self.axes],
@@ -304,6 +306,24 @@ class SweepPlan:
                     )
                 )
         return tasks
+
+
+def _terrain_digest(descriptor: dict) -> str | None:
+    """sha256 of the terrain file a descriptor names (None without one): a sweep resumed after the heights were
+    edited must not keep rows flown over the old ones (the path alone stays the same)."""
+    import hashlib
+
+    terrain = descriptor.get("terrain", {})
+    if terrain.get("kind") != "file" or not terrain.get("file"):
+        return None
+    digest = hashlib.sha256()
+    try:
+        with open(terrain["file"], "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                digest.update(block)
+    except OSError:
+        return None  # the build says what is wrong with the file
+    return digest.hexdigest()
 
 
 def _object_section(kind: str) -> str:
@@ -544,9 +564,11 @@ class _Results:
     def _check(found: dict | None, definition: dict, path: Path) -> None:
         if not isinstance(found, dict):
             raise SweepError(f"{path} is not the output of a warpsim sweep; choose another --out")
-        for key in ("seconds", "window", "axes", "metrics", "scene"):  # the most telling first
+        for key in ("seconds", "window", "axes", "metrics", "scene", "terrain"):  # the most telling first
             if found.get(key) != definition[key]:
-                what = {"scene": "scene or settings", "axes": "swept keys"}.get(key, f"--{key}")
+                what = {"scene": "scene or settings", "axes": "swept keys", "terrain": "terrain heights"}.get(
+                    key, f"--{key}"
+                )
                 raise SweepError(
                     f"{path} holds a sweep whose {what} differ from this one's; choose another --out, or --restart "
                     "to replace it"

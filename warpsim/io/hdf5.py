@@ -314,6 +314,18 @@ class H5Recorder:
             top.create_dataset(
                 name, data=data, chunks=data.shape if data.size else None, **(_CHECKSUM if data.size else {})
             )
+        terrain = model.terrain  # the heights themselves: a resume or a convert never reads a terrain file again
+        heights = top.create_dataset(
+            "terrain_heights",
+            data=terrain.heights,
+            chunks=(min(256, terrain.heights.shape[0]), terrain.heights.shape[1]),
+            compression="gzip",
+            compression_opts=4,
+            shuffle=True,
+            **_CHECKSUM,
+        )
+        heights.attrs["size"] = np.asarray(terrain.size, dtype=np.float64)
+        heights.attrs["origin"] = np.asarray(terrain.origin, dtype=np.float64)
         gz = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
         for name, (frame_shape, dtype, rows) in _frame_layout(n, objects, len(cp.control_names)).items():
             f.create_dataset(
@@ -606,6 +618,35 @@ class Recording:
             raise RecordingError(f"{self.path}: the recording has no frame to resume from")
         return self._checkpoint
 
+    def terrain(self):
+        """The recorded terrain (:class:`warpsim.terrain.Heightfield`), or None for a recording made before
+        terrains were stored (its ``[terrain]`` section is built then). Its size is checked against the limits of a
+        terrain file and the memory available before it is read."""
+        from ..builder import available_memory
+        from ..terrain import MAX_HEIGHT, MAX_SIDE, Heightfield
+
+        d = self.file["topology"].get("terrain_heights")
+        if d is None:
+            return None
+        path = self.path
+        with _reading(path):
+            if d.ndim != 2 or not all(2 <= n <= MAX_SIDE for n in d.shape):
+                raise RecordingError(f"{path}: its terrain is {list(d.shape)} samples, not 2 to {MAX_SIDE} a side")
+            need, available = 8 * d.shape[0] * d.shape[1], available_memory()  # float32, and a float32 copy
+            if available is not None and need > 0.5 * available:
+                raise RecordingError(
+                    f"{path}: its terrain of {d.shape[0]:,} x {d.shape[1]:,} samples needs {need / 1e9:.1f} GB; "
+                    f"{available / 1e9:.1f} GB are available"
+                )
+            heights = d[()]
+            size, origin = (tuple(float(v) for v in d.attrs[name]) for name in ("size", "origin"))
+            if not np.isfinite(heights).all() or np.abs(heights).max() > MAX_HEIGHT:
+                raise RecordingError(f"{path}: its terrain heights are not finite or beyond +-{MAX_HEIGHT:g} m")
+            try:
+                return Heightfield(heights, size, origin)
+            except ValueError as err:
+                raise RecordingError(f"{path}: its terrain cannot be used ({err})") from None
+
     def descriptor(self, where: str | None = None) -> dict:
         """The recorded scene's validated descriptor, checked against what the file holds before anything is built
         from it: one world per recorded object (a crafted descriptor of 4,096 worlds was built for minutes before
@@ -625,7 +666,7 @@ class Recording:
         """The recorded scene's :class:`warpsim.Model`, checked against the recorded particle count."""
         from ..scene import build_model
 
-        model = build_model(self.descriptor(), device, str(self.path))
+        model = build_model(self.descriptor(), device, str(self.path), self.terrain())
         if model.particle_count != self.particle_count:
             raise RecordingError(
                 f"{self.path}: its descriptor builds {model.particle_count} particles, its frames hold "

@@ -736,3 +736,28 @@ def test_a_sweep_over_an_edited_terrain_file_is_not_resumed(tmp_path, monkeypatc
 
 
 ROOT_DIR = Path(__file__).resolve().parent.parent
+
+
+def test_the_local_cluster_cannot_be_joined_by_another_process():
+    """The default LocalCluster listened on 127.0.0.1 without TLS or authentication, and another local process ran
+    its own function on a worker. Now every connection is mutual TLS with credentials made for this cluster: a
+    plain client, a TCP client and a client with credentials of its own are all refused; the sweep's runs code."""
+    from dask.distributed import Client
+    from distributed.security import Security
+
+    client, cluster = sweeps._local_cluster(1)
+    try:
+        address = cluster.scheduler_address
+        assert address.startswith("tls://127.0.0.1:")
+        assert client.submit(sum, [1, 2, 3]).result(timeout=30) == 6
+        for attempt in (
+            lambda: Client(address, timeout="3s"),
+            lambda: Client(address.replace("tls://", "tcp://"), timeout="3s"),
+            lambda: Client(address, security=Security.temporary(), timeout="3s"),
+        ):
+            with pytest.raises(Exception) as caught:  # noqa: PT011 - each way fails with an error of its own
+                intruder = attempt()
+                intruder.close()
+            assert not isinstance(caught.value, AssertionError)
+    finally:
+        sweeps._close(client, cluster)

@@ -797,6 +797,8 @@ def cmd_sweep(args) -> int:
     try:
         sweeps.require("distributed")
         sweeps.require("pandas")
+        if not args.scheduler:
+            sweeps.require("cryptography")
     except sweeps.SweepError as err:
         raise UsageError(str(err)) from None
     descriptor, _, where = _load(args, worlds_from_vary=False)  # here --vary makes the sweep's axes

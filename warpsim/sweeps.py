@@ -55,7 +55,7 @@ def require(module: str):
     try:
         return importlib.import_module(module)
     except ImportError:
-        name = {"distributed": "Dask", "dask": "Dask", "pyarrow": "pyarrow", "pandas": "pandas"}.get(
+        name = {"distributed": "Dask", "dask": "Dask", "cryptography": "cryptography (TLS for the local cluster)"}.get(
             module.split(".")[0], module
         )
         raise SweepError(f"sweeps need {name}: {EXTRA_HINT}") from None
@@ -973,20 +973,28 @@ def _connect(scheduler, workers: int | None):
 
 def _local_cluster(count: int):
     """A ``LocalCluster`` of ``count`` single-threaded worker processes (NumPy/BLAS on one thread each), and
-    its client."""
+    its client. Nobody else can join it: every connection is TLS with mutual authentication by temporary
+    credentials made for this cluster (``Security.temporary()``), which only this process and its workers hold;
+    without them any local process could connect to the scheduler on 127.0.0.1 and run its own code on a worker
+    as the sweep's user."""
     import logging
 
     from dask.distributed import Client, LocalCluster
+    from distributed.security import Security
 
+    security = Security.temporary()  # needs `cryptography` (the [sweep] extra)
     cluster = LocalCluster(
         n_workers=count,
         threads_per_worker=1,
         processes=True,
+        host="127.0.0.1",
+        protocol="tls://",
+        security=security,
         dashboard_address="127.0.0.1:0",  # the HTTP server always starts: on a free port
         silence_logs=logging.ERROR,
         env=ONE_THREAD,
     )
-    client = Client(cluster)
+    client = Client(cluster, security=security)
     client.register_plugin(_ignore_interrupt_plugin())
     return client, cluster
 

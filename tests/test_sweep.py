@@ -761,3 +761,21 @@ def test_the_local_cluster_cannot_be_joined_by_another_process():
             assert not isinstance(caught.value, AssertionError)
     finally:
         sweeps._close(client, cluster)
+
+
+def test_sigterm_stops_a_sweep_like_ctrl_c(tmp_path):
+    """SIGTERM to `warpsim sweep` killed it by the signal (143), leaving only the journal and a 'leaked semaphore'
+    warning; it now stops like Ctrl-C: workers stopped, the finished rows written to the table, exit 130."""
+    journal = tmp_path / "s.parquet.partial"
+    proc = subprocess.Popen(_cli(tmp_path, workers=1), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None:
+        if journal.exists() and len(journal.read_text().splitlines()) >= 2:
+            break
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGTERM)  # the sweep's own process only, as `kill PID` or a batch system does
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, (out, err)
+    assert "Traceback" not in err and "leaked" not in err and "interrupted:" in out, err
+    kept = pd.read_parquet(tmp_path / "s.parquet")
+    assert 1 <= len(kept) <= 6 and not journal.exists()

@@ -10,6 +10,7 @@ kept); an interrupted run ends with 130.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 from dataclasses import dataclass
@@ -510,6 +511,53 @@ class _StopRequests:
             signal.signal(sig, handler)
 
 
+@contextlib.contextmanager
+def _terminate_as_interrupt():
+    """Inside the block, the first SIGTERM raises ``KeyboardInterrupt`` where Ctrl-C would (so that a sweep closes
+    its cluster and writes its rows as it does on Ctrl-C, instead of dying with them unwritten); later ones are
+    ignored, so that the clean-up itself is not cut short. Off the main thread, signals are left alone."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    raised = []
+
+    def handle(signum, frame):
+        if not raised:
+            raised.append(signum)
+            raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, handle)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+@contextlib.contextmanager
+def _signals_quit(viewer):
+    """Inside the block SIGINT and SIGTERM ask ``viewer`` to quit (its ``quit`` flag, read between frames), as Esc
+    does. Off the main thread, signals are left alone."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handle(signum, frame):
+        viewer.quit = True
+
+    previous = {sig: signal.signal(sig, handle) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
 def _same_file_check(scene: str, outputs: dict, what: str = "the scene file") -> None:
     """Refuse an output that would overwrite the scene file being run."""
     from .io import same_file
@@ -524,8 +572,6 @@ def _same_file_check(scene: str, outputs: dict, what: str = "the scene file") ->
 def cmd_run(args) -> int:
     """Run a scene (or continue a recording) and print the summary: check the options, resolve the scene, open
     the outputs, run, report."""
-    import contextlib
-
     from .runner import BlowUpError, RecordedControls
 
     usd_path, h5_path = _check_run_options(args)
@@ -838,9 +884,10 @@ def cmd_sweep(args) -> int:
         )
     progress = _sweep_progress if not args.quiet and sys.stderr.isatty() else None
     try:
-        outcome = sweeps.run_sweep(
-            plan, out, args.workers, args.scheduler, args.chunk, args.device, h5_dir, args.restart, progress
-        )
+        with _terminate_as_interrupt():  # SIGTERM stops the sweep like Ctrl-C: workers stopped, rows written, 130
+            outcome = sweeps.run_sweep(
+                plan, out, args.workers, args.scheduler, args.chunk, args.device, h5_dir, args.restart, progress
+            )
     except sweeps.SweepError as err:
         raise UsageError(str(err)) from None
     if progress is not None:
@@ -910,8 +957,6 @@ def cmd_plot(args) -> int:
 
 def cmd_view(args) -> int:
     """Fly a scene in a window until the user quits (or --seconds); print where the outputs went."""
-    import contextlib
-
     from .descriptor import to_toml
     from .io.hdf5 import RecordingError, check_recording_path
     from .io.render import check_picture_path
@@ -940,7 +985,10 @@ def cmd_view(args) -> int:
         viewer = Viewer(sim, backend, f"warpsim: {where}", h5_path, to_toml(descriptor), where, seconds=args.seconds)
     except RecordingError as err:
         raise UsageError(f"--h5 {err}") from None
-    with contextlib.suppress(KeyboardInterrupt):  # Ctrl-C in the terminal quits like Esc
+    # Ctrl-C in the terminal, or SIGTERM, quits like Esc, between two frames: the recording closed with every frame
+    # flown (an interrupt raised between a step and its write once cost the frames since the last checkpoint), the
+    # screenshot saved
+    with _signals_quit(viewer), contextlib.suppress(KeyboardInterrupt):
         viewer.run()  # closes the recording and the window, however it ends
     if shot is not None:
         from .io.render import save_png

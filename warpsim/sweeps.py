@@ -1037,9 +1037,10 @@ def _run_tasks(client, tasks: list[ChunkTask], results: _Results, total: int, st
 
 @contextlib.contextmanager
 def _ctrl_c_flag():
-    """While inside, Ctrl-C (SIGINT) sets the event this yields instead of raising ``KeyboardInterrupt`` wherever
-    the main thread happens to be (inside Dask's client code it could be lost); the sweep's loop raises it when
-    it looks next, at once if it was waiting. Off the main thread (where no signal lands) the event is never set."""
+    """While inside, Ctrl-C (SIGINT) or SIGTERM sets the event this yields instead of raising ``KeyboardInterrupt``
+    wherever the main thread happens to be (inside Dask's client code it could be lost); the sweep's loop raises it
+    when it looks next, at once if it was waiting. Off the main thread (where no signal lands) the event is never
+    set."""
     import signal
     import threading
 
@@ -1047,11 +1048,13 @@ def _ctrl_c_flag():
     if threading.current_thread() is not threading.main_thread():
         yield stop
         return
-    previous = signal.signal(signal.SIGINT, lambda *_: stop.set())
+    # SIGTERM too: a sweep asked to end (by a scheduler, `kill`) stops like Ctrl-C and keeps its rows
+    previous = {sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         yield stop
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 class _TaskFailedError(Exception):

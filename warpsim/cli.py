@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from . import __version__
+from ._interrupt import interruptible
 
 EXIT_USAGE = 2
 EXIT_BLOWUP = 3
@@ -639,6 +640,7 @@ def _claim_recording(outputs, args, h5_path: Path | None):
     if args.resume:
         _checked_output(check_recording_path, args.resume, "--resume")
     flag, path = ("--h5", h5_path) if h5_path else ("--resume", args.resume)
+    interruptible()  # from here on Ctrl-C must close what is opened
     try:
         lock = claim(path, create=bool(h5_path))  # held to the end: nobody else writes it meanwhile
     except RecordingError as err:
@@ -813,6 +815,7 @@ def cmd_convert(args) -> int:
     from .io.hdf5 import RecordingError
     from .io.usd import recording_to_stage
 
+    interruptible()  # the output's temporary is made next
     try:
         path = recording_to_stage(args.recording, args.output)
     except (RecordingError, OutputPathError) as err:
@@ -827,6 +830,7 @@ def cmd_render(args) -> int:
     from .io.hdf5 import RecordingError
     from .io.render import render_recording
 
+    interruptible()  # the output's temporary is made next
     try:
         path = render_recording(args.recording, args.output, args.frame, args.size, args.azimuth, args.elevation)
     except (RecordingError, OutputPathError, RuntimeError) as err:
@@ -883,6 +887,7 @@ def cmd_sweep(args) -> int:
             f"{where}: {total} cases ({sizes}), {plan.seconds:g} s each, window {plan.window[0]:g}-{plan.window[1]:g} s"
         )
     progress = _sweep_progress if not args.quiet and sys.stderr.isatty() else None
+    interruptible()  # the sweep's journal and table open inside
     try:
         with _terminate_as_interrupt():  # SIGTERM stops the sweep like Ctrl-C: workers stopped, rows written, 130
             outcome = sweeps.run_sweep(
@@ -947,6 +952,7 @@ def cmd_plot(args) -> int:
     """Draw a sweep's metric as a PNG."""
     from .io.plot import PlotError, plot_sweep
 
+    interruptible()  # the output's temporary is made next
     try:
         path = plot_sweep(args.table, args.output, args.x, args.metric, args.y, args.where)
     except PlotError as err:
@@ -981,6 +987,7 @@ def cmd_view(args) -> int:
     gl.check_display()  # a missing extra or display is said before the model is built
     sim = Simulation(descriptor, device=device, where=where)
     backend = PygletBackend(args.size, keep_pictures=shot is not None)
+    interruptible()  # the recording opens next
     try:
         viewer = Viewer(sim, backend, f"warpsim: {where}", h5_path, to_toml(descriptor), where, seconds=args.seconds)
     except RecordingError as err:
@@ -1001,7 +1008,7 @@ def cmd_view(args) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``warpsim`` console script."""
+    """The ``warpsim`` command line (``argv``: its arguments; default ``sys.argv[1:]``); returns the exit code."""
     try:
         return _main(argv)
     except KeyboardInterrupt:  # Ctrl-C before a run's own handling starts (start-up, model building)

@@ -13,7 +13,7 @@ import tempfile
 from pathlib import Path
 
 from conftest import fuzz_watchdog
-from hypothesis import HealthCheck, event, given, settings
+from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from warpsim.cli import main
@@ -324,7 +324,10 @@ ODD_VALUES = st.sampled_from([-1, 0, 2, 99, 1e300, math.nan, "x", "", b"\xff", [
 @st.composite
 def hostile_recordings(draw) -> tuple[str, object]:
     """``(kind, detail)``: how to spoil the pristine recording (see ``_spoil``)."""
-    kind = draw(st.sampled_from(["flip", "flip", "cut", "drop", "attr", "foreign", "reshape"]))
+    kind = draw(st.sampled_from(["flip", "flip", "cut", "drop", "attr", "foreign", "reshape", "value"]))
+    if kind == "value":  # a value a writer would never write, in a frame dataset (a replay sets controls again)
+        name = draw(st.sampled_from(["time", "controls", "positions", "diagnostics/altitude"]))
+        return kind, (name, draw(st.integers(0, 8)), draw(st.sampled_from([1e308, -1e308, 1e30, -1.0, 1e9, math.nan])))
     if kind == "flip":
         return kind, draw(st.lists(st.tuples(st.integers(0, 10**7), st.integers(1, 255)), min_size=1, max_size=4))
     if kind == "cut":
@@ -353,6 +356,8 @@ def hostile_recordings(draw) -> tuple[str, object]:
 
 
 def _spoil(path: Path, kind: str, detail) -> None:
+    import warnings
+
     import h5py
     import numpy as np
 
@@ -363,9 +368,15 @@ def _spoil(path: Path, kind: str, detail) -> None:
     elif kind == "cut":
         data = data[: int(len(data) * detail)]
     path.write_bytes(bytes(data))
-    if kind in ("drop", "attr", "reshape"):
+    if kind in ("drop", "attr", "reshape", "value"):
         with h5py.File(path, "r+") as f:
-            if kind == "drop" and detail.startswith("@"):
+            if kind == "value":
+                name, index, value = detail
+                d = f[name]
+                with np.errstate(over="ignore"), warnings.catch_warnings():  # 1e308 in a float32: inf, as meant
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    d[index % d.shape[0]] = value
+            elif kind == "drop" and detail.startswith("@"):
                 del f.attrs[detail[1:]]
             elif kind == "drop":
                 del f[detail]
@@ -383,7 +394,9 @@ def _spoil(path: Path, kind: str, detail) -> None:
 
 
 @settings(max_examples=int(os.environ.get("WARPSIM_FUZZ_EXAMPLES", "60")), deadline=None)
-@given(hostile_recordings(), st.sampled_from(["convert", "render", "resume"]))
+@given(hostile_recordings(), st.sampled_from(["convert", "render", "resume", "replay"]))
+@example(spoil=("value", ("controls", 1, 1e300)), command="replay")  # was a ControlError traceback
+@example(spoil=("value", ("time", 1, 1e308)), command="convert")  # was an OverflowError traceback
 def test_hostile_recordings_are_refused_clearly(spoil, command):
     """Whatever a recording holds, reading it ends in exit 0, or 2 with one line, within seconds (its watchdog
     fails the example, or ends the test run with a stack dump if HDF5 hangs where Ctrl-C cannot reach)."""
@@ -395,6 +408,7 @@ def test_hostile_recordings_are_refused_clearly(spoil, command):
             "convert": ["convert", str(path), str(Path(tmp) / "out.usda")],
             "render": ["render", str(path), str(Path(tmp) / "out.png")],
             "resume": ["run", "--resume", str(path), "--seconds", "0.06", "--quiet"],
+            "replay": ["run", "--replay", str(path), "--seconds", "0.06", "--quiet"],
         }[command]
         out, err = io.StringIO(), io.StringIO()
         code = None

@@ -561,6 +561,11 @@ class Recording:
         self.time = f["time"][: self.frame_count]
         if not np.isfinite(self.time).all():
             raise RecordingError(f"{path}: frame times are not finite")
+        # frames lie on a fixed grid of frame_interval (the last one may be shorter): a time off it (1e308) is not
+        # a frame of this recording, and would overflow the stage's time codes
+        grid = np.arange(self.frame_count) * self.frame_interval
+        if np.any(np.abs(self.time - grid) > 1.001 * self.frame_interval):
+            raise RecordingError(f"{path}: frame times do not follow its frame_interval of {self.frame_interval:g} s")
 
     def _check_stored(self, particles: int) -> None:
         """Trust the declared frame count only as far as the file holds it: every frame dataset must be chunked as
@@ -606,10 +611,19 @@ class Recording:
         :meth:`warpsim.runner.Simulation.set_controls`); without ``frame``, those of every frame, in one read."""
         if frame is not None and not 0 <= frame < self.frame_count:
             raise RecordingError(f"{self.path}: no frame {frame}; the recording has frames 0..{self.frame_count - 1}")
+        path = self.path
         names = tuple(str(n) for n in self.file["checkpoint"].attrs["control_names"])
         with _reading(self.path):
             tables = self.file["controls"][: self.frame_count] if frame is None else self.file["controls"][frame][None]
         rows = [unpack_controls(names, ~np.isnan(table[:, 0]), table) for table in tables]
+        from ..inputs import check_value
+
+        for k, row in enumerate(rows):  # a replay sets them again: out-of-range values are the file's fault
+            for name, value in row.items():
+                try:
+                    check_value(name, value)
+                except ValueError as err:
+                    raise RecordingError(f"{path}: frame {k if frame is None else frame} holds {err}") from None
         return rows if frame is None else rows[0]
 
     def checkpoint(self) -> Checkpoint:

@@ -435,7 +435,7 @@ def test_sweep_and_plot_command_lines_never_traceback(tmp_path, monkeypatch):
     from hypothesis import strategies as st
 
     monkeypatch.setattr(sweeps, "_run_tasks", _in_process)
-    monkeypatch.setattr(sweeps, "_local_cluster", lambda count: (None, None))
+    monkeypatch.setattr(sweeps, "_local_cluster", lambda count, log=None: (None, None))
     monkeypatch.setattr(sweeps, "_connect", lambda scheduler, workers: (None, False, workers or 1))
     (tmp_path / "bad.toml").write_text("[scene]\nobject = 'kite'\n[kite]\nrope_length = -3\n")
     (tmp_path / "kites.toml").write_text("[scene]\nobject = 'kite'\n[sweep]\nwind.speed = [4, 6]\n")
@@ -517,7 +517,7 @@ def _here(monkeypatch) -> list:
             results.add(sweeps.run_chunk(task))
 
     monkeypatch.setattr(sweeps, "_run_tasks", in_process)
-    monkeypatch.setattr(sweeps, "_local_cluster", lambda count: (None, None))
+    monkeypatch.setattr(sweeps, "_local_cluster", lambda count, log=None: (None, None))
     monkeypatch.setattr(sweeps, "_warm_kernels", lambda tasks, device: None)
     return ran
 
@@ -779,3 +779,40 @@ def test_sigterm_stops_a_sweep_like_ctrl_c(tmp_path):
     assert "Traceback" not in err and "leaked" not in err and "interrupted:" in out, err
     kept = pd.read_parquet(tmp_path / "s.parquet")
     assert 1 <= len(kept) <= 6 and not journal.exists()
+
+
+def test_a_failed_task_is_one_line_naming_dasks_log(tmp_path, monkeypatch, capsys):
+    """A killed scheduler ended in exit 1 with 36 lines (a Dask traceback, a literal \\n in the error line) and
+    "done:" on stdout; Dask's ERROR lines reached the terminal. Now Dask logs into a file beside the table, and the
+    sweep says "failed:", then one line that names the file."""
+    import logging
+
+    def fail(client, tasks, results, total, started, on_progress):
+        results.add(sweeps.run_chunk(tasks[0]))
+        logging.getLogger("distributed.client").error("Couldn't gather keys\nTraceback (most recent call last): ...")
+        try:
+            raise RuntimeError("warpsim-cases-1-1 cancelled for reason: scheduler-connection-lost.\nmore\nlines")
+        except RuntimeError as err:
+            raise sweeps._TaskFailedError() from err
+
+    monkeypatch.setattr(sweeps, "_run_tasks", fail)
+    monkeypatch.setattr(sweeps, "_local_cluster", lambda count, log=None: (None, None))
+    monkeypatch.setattr(sweeps, "_warm_kernels", lambda tasks, device: None)
+    client = logging.getLogger("distributed.client")
+    saved = client.handlers[:], client.propagate, client.disabled
+    client.addHandler(logging.StreamHandler(sys.stderr))  # as Dask's own configuration gives it one
+    try:
+        assert main(_quick(tmp_path / "t.parquet", "--chunk", "1")) == 1
+    finally:
+        client.handlers, client.propagate, client.disabled = saved
+        for logger in sweeps._dask_loggers():  # the command turned them off for the rest of its process
+            logger.disabled = False
+    captured = capsys.readouterr()
+    log = tmp_path / "t.parquet.dask.log"
+    assert captured.err == (
+        "warpsim sweep: error: a task failed: warpsim-cases-1-1 cancelled for reason: scheduler-connection-lost.; "
+        f"the finished rows are kept; Dask's log: {log}\n"
+    )
+    assert "failed: 1 cases run" in captured.out and "done:" not in captured.out
+    assert "Couldn't gather keys" in log.read_text()
+    assert len(pd.read_parquet(tmp_path / "t.parquet")) == 1

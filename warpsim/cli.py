@@ -895,6 +895,8 @@ def cmd_sweep(args) -> int:
             )
     except sweeps.SweepError as err:
         raise UsageError(str(err)) from None
+    finally:
+        sweeps.silence_dask()  # what a closing client says after the sweep (a scheduler gone) is not the user's
     if progress is not None:
         sys.stderr.write("\r" + " " * 70 + "\r")
     table = outcome.table
@@ -903,15 +905,20 @@ def cmd_sweep(args) -> int:
         rate = outcome.ran / outcome.wall if outcome.wall > 0 else 0.0
         kept = f"{outcome.kept} already in {out}; " if outcome.kept else ""
         where_run = f"{outcome.workers} workers" if outcome.ran else "nothing to run"
-        status = "interrupted" if outcome.interrupted else "done"
+        status = "failed" if outcome.failures else "interrupted" if outcome.interrupted else "done"
         print(
             f"{status}: {kept}{outcome.ran} cases run in {outcome.wall:.1f} s on {where_run} ({rate:.2f} cases/s); "
             f"{len(table)} rows, {blew} blew up"
         )
         print(f"  table: {out}")
-    for err in outcome.failures:
-        sys.stderr.write(f"warpsim sweep: error: a task failed: {one_line(str(err) or type(err).__name__)}\n")
-    if outcome.failures:
+    if outcome.failures:  # one line: the first failure's first line (a Dask error text runs over many)
+        err = outcome.failures[0]
+        text = (str(err).strip().splitlines() or [type(err).__name__])[0]
+        more = f" (and {len(outcome.failures) - 1} more)" if len(outcome.failures) > 1 else ""
+        log = f"; Dask's log: {outcome.log}" if outcome.log else ""
+        sys.stderr.write(
+            f"warpsim sweep: error: a task failed{more}: {one_line(text)}; the finished rows are kept{log}\n"
+        )
         return 1
     return EXIT_INTERRUPTED if outcome.interrupted else 0
 

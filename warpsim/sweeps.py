@@ -750,13 +750,17 @@ def _format_of(out: Path) -> str:
 # ---------------------------------------------------------------------------------------------------- Dask
 
 
-def _ignore_interrupt_plugin():
+def _ignore_interrupt_plugin(log: Path | None = None):
     """A worker plugin for the local cluster: Ctrl-C in the terminal reaches every process of its group, the
-    workers included; they ignore it, and the sweep itself stops them cleanly."""
+    workers included; they ignore it, and the sweep itself stops them cleanly. With ``log``, what the worker's Dask
+    logs goes there (see :func:`_dask_log`) instead of the terminal."""
     from dask.distributed import WorkerPlugin
 
     class IgnoreInterrupt(WorkerPlugin):
         name = "warpsim-ignore-interrupt"
+
+        def __init__(self, log: str | None):
+            self.log = log
 
         def setup(self, worker):
             import signal
@@ -764,8 +768,76 @@ def _ignore_interrupt_plugin():
 
             if threading.current_thread() is threading.main_thread():
                 signal.signal(signal.SIGINT, signal.SIG_IGN)
+            if self.log:
+                _log_to(self.log)
 
-    return IgnoreInterrupt()
+    return IgnoreInterrupt(str(log) if log else None)
+
+
+_DASK_LOGGERS = ("distributed", "tornado", "asyncio")
+
+
+def _log_to(path) -> list:
+    """Send what Dask and its network layers log in this process to ``path`` (appended; a link there is never
+    followed) instead of the terminal; returns what to give back to :func:`_restore_logging`."""
+    import logging
+
+    flags = os.O_WRONLY | os.O_CREAT | os.O_APPEND | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    handler = logging.StreamHandler(open(os.open(path, flags, 0o666), "a", encoding="utf-8"))  # noqa: SIM115
+    handler.setFormatter(logging.Formatter("%(asctime)s %(process)d %(name)s %(levelname)s: %(message)s"))
+    saved = []
+    for logger in _dask_loggers():
+        saved.append((logger, logger.handlers[:], logger.propagate))
+        logger.handlers = [handler]
+        logger.propagate = False
+    return [handler, saved]
+
+
+def _dask_loggers() -> list:
+    """Dask's loggers and those of its network layers: the top ones, and every one below them that Dask gave a
+    handler of its own (``distributed.client`` has one)."""
+    import logging
+
+    names = set(_DASK_LOGGERS)
+    for name, logger in list(logging.root.manager.loggerDict.items()):
+        if name.split(".")[0] in _DASK_LOGGERS and getattr(logger, "handlers", None):
+            names.add(name)
+    return [logging.getLogger(name) for name in sorted(names)]
+
+
+def silence_dask() -> None:
+    """Turn off Dask's logging in this process for good: for a command whose sweep is over, whose client may still
+    be tearing down connections (a killed scheduler gave 36 lines of tracebacks after the sweep had ended)."""
+    for logger in _dask_loggers():
+        logger.disabled = True
+
+
+def _restore_logging(state: list) -> None:
+    handler, saved = state
+    for logger, handlers, propagate in saved:
+        logger.handlers, logger.propagate = handlers, propagate
+    handler.close()
+
+
+@contextlib.contextmanager
+def _dask_log(path: Path | None):
+    """Inside the block, Dask's log lines (a lost worker, "Couldn't gather keys", a scheduler gone: dozens of lines
+    and tracebacks) go to ``path`` beside the table, not the terminal; yields ``path`` (None without one). The file is
+    removed when nothing was logged. Without ``path`` logging is left as it is."""
+    if path is None:
+        yield None
+        return
+    with contextlib.suppress(FileNotFoundError):
+        if os.path.islink(path):
+            path.unlink()
+    state = _log_to(path)
+    try:
+        yield path
+    finally:
+        _restore_logging(state)
+        with contextlib.suppress(OSError):
+            if os.path.getsize(path) == 0:
+                path.unlink()
 
 
 def _check_recordings_free(tasks: Sequence[ChunkTask]) -> None:
@@ -806,7 +878,8 @@ _SHARED = ("solver", "air", "terrain", "ground")
 class SweepOutcome:
     """What :func:`run_sweep` did. ``table``: the rows (pandas DataFrame); ``ran``: cases run now;
     ``kept``: cases already done before; ``wall``: seconds; ``workers``: worker threads used;
-    ``interrupted``: stopped by Ctrl-C (the rows finished so far are kept)."""
+    ``interrupted``: stopped by Ctrl-C (the rows finished so far are kept); ``failures``: the exceptions of tasks
+    that failed for good; ``log``: the file Dask's log lines went to, when there were any."""
 
     table: object
     ran: int
@@ -815,6 +888,7 @@ class SweepOutcome:
     workers: int
     interrupted: bool = False
     failures: list = field(default_factory=list)
+    log: Path | None = None  # Dask's log of this sweep, when it logged anything (see _dask_log)
 
 
 def run_sweep(
@@ -845,8 +919,10 @@ def run_sweep(
     require("distributed")
     if scheduler is None:
         check_workers(workers)
-    with _owning(out):
-        return _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress)
+    with _owning(out), _dask_log(out.with_name(out.name + ".dask.log") if out is not None else None) as log:
+        outcome = _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress, log)
+    outcome.log = log if log is not None and log.exists() else None
+    return outcome
 
 
 @contextlib.contextmanager
@@ -870,7 +946,7 @@ def _owning(out: Path | None):
         lock.release()
 
 
-def _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress) -> SweepOutcome:
+def _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress, log) -> SweepOutcome:
     """:func:`run_sweep` once ``out`` is this sweep's own."""
     from .io import OutputWriteError
 
@@ -889,7 +965,7 @@ def _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on
             _check_recordings_free(tasks)
             if client is None:  # the local cluster: kernels compiled once, here, then the workers start
                 _warm_kernels(tasks, device)
-                client, cluster = _local_cluster(used)
+                client, cluster = _local_cluster(used, log)
                 own_client = True
             _run_tasks(client, tasks, results, len(todo), started, on_progress)
     except KeyboardInterrupt:
@@ -971,12 +1047,12 @@ def _connect(scheduler, workers: int | None):
     return client, True, sum(client.nthreads().values())
 
 
-def _local_cluster(count: int):
+def _local_cluster(count: int, log: Path | None = None):
     """A ``LocalCluster`` of ``count`` single-threaded worker processes (NumPy/BLAS on one thread each), and
-    its client. Nobody else can join it: every connection is TLS with mutual authentication by temporary
-    credentials made for this cluster (``Security.temporary()``), which only this process and its workers hold;
-    without them any local process could connect to the scheduler on 127.0.0.1 and run its own code on a worker
-    as the sweep's user."""
+    its client (``log``: where the workers' Dask logs go, see :func:`_dask_log`). Nobody else can join it: every
+    connection is TLS with mutual authentication by temporary credentials made for this cluster
+    (``Security.temporary()``), which only this process and its workers hold; without them any local process could
+    connect to the scheduler on 127.0.0.1 and run its own code on a worker as the sweep's user."""
     import logging
 
     from dask.distributed import Client, LocalCluster
@@ -995,7 +1071,7 @@ def _local_cluster(count: int):
         env=ONE_THREAD,
     )
     client = Client(cluster, security=security)
-    client.register_plugin(_ignore_interrupt_plugin())
+    client.register_plugin(_ignore_interrupt_plugin(log))
     return client, cluster
 
 

@@ -466,3 +466,56 @@ def test_sigterm_closes_the_viewer_like_ctrl_c(tmp_path):
     with Recording(tmp_path / "f.h5") as recording:
         assert recording.frame_count >= 20
         assert recording.time[-1] == pytest.approx(simulated, abs=0.006)  # every frame flown is kept
+
+
+def _children_named(name: str) -> list[int]:
+    """Process ids of this process's children whose command is ``name``."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:
+                continue
+            command, rest = stat[stat.index("(") + 1 : stat.rindex(")")], stat[stat.rindex(")") + 2 :].split()
+            if command == name and int(rest[1]) == os.getpid():
+                found.append(int(entry.name))
+    return found
+
+
+def test_the_display_going_away_keeps_the_recording_and_screenshot(tmp_path):
+    """When the X server died under `warpsim view`, Xlib printed two lines and exited 1 with the recording left open
+    and no screenshot. Now the recording is closed with every frame, the screenshot saved, one line, exit 130."""
+    if shutil.which("Xvfb") is None or importlib.util.find_spec("pyglet") is None:
+        pytest.skip("needs Xvfb and pyglet")
+    from warpsim.io.h5safe import status_flags
+    from warpsim.viewer.xvfb import virtual_display
+
+    with virtual_display((640, 480)) as env:
+        (server,) = _children_named("Xvfb")
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "warpsim", "view", "parachute", "--size", "320x240"]
+            + ["--screenshot", "s.png", "--h5", "f.h5", "--seconds", "600"],
+            env=env,
+            cwd=tmp_path,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        frames, deadline = 0, time.monotonic() + 120
+        while time.monotonic() < deadline and proc.poll() is None and frames < 20:
+            time.sleep(0.2)
+            try:
+                with Recording(tmp_path / "f.h5") as recording:
+                    frames = recording.frame_count
+            except Exception:  # noqa: BLE001 - not written yet
+                pass
+        os.kill(server, signal.SIGKILL)
+        out, err = proc.communicate(timeout=60)
+    lines = [line for line in err.splitlines() if line.strip() and not line.startswith("recording to")]
+    assert proc.returncode == 130 and len(lines) == 1, (proc.returncode, err)
+    assert "the display went away" in lines[0] and "recording: f.h5" in lines[0] and "screenshot: s.png" in lines[0]
+    assert (tmp_path / "s.png").stat().st_size > 1000 and status_flags(tmp_path / "f.h5") == 0
+    simulated = float(lines[0].split("at t = ")[1].split(" s")[0])
+    with Recording(tmp_path / "f.h5") as recording:
+        assert recording.frame_count >= 20 and recording.time[-1] == pytest.approx(simulated, abs=0.006)

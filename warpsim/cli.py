@@ -537,6 +537,41 @@ def _terminate_as_interrupt():
         signal.signal(signal.SIGTERM, previous)
 
 
+def _on_display_lost(viewer, backend, shot):
+    """Install an Xlib I/O error handler for when the X server goes away under the viewer (Xlib's own printed two
+    lines and exited 1 with the recording open and no screenshot): close the recording with every frame flown, save
+    the screenshot, say so in one line and exit 130. Returns the handler (keep it referenced), or None without
+    Xlib."""
+    import os
+
+    try:
+        from pyglet.libs.x11 import xlib
+    except Exception:  # noqa: BLE001 - not X11 (or no pyglet): nothing to watch
+        return None
+
+    def lost(display):
+        try:
+            viewer.close_recording()
+            saved = ""
+            if shot is not None:
+                from .io.render import save_png
+
+                saved = f"; screenshot: {save_png(shot, backend.screenshot())}"
+            kept = f"; recording: {', '.join(str(p) for p in viewer.takes)}" if viewer.takes else ""
+            sys.stderr.write(
+                f"warpsim view: error: the display went away (its X server ended) at t = {viewer.sim.state.time:.2f} s"
+                f"{kept}{saved}\n"
+            )
+            sys.stderr.flush()
+        finally:
+            os._exit(EXIT_INTERRUPTED)  # Xlib exits the process once this returns; nothing more can be drawn
+        return 0
+
+    handler = xlib.XIOErrorHandler(lost)
+    xlib.XSetIOErrorHandler(handler)
+    return handler
+
+
 @contextlib.contextmanager
 def _signals_quit(viewer):
     """Inside the block SIGINT and SIGTERM ask ``viewer`` to quit (its ``quit`` flag, read between frames), as Esc
@@ -999,6 +1034,7 @@ def cmd_view(args) -> int:
         viewer = Viewer(sim, backend, f"warpsim: {where}", h5_path, to_toml(descriptor), where, seconds=args.seconds)
     except RecordingError as err:
         raise UsageError(f"--h5 {err}") from None
+    lost = _on_display_lost(viewer, backend, shot)  # kept referenced: Xlib holds only a C pointer to it
     # Ctrl-C in the terminal, or SIGTERM, quits like Esc, between two frames: the recording closed with every frame
     # flown (an interrupt raised between a step and its write once cost the frames since the last checkpoint), the
     # screenshot saved
@@ -1008,6 +1044,7 @@ def cmd_view(args) -> int:
         from .io.render import save_png
 
         print(f"screenshot: {save_png(shot, backend.screenshot())}")
+    del lost
     print(f"simulated {sim.state.time:.2f} s; drew {viewer.pictures} pictures")
     for path in viewer.takes:
         print(f"recording: {path}")

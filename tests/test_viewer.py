@@ -468,19 +468,19 @@ def test_sigterm_closes_the_viewer_like_ctrl_c(tmp_path):
         assert recording.time[-1] == pytest.approx(simulated, abs=0.006)  # every frame flown is kept
 
 
-def _children_named(name: str) -> list[int]:
-    """Process ids of this process's children whose command is ``name``."""
-    found = []
+def _our_xvfb(screen: str) -> int:
+    """The process id of this process's Xvfb child started with ``-screen 0 SCREEN``."""
     for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                stat = (entry / "stat").read_text()
-            except OSError:
-                continue
-            command, rest = stat[stat.index("(") + 1 : stat.rindex(")")], stat[stat.rindex(")") + 2 :].split()
-            if command == name and int(rest[1]) == os.getpid():
-                found.append(int(entry.name))
-    return found
+        if not entry.name.isdigit():
+            continue
+        try:
+            args = (entry / "cmdline").read_bytes().split(b"\0")
+            parent = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, IndexError, ValueError):
+            continue
+        if args[0].endswith(b"Xvfb") and screen.encode() in args and parent == os.getpid():
+            return int(entry.name)
+    raise AssertionError(f"no Xvfb child with screen {screen}")
 
 
 def test_the_display_going_away_keeps_the_recording_and_screenshot(tmp_path):
@@ -491,8 +491,8 @@ def test_the_display_going_away_keeps_the_recording_and_screenshot(tmp_path):
     from warpsim.io.h5safe import status_flags
     from warpsim.viewer.xvfb import virtual_display
 
-    with virtual_display((640, 480)) as env:
-        (server,) = _children_named("Xvfb")
+    with virtual_display((656, 496)) as env:  # a size of its own, to tell its server from others
+        server = _our_xvfb("656x496x24")
         proc = subprocess.Popen(
             [sys.executable, "-m", "warpsim", "view", "parachute", "--size", "320x240"]
             + ["--screenshot", "s.png", "--h5", "f.h5", "--seconds", "600"],

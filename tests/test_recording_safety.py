@@ -620,3 +620,19 @@ def test_ctrl_c_during_start_up_under_load_is_one_line_every_time(tmp_path):
         for burner in burners:
             burner.kill()
             burner.wait()
+
+
+@pytest.mark.parametrize("output", ["k.png", "k.usda"])
+def test_a_link_planted_at_the_temporary_name_is_not_written_through(output, tmp_path):
+    """Pictures and stages are written to `.NAME.PID.tmp.EXT` and renamed; a link planted under that name (a shared
+    folder such as /tmp) made the writer write into the linked file. The temporary is now created with O_EXCL |
+    O_NOFOLLOW after removing whatever is there."""
+    rec = tmp_path / "k.h5"
+    assert main(["run", "kite", "--seconds", "0.1", "--h5", str(rec), "--quiet"]) == 0
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    out = tmp_path / output
+    temporary_path(out).symlink_to(victim)
+    assert main(["render" if output.endswith(".png") else "convert", str(rec), str(out)]) == 0
+    assert victim.read_text() == "precious" and out.is_file() and not out.is_symlink()
+    assert not os.path.lexists(temporary_path(out))

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import OutputWriteError, check_output_path, reason, remove_stale_temporaries, temporary_path
+from . import OutputWriteError, check_output_path, create_temporary, reason
 from .style import COLOURS, SPHERE_PARTS
 
 EXTENSIONS = (".png", ".gif")
@@ -178,10 +178,11 @@ class Scene:
 def _atomic_save(path: Path, save) -> Path:
     """Call ``save(temporary name)`` and rename the result over ``path``; a failure (full disk) leaves ``path``
     as it was and raises :class:`warpsim.io.OutputWriteError`."""
-    remove_stale_temporaries(path)
-    tmp = temporary_path(path)
+    tmp = None
     try:
         try:
+            tmp, fd = create_temporary(path)  # our own regular file: a link planted there is removed, not followed
+            os.close(fd)
             save(tmp)
             with open(tmp, "rb+") as f:
                 os.fsync(f.fileno())
@@ -192,7 +193,8 @@ def _atomic_save(path: Path, save) -> Path:
         os.chmod(tmp, 0o666 & ~mask)
         os.replace(tmp, path)
     finally:
-        tmp.unlink(missing_ok=True)
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)
     return path
 
 

@@ -816,3 +816,23 @@ def test_a_failed_task_is_one_line_naming_dasks_log(tmp_path, monkeypatch, capsy
     assert "failed: 1 cases run" in captured.out and "done:" not in captured.out
     assert "Couldn't gather keys" in log.read_text()
     assert len(pd.read_parquet(tmp_path / "t.parquet")) == 1
+
+
+def test_a_spoiled_table_is_one_line_before_anything_runs(tmp_path, monkeypatch, capsys):
+    """The table's rows are checked as the journal's are: one without a metric column of this sweep (a table
+    edited by hand, or written by another tool with the sweep's metadata kept) is one line, exit 2, before any case
+    runs, and again on a rerun until --restart."""
+    import pyarrow.parquet as pq
+
+    ran = _here(monkeypatch)
+    out = tmp_path / "t.parquet"
+    assert main(_quick(out, "--quiet")) == 0
+    table = pq.read_table(out)
+    pq.write_table(table.drop(["altitude_mean"]).replace_schema_metadata(table.schema.metadata), out)
+    ran.clear()
+    for _ in range(2):
+        assert main(_quick(out, "--quiet")) == 2
+        err = capsys.readouterr().err
+        assert f"{out}: row 1 lacks altitude_mean" in err and err.count("\n") == 1 and ran == [], err
+    assert main(_quick(out, "--quiet", "--restart")) == 0 and ran == [0, 1, 2]
+    assert "altitude_mean" in pq.read_table(out).column_names

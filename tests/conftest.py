@@ -1,3 +1,4 @@
+import contextlib
 import os
 
 import numpy as np
@@ -46,3 +47,48 @@ def worst_elongation(model, positions) -> float:
 @pytest.fixture
 def rng():
     return np.random.default_rng(1234)
+
+
+FUZZ_EXAMPLE_SECONDS = float(os.environ.get("WARPSIM_FUZZ_EXAMPLE_SECONDS", "20"))
+"""Wall seconds one fuzz example may take before its watchdog interrupts it like Ctrl-C (a legitimate
+`run hang-glider --seconds 1e9` drawn from the token lists ran for 49 minutes); six times as long ends the whole
+test run with a stack dump of every thread (a hang that Ctrl-C cannot end)."""
+
+
+class Watchdog:
+    """What :func:`fuzz_watchdog` yields: ``fired`` is True once it interrupted the example."""
+
+    fired = False
+
+
+@contextlib.contextmanager
+def fuzz_watchdog(seconds: float = FUZZ_EXAMPLE_SECONDS):
+    """Bound one fuzz example: after ``seconds`` SIGINT reaches this process, as Ctrl-C would (a run stops after
+    its frame and exits 130, a start-up raises ``KeyboardInterrupt``); after ``6 * seconds`` faulthandler dumps
+    every thread's stack and exits. A ``KeyboardInterrupt`` the watchdog caused ends the block quietly; the caller
+    treats an example the watchdog interrupted as one that ran too long, not as a failure (``Watchdog.fired``)."""
+    import faulthandler
+    import signal
+    import threading
+
+    dog = Watchdog()
+
+    def fire():
+        dog.fired = True
+        os.kill(os.getpid(), signal.SIGINT)
+
+    timer = threading.Timer(seconds, fire)
+    timer.daemon = True
+    faulthandler.dump_traceback_later(6 * seconds, exit=True)
+    timer.start()
+    try:
+        try:
+            yield dog
+        finally:
+            timer.cancel()
+            timer.join()  # a SIGINT sent before the cancel is handled here at the latest
+    except KeyboardInterrupt:
+        if not dog.fired:
+            raise
+    finally:
+        faulthandler.cancel_dump_traceback_later()

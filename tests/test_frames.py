@@ -119,3 +119,37 @@ def test_blow_up_goes_back_to_the_last_good_frame_and_its_controls():
     assert sim.controls == before
     sim.run(0.3)  # and it goes on from there
     assert np.isfinite(sim.state.positions()).all()
+
+
+def test_long_frames_step_without_a_frame_graph_and_give_the_same_bits(monkeypatch):
+    """A frame of more steps than `MAX_FRAME_GRAPH_STEPS` (a low --fps) is not captured as one graph (at --fps 0.001
+    that was 100,000 steps, twice: gigabytes and minutes of start-up); it steps through the solver's one-step graph
+    and gives the same state, bit for bit, as the frame replayed as one graph."""
+    from warpsim import runner
+
+    d = defaults("kite")
+    d["scene"]["fps"] = 1.0 / (60 * d["solver"]["dt"])  # 60 steps a frame
+    monkeypatch.setattr(runner, "MAX_FRAME_GRAPH_STEPS", 30)
+    stepped = Simulation(d)
+    assert stepped.steps_per_frame == 60 and stepped._graphs is None
+    monkeypatch.setattr(runner, "MAX_FRAME_GRAPH_STEPS", 60)
+    whole = Simulation(d)
+    assert whole._graphs is not None
+    for sim in (stepped, whole):
+        sim.run(2 * 60 * sim.dt)
+        assert sim.steps_taken == 120
+    np.testing.assert_array_equal(stepped.state.positions(), whole.state.positions())
+    np.testing.assert_array_equal(stepped.state.particle_q_prev.numpy(), whole.state.particle_q_prev.numpy())
+
+
+@pytest.mark.parametrize("fps", [0.001, 1e-6])
+def test_a_low_frame_rate_starts_in_bounded_time(fps):
+    """`warpsim run kite --fps 0.001 --seconds 0.1` took > 120 s and 2.1 GB capturing a graph of a 100,000-step
+    frame; now the start-up (build and capture) is that of a normal run."""
+    d = defaults("kite")
+    d["scene"]["fps"] = fps
+    sim = Simulation(d)
+    assert sim._graphs is None
+    assert sim.startup_time < 5.0
+    sim.run(0.1)
+    assert sim.steps_taken == round(0.1 / sim.dt)

@@ -12,7 +12,8 @@ import os
 import tempfile
 from pathlib import Path
 
-from hypothesis import HealthCheck, event, given, settings
+from conftest import fuzz_watchdog
+from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from warpsim.cli import main
@@ -101,10 +102,18 @@ def test_descriptor_loader_accepts_or_explains(text):
     assert 0 < d["solver"]["dt"] <= 1.0 and d["worlds"]["count"] >= 1
     # a valid descriptor builds (or is refused with a clear message) and runs (or reports a blow-up)
     d["scene"]["fps"] = 100.0
+    with fuzz_watchdog() as dog:
+        _build_and_run(d, "fuzz.toml")
+    if dog.fired:
+        event("stopped by its watchdog")
+
+
+def _build_and_run(d: dict, where: str) -> None:
+    """Build ``d`` and run it for 0.03 s: refused with one clear line, run, or blown up (said so)."""
     try:
-        sim = Simulation(d, where="fuzz.toml")
+        sim = Simulation(d, where=where)
     except DescriptorError as err:
-        assert str(err).startswith("fuzz.toml: ") and "\n" not in str(err)
+        assert str(err).startswith(f"{where}: ") and "\n" not in str(err), err
         event("valid, refused at build")
         return
     try:
@@ -120,10 +129,11 @@ def test_descriptor_loader_accepts_or_explains(text):
 def test_mangled_scene_files_are_refused_clearly(text, cut, scene):
     original = scene.read_text()
     mangled = original[:cut] + text + original[cut + len(text) // 2 :]
-    try:
-        load_text(mangled, "mangled.toml")
-    except DescriptorError as err:
-        assert str(err).startswith("mangled.toml: ")
+    with fuzz_watchdog():
+        try:
+            load_text(mangled, "mangled.toml")
+        except DescriptorError as err:
+            assert str(err).startswith("mangled.toml: ")
 
 
 TOKENS = {
@@ -237,8 +247,9 @@ def test_command_line_never_tracebacks_and_leaves_nothing_on_error(argv):
         cwd = os.getcwd()
         os.chdir(directory)
         display = os.environ.pop("DISPLAY", None)  # `view` must say "no display", never open a window here
+        code = None
         try:
-            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            with fuzz_watchdog() as dog, contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
                 try:
                     code = main(argv)
                 except SystemExit as exit:  # argparse: --help, --version, or a usage error
@@ -250,6 +261,10 @@ def test_command_line_never_tracebacks_and_leaves_nothing_on_error(argv):
         errors = err.getvalue()
         event(f"exit {code}")
         assert "Traceback" not in errors and "Error:" not in errors.replace("error:", ""), (argv, errors)
+        if dog.fired:  # a legitimately long run (--seconds 1e9) stopped like Ctrl-C: it ran too long, nothing more
+            event("stopped by its watchdog")
+            assert code in (None, 0, 2, 3, 130), (argv, code, errors)
+            return
         assert code in (0, 2, 3), (argv, code, errors)
         if code == 2:
             lines = [line for line in errors.splitlines() if line.strip()]
@@ -278,17 +293,15 @@ def test_object_builders_take_edge_values(override):
     text = "\n".join(f"[{s}]\n" + "\n".join(f"{k} = {_toml(v)}" for k, v in t.items()) for s, t in override.items())
     try:
         d = load_text(text, "edgy.toml")
-        d["scene"]["fps"] = 100.0
-        sim = Simulation(d, where="edgy.toml")
     except DescriptorError as err:
         assert str(err).startswith("edgy.toml: ") and "\n" not in str(err), err
         event("refused")
         return
-    try:
-        sim.run(0.03)
-        event("built and ran")
-    except BlowUpError:
-        event("built, blew up")
+    d["scene"]["fps"] = 100.0
+    with fuzz_watchdog() as dog:
+        _build_and_run(d, "edgy.toml")
+    if dog.fired:
+        event("stopped by its watchdog")
 
 
 # Recordings as hostile input: flipped bytes, cuts, foreign HDF5, missing or wrong attributes and datasets.
@@ -311,7 +324,10 @@ ODD_VALUES = st.sampled_from([-1, 0, 2, 99, 1e300, math.nan, "x", "", b"\xff", [
 @st.composite
 def hostile_recordings(draw) -> tuple[str, object]:
     """``(kind, detail)``: how to spoil the pristine recording (see ``_spoil``)."""
-    kind = draw(st.sampled_from(["flip", "flip", "cut", "drop", "attr", "foreign", "reshape"]))
+    kind = draw(st.sampled_from(["flip", "flip", "cut", "drop", "attr", "foreign", "reshape", "value"]))
+    if kind == "value":  # a value a writer would never write, in a frame dataset (a replay sets controls again)
+        name = draw(st.sampled_from(["time", "controls", "positions", "diagnostics/altitude"]))
+        return kind, (name, draw(st.integers(0, 8)), draw(st.sampled_from([1e308, -1e308, 1e30, -1.0, 1e9, math.nan])))
     if kind == "flip":
         return kind, draw(st.lists(st.tuples(st.integers(0, 10**7), st.integers(1, 255)), min_size=1, max_size=4))
     if kind == "cut":
@@ -340,6 +356,8 @@ def hostile_recordings(draw) -> tuple[str, object]:
 
 
 def _spoil(path: Path, kind: str, detail) -> None:
+    import warnings
+
     import h5py
     import numpy as np
 
@@ -350,9 +368,15 @@ def _spoil(path: Path, kind: str, detail) -> None:
     elif kind == "cut":
         data = data[: int(len(data) * detail)]
     path.write_bytes(bytes(data))
-    if kind in ("drop", "attr", "reshape"):
+    if kind in ("drop", "attr", "reshape", "value"):
         with h5py.File(path, "r+") as f:
-            if kind == "drop" and detail.startswith("@"):
+            if kind == "value":
+                name, index, value = detail
+                d = f[name]
+                with np.errstate(over="ignore"), warnings.catch_warnings():  # 1e308 in a float32: inf, as meant
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    d[index % d.shape[0]] = value
+            elif kind == "drop" and detail.startswith("@"):
                 del f.attrs[detail[1:]]
             elif kind == "drop":
                 del f[detail]
@@ -370,12 +394,12 @@ def _spoil(path: Path, kind: str, detail) -> None:
 
 
 @settings(max_examples=int(os.environ.get("WARPSIM_FUZZ_EXAMPLES", "60")), deadline=None)
-@given(hostile_recordings(), st.sampled_from(["convert", "render", "resume"]))
+@given(hostile_recordings(), st.sampled_from(["convert", "render", "resume", "replay"]))
+@example(spoil=("value", ("controls", 1, 1e300)), command="replay")  # was a ControlError traceback
+@example(spoil=("value", ("time", 1, 1e308)), command="convert")  # was an OverflowError traceback
 def test_hostile_recordings_are_refused_clearly(spoil, command):
-    """Whatever a recording holds, reading it ends in exit 0, or 2 with one line, within seconds (a watchdog
-    ends the test run with a stack dump if HDF5 hangs)."""
-    import faulthandler
-
+    """Whatever a recording holds, reading it ends in exit 0, or 2 with one line, within seconds (its watchdog
+    fails the example, or ends the test run with a stack dump if HDF5 hangs where Ctrl-C cannot reach)."""
     kind, detail = spoil
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "rec.h5"
@@ -384,18 +408,40 @@ def test_hostile_recordings_are_refused_clearly(spoil, command):
             "convert": ["convert", str(path), str(Path(tmp) / "out.usda")],
             "render": ["render", str(path), str(Path(tmp) / "out.png")],
             "resume": ["run", "--resume", str(path), "--seconds", "0.06", "--quiet"],
+            "replay": ["run", "--replay", str(path), "--seconds", "0.06", "--quiet"],
         }[command]
         out, err = io.StringIO(), io.StringIO()
-        faulthandler.dump_traceback_later(120, exit=True)
-        try:
-            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-                code = main(argv)
-        finally:
-            faulthandler.cancel_dump_traceback_later()
+        code = None
+        with fuzz_watchdog() as dog, contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            code = main(argv)
         event(f"{kind}: exit {code}")
+        assert not dog.fired, (spoil, command, "a recording kept a reader busy for the whole watchdog")
         errors = [line for line in err.getvalue().splitlines() if line.strip()]
         assert code in (0, 2), (spoil, command, code, errors)
         if code == 2:
             assert len(errors) == 1 and "error:" in errors[0], (spoil, errors)
         else:
             assert errors == [], (spoil, errors)
+
+
+def test_the_watchdog_stops_a_legitimately_endless_example():
+    """The fuzz drew `run --seconds 0.05 hang-glider --seconds 1e9` (a valid 10^9-second run) and the hunt hung
+    for 49 minutes; each example now has a watchdog that stops it like Ctrl-C (exit 130, outputs kept)."""
+    import time
+
+    started = time.perf_counter()
+    out, err = io.StringIO(), io.StringIO()
+    with tempfile.TemporaryDirectory() as tmp:
+        rec = Path(tmp) / "long.h5"
+        with fuzz_watchdog(1.0) as dog, contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            code = main(["run", "--seconds", "0.05", "flag", "--seconds", "1e9", "--quiet", "--h5", str(rec)])
+        assert dog.fired and code == 130, (code, err.getvalue())
+        assert "Traceback" not in err.getvalue()
+        assert 1.0 < time.perf_counter() - started < 15.0
+        from warpsim.io.hdf5 import Recording
+
+        with Recording(rec) as recording:
+            assert recording.frame_count > 1  # it was running, and keeps what it ran
+    with fuzz_watchdog(5.0) as quiet:  # an example that ends in time is left alone
+        assert main(["list"]) == 0
+    assert not quiet.fired

@@ -490,3 +490,157 @@ def test_empty_and_skeleton_recordings_are_refused(tmp_path, capsys):
         assert "->" not in captured.out
         _one_error_line(captured.err.strip().splitlines(), message)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["empty.h5", "skeleton.h5"]
+
+
+def _crafted(tmp_path, name: str) -> Path:
+    """A closed flag recording of a few frames, to be edited by hand the way an attacker would."""
+    d = defaults("flag")
+    d["scene"]["seconds"] = 0.1
+    path = tmp_path / name
+    sim = Simulation(d)
+    with H5Recorder(path, sim.model, d, sim.checkpoint, to_toml(d), "flag") as recorder:
+        sim.run(0.1, on_frame=recorder.write)
+    return path
+
+
+def test_recordings_declaring_more_than_they_hold_are_refused_before_any_build(tmp_path, capsys):
+    """A 187 KB file that declared 10 M frames (its checkpoint's digest recomputed) kept `convert` busy for minutes
+    and `--replay` at 4 GB; a descriptor of 4,096 worlds was built before its particles were compared; a dataset
+    chunked in blocks of a million frames holds them in a few bytes. Each is one line and exit 2, in seconds."""
+    many = _crafted(tmp_path, "many.h5")
+    with Recording(many) as r:
+        cp, slot = r.checkpoint(), r._slot
+    declared = 10_000_000
+    with h5py.File(many, "r+") as f:
+        for name in ("time", "positions", "controls", "diagnostics/worst_stretch", "diagnostics/kinetic_energy"):
+            f[name].resize(declared, axis=0)
+        for name in ("diagnostics/centre", "diagnostics/altitude", "diagnostics/airspeed"):
+            f[name].resize(declared, axis=0)
+        f[f"checkpoint/slot{slot}/frame"][0] = declared - 1
+        f[f"checkpoint/slot{slot}/digest"][...] = cp.digest(declared - 1)
+    worlds = _crafted(tmp_path, "worlds.h5")
+    with h5py.File(worlds, "r+") as f:
+        d = load_text(str(f.attrs["descriptor"]), "test")
+        d["worlds"] = {"count": 4096}
+        f.attrs["descriptor"] = to_toml(d)
+    chunked = _crafted(tmp_path, "chunked.h5")
+    with h5py.File(chunked, "r+") as f:
+        times = f["time"][()]
+        del f["time"]
+        f.create_dataset("time", data=times, maxshape=(None,), chunks=(1_000_000,))
+    cases = [
+        (many, "declares 10,000,000 frames but dataset"),
+        (worlds, "asks for 4,096 worlds, its frames hold 1 objects"),
+        (chunked, "dataset time is not stored as warpsim writes it"),
+    ]
+    for path, message in cases:
+        for argv in (
+            ["convert", path, tmp_path / "out.usda"],
+            ["render", path, tmp_path / "out.png"],
+            ["run", "--replay", path, "--quiet"],
+            ["run", "--resume", path, "--quiet"],
+        ):
+            started = time.perf_counter()
+            assert main([str(a) for a in argv]) == EXIT_USAGE, argv
+            assert time.perf_counter() - started < 10.0, argv
+            _one_error_line(capsys.readouterr().err.strip().splitlines(), message)
+    assert not (tmp_path / "out.usda").exists() and not (tmp_path / "out.png").exists()
+
+
+def test_a_writer_killed_in_plain_write_mode_is_recovered(tmp_path):
+    """`run --resume` opens the file in plain (not SWMR) write mode while it checks the layout; a kill -9 there left
+    the superblock marked open for write, and `convert`, `render` and `--resume` called the whole recording damaged
+    (only `h5clear -s` saved it, and nothing said so). They now clear the flags under the writer's lock."""
+    from warpsim.io.h5safe import status_flags
+
+    rec = tmp_path / "k.h5"
+    assert main(["run", "kite", "--seconds", "0.2", "--h5", str(rec), "--quiet"]) == 0
+    with Recording(rec) as r:
+        frames = r.frame_count
+    kill = "import h5py, os, sys; f = h5py.File(sys.argv[1], 'r+', locking=False); f.flush(); os.kill(os.getpid(), 9)"
+    for command in ("convert", "render", "resume"):
+        victim = tmp_path / f"{command}.h5"
+        shutil.copy(rec, victim)
+        subprocess.run([sys.executable, "-c", kill, str(victim)], check=False)
+        assert status_flags(victim) & 1  # what the killed writer left
+        argv = {
+            "convert": ["convert", victim, tmp_path / "k.usda"],
+            "render": ["render", victim, tmp_path / "k.png"],
+            "resume": ["run", "--resume", victim, "--seconds", "0.1", "--quiet"],
+        }[command]
+        assert main([str(a) for a in argv]) == 0, command
+        assert status_flags(victim) == 0
+        with h5py.File(victim, "r") as f:  # plain HDF5 opens it again
+            assert f["time"].shape[0] >= frames
+
+
+def test_the_terrain_is_part_of_the_recording_and_found_beside_its_scene(tmp_path, monkeypatch):
+    """After the scene's terrain .npy was edited, `run --resume` exited 0 with half the frames differing from an
+    uninterrupted run; `terrain.file` was looked up from the current directory, not the scene file's. The heights
+    are now stored in the recording (resume, replay, convert and render use them) and the path is the scene's."""
+    scenes = tmp_path / "scenes"
+    scenes.mkdir()
+    rng = np.random.default_rng(7)
+    np.save(scenes / "hills.npy", rng.normal(0.0, 3.0, (48, 48)))
+    scene = scenes / "hills.toml"
+    scene.write_text("[scene]\nobject = 'kite'\n[terrain]\nkind = 'file'\nfile = 'hills.npy'\nsize = 200\n")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)  # the scene is run from another folder, by its path
+    whole, cut = tmp_path / "whole.h5", tmp_path / "cut.h5"
+    assert main(["run", str(scene), "--seconds", "0.6", "--h5", str(whole), "--quiet"]) == 0
+    assert main(["run", str(scene), "--seconds", "0.3", "--h5", str(cut), "--quiet"]) == 0
+    np.save(scenes / "hills.npy", np.zeros((48, 48)))  # the terrain file edited ...
+    assert main(["run", "--resume", str(cut), "--seconds", "0.3", "--quiet"]) == 0
+    with Recording(whole) as a, Recording(cut) as b:
+        assert a.frame_count == b.frame_count > 10
+        np.testing.assert_array_equal(a.positions(), b.positions())  # ... and the resume flew the recorded hills
+        assert a.terrain().heights.std() > 1.0
+    (scenes / "hills.npy").unlink()  # ... and gone: the recording still converts and renders
+    assert main(["convert", str(cut), str(tmp_path / "c.usda")]) == 0
+    assert main(["render", str(cut), str(tmp_path / "c.png")]) == 0
+    assert main(["run", "--replay", str(cut), "--seconds", "0.1", "--quiet"]) == 0
+
+
+def test_ctrl_c_during_start_up_under_load_is_one_line_every_time(tmp_path):
+    """`test_ctrl_c_during_start_up_is_one_line[0.3]` once printed "Exception ignored ... KeyboardInterrupt" under
+    load: the interrupt landed in an import or a finaliser. With two busy processes loading the cores, runs are
+    interrupted at moments spread over their start-up (imports, Warp, the model, the first frames): every one ends
+    with at most one line, exit 130 (or 0 when it finished first), and either no recording or a readable one.
+    (Before the interpreter reaches warpsim's first line, about 0.05 s, Python's own handling applies.)"""
+    burners = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(2)]
+    try:
+        for k, delay in enumerate((0.2, 0.35, 0.5, 0.7, 0.9, 1.2)):
+            folder = tmp_path / f"run{k}"
+            folder.mkdir()
+            proc = _start("run", "kite", "--seconds", "3", "--h5", folder / "k.h5", cwd=folder)
+            time.sleep(delay)
+            proc.send_signal(signal.SIGINT)
+            out, err = proc.communicate(timeout=120)
+            lines = [line for line in err.splitlines() if line.strip() and CUDA_NOTE not in line]
+            lines = [line for line in lines if not line.startswith("\r")]
+            assert proc.returncode in (0, EXIT_INTERRUPTED), (delay, proc.returncode, err)
+            assert "Traceback" not in err and "Exception ignored" not in err and len(lines) <= 1, (delay, err)
+            if (folder / "k.h5").exists():
+                with Recording(folder / "k.h5") as r:
+                    assert r.frame_count >= 1
+    finally:
+        for burner in burners:
+            burner.kill()
+            burner.wait()
+
+
+@pytest.mark.parametrize("output", ["k.png", "k.usda"])
+def test_a_link_planted_at_the_temporary_name_is_not_written_through(output, tmp_path):
+    """Pictures and stages are written to `.NAME.PID.tmp.EXT` and renamed; a link planted under that name (a shared
+    folder such as /tmp) made the writer write into the linked file. The temporary is now created with O_EXCL |
+    O_NOFOLLOW after removing whatever is there."""
+    rec = tmp_path / "k.h5"
+    assert main(["run", "kite", "--seconds", "0.1", "--h5", str(rec), "--quiet"]) == 0
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    out = tmp_path / output
+    temporary_path(out).symlink_to(victim)
+    assert main(["render" if output.endswith(".png") else "convert", str(rec), str(out)]) == 0
+    assert victim.read_text() == "precious" and out.is_file() and not out.is_symlink()
+    assert not os.path.lexists(temporary_path(out))

@@ -3,6 +3,7 @@ rows, bad input as one line, the table and the plot read back as a person would 
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import signal
@@ -287,6 +288,7 @@ def test_sweep_table_in_a_descriptor(tmp_path):
         (["--vary", "wind.speed=4,8", "--resume"], "holds no rows yet"),
         (["--vary", "wind.speed=4,8", "--worlds", "3"], "unrecognized arguments"),
         (["--vary", "wind.speed=4,8", "--workers", "2", "--scheduler", "tcp://127.0.0.1:9"], "--workers sizes"),
+        (["--vary", "wind.speed=4,8", "--workers", "1000"], "is more than this machine can run"),
     ],
 )
 def test_bad_sweeps_end_with_one_line(tmp_path, capsys, args, message):
@@ -303,6 +305,23 @@ def test_bad_sweeps_end_with_one_line(tmp_path, capsys, args, message):
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1 and err.startswith("warpsim"), err
     assert not list(tmp_path.glob("s.parquet*"))
+
+
+def test_local_workers_are_bounded_by_cores_and_memory(monkeypatch):
+    """`--workers 1000` took more than 10 GB within a minute: the local cluster takes at most 4 workers per core and
+    no more than 80 % of the available memory holds at `WORKER_BYTES` each."""
+    from warpsim import builder
+
+    monkeypatch.setattr(sweeps, "cores", lambda: 2)
+    monkeypatch.setattr(builder, "available_memory", lambda: 100 * sweeps.WORKER_BYTES)
+    assert sweeps.max_local_workers() == 8
+    monkeypatch.setattr(builder, "available_memory", lambda: 5 * sweeps.WORKER_BYTES)
+    assert sweeps.max_local_workers() == 4  # 80 % of 5 workers' worth
+    sweeps.check_workers(4)
+    with pytest.raises(sweeps.SweepError, match="--workers 5 is more than this machine can run \\(4"):
+        sweeps.check_workers(5)
+    monkeypatch.setattr(builder, "available_memory", lambda: 0)
+    assert sweeps.max_local_workers() == 1  # one worker is always allowed
 
 
 def test_list_metrics_names_units(capsys):
@@ -411,11 +430,12 @@ def test_sweep_and_plot_command_lines_never_traceback(tmp_path, monkeypatch):
     import contextlib
     import io
 
+    from conftest import fuzz_watchdog
     from hypothesis import HealthCheck, example, given, settings
     from hypothesis import strategies as st
 
     monkeypatch.setattr(sweeps, "_run_tasks", _in_process)
-    monkeypatch.setattr(sweeps, "_local_cluster", lambda count: (None, None))
+    monkeypatch.setattr(sweeps, "_local_cluster", lambda count, log=None: (None, None))
     monkeypatch.setattr(sweeps, "_connect", lambda scheduler, workers: (None, False, workers or 1))
     (tmp_path / "bad.toml").write_text("[scene]\nobject = 'kite'\n[kite]\nrope_length = -3\n")
     (tmp_path / "kites.toml").write_text("[scene]\nobject = 'kite'\n[sweep]\nwind.speed = [4, 6]\n")
@@ -457,8 +477,9 @@ def test_sweep_and_plot_command_lines_never_traceback(tmp_path, monkeypatch):
         out, err = io.StringIO(), io.StringIO()
         cwd = os.getcwd()
         os.chdir(tmp_path)
+        code = None
         try:
-            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            with fuzz_watchdog() as dog, contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
                 try:
                     code = main(argv)
                 except SystemExit as exit:
@@ -467,7 +488,7 @@ def test_sweep_and_plot_command_lines_never_traceback(tmp_path, monkeypatch):
             os.chdir(cwd)
         errors = err.getvalue()
         codes.append(code)
-        assert "Traceback" not in errors and code in (0, 2), (argv, code, errors)
+        assert "Traceback" not in errors and code in ((0, 2, 130, None) if dog.fired else (0, 2)), (argv, code, errors)
         if code == 2:
             assert len(errors.strip().splitlines()) == 1 and "error:" in errors, (argv, errors)
             assert {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()} == before, (argv, errors)
@@ -481,3 +502,337 @@ def test_sweep_and_plot_command_lines_never_traceback(tmp_path, monkeypatch):
     codes: list = []
     check()
     assert codes.count(0) >= 5  # some sweeps and plots did run (the explicit examples at least)
+
+
+# ---------------------------------------------------------------------------------------- one owner, nothing lost
+
+
+def _here(monkeypatch) -> list:
+    """Run sweeps' tasks in this process (no cluster); returns the list of the cases each run ran."""
+    ran: list = []
+
+    def in_process(client, tasks, results, total, started, on_progress):
+        for task in tasks:
+            ran.extend(task.cases)
+            results.add(sweeps.run_chunk(task))
+
+    monkeypatch.setattr(sweeps, "_run_tasks", in_process)
+    monkeypatch.setattr(sweeps, "_local_cluster", lambda count, log=None: (None, None))
+    monkeypatch.setattr(sweeps, "_warm_kernels", lambda tasks, device: None)
+    return ran
+
+
+def _quick(out, *extra) -> list[str]:
+    return ["sweep", "kite", "--vary", "wind.speed=4.0,6.0,8.0", "--seconds", "0.05", "--out", str(out), *extra]
+
+
+def test_two_sweeps_on_one_out_the_second_is_refused(tmp_path, monkeypatch, capsys):
+    """Two sweeps on one --out both ended 0 and the table kept only the last one's rows: the table is owned by one
+    sweep at a time (a lock beside it, taken before anything is read), the second ends with one line, exit 2."""
+    from warpsim.io import OutputLock
+
+    ran = _here(monkeypatch)
+    out = tmp_path / "t.parquet"
+    lock = OutputLock(out)  # what a running sweep on `out` holds
+    try:
+        assert main(_quick(out, "--quiet")) == 2
+        assert "another warpsim sweep is writing this table" in capsys.readouterr().err
+        assert ran == [] and not out.exists()
+    finally:
+        lock.release()
+    assert main(_quick(out, "--quiet")) == 0 and ran == [0, 1, 2]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.parquet"]  # the lock file went with the sweep
+
+
+def test_links_at_the_outputs_are_never_written_through(tmp_path, monkeypatch, capsys):
+    """A link planted at the temporary name (or at OUT.partial, then --restart) made the sweep write into the
+    linked file and turned OUT into a link to it. Temporaries are made with O_EXCL | O_NOFOLLOW and a planted one is
+    removed; a link at OUT.partial is refused, or removed (not followed) by --restart."""
+    from warpsim.io import temporary_path
+
+    _here(monkeypatch)
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    out = tmp_path / "t.parquet"
+    temporary_path(out).symlink_to(victim)
+    assert main(_quick(out, "--quiet")) == 0
+    assert victim.read_text() == "precious" and not out.is_symlink() and len(pd.read_parquet(out)) == 3
+    assert not temporary_path(out).exists()
+    partial = tmp_path / "t.parquet.partial"
+    partial.symlink_to(victim)
+    assert main(_quick(out, "--quiet", "--vary", "kite.tow_point=0.3,0.4")) == 2
+    assert "is a link" in capsys.readouterr().err
+    assert main(_quick(out, "--quiet", "--vary", "kite.tow_point=0.3,0.4", "--restart")) == 0
+    assert victim.read_text() == "precious" and not out.is_symlink() and len(pd.read_parquet(out)) == 6
+    assert not os.path.lexists(partial)
+
+
+def test_a_csv_sweep_over_a_vector_key_runs_each_case_once(tmp_path, monkeypatch):
+    """CSV holds wind.velocity as text; a rerun did not recognise its rows, ran every case again and doubled them."""
+    ran = _here(monkeypatch)
+    out = tmp_path / "v.csv"
+    argv = ["sweep", "kite", "--vary", "wind.velocity=[[4.0,0.0,0.0],[6.0,0.0,0.0]]", "--seconds", "0.05"]
+    assert main([*argv, "--out", str(out), "--quiet"]) == 0 and ran == [0, 1]
+    assert main([*argv, "--out", str(out), "--quiet"]) == 0 and ran == [0, 1]  # nothing ran again
+    table = sweeps.read_csv(out)
+    assert len(table) == 2 and list(table["wind.velocity"]) == ["[4.0, 0.0, 0.0]", "[6.0, 0.0, 0.0]"]
+
+
+SPOILS = {
+    "definition not a dict": lambda d, rows: ['{"definition": [1, 2]}'],
+    "row missing an axis": lambda d, rows: [d, json.dumps({k: v for k, v in rows[0].items() if k != "wind.speed"})],
+    "axis of the wrong type": lambda d, rows: [d, json.dumps({**rows[0], "wind.speed": {"a": 1}})],
+    "metric missing": lambda d, rows: [d, json.dumps({k: v for k, v in rows[0].items() if k != "altitude_mean"})],
+    "row not a dict": lambda d, rows: [d, "[1, 2, 3]"],
+}
+
+
+@pytest.mark.parametrize("spoil", [*SPOILS, "deeply nested", "a directory", "empty"])
+def test_a_spoiled_journal_is_one_line_before_anything_runs(spoil, tmp_path, monkeypatch, capsys):
+    """Spoiled journals ended in tracebacks, some only after every case had run, and again on every rerun."""
+    import json
+
+    ran = _here(monkeypatch)
+    out = tmp_path / "t.parquet"
+    partial = tmp_path / "t.parquet.partial"
+    assert main(_quick(out, "--quiet")) == 0
+    rows = pd.read_parquet(out).to_dict("records")
+    rows = [{k: (v.item() if hasattr(v, "item") else v) for k, v in r.items()} for r in rows]
+    out.unlink()
+    ran.clear()
+    definition = json.dumps({"definition": _quick_definition()})
+    if spoil == "deeply nested":
+        lines = [definition, "[" * 100_000 + "]" * 100_000]
+    elif spoil in SPOILS:
+        lines = SPOILS[spoil](definition, rows)
+    if spoil == "a directory":
+        partial.mkdir()
+    elif spoil == "empty":
+        partial.write_text("")
+    else:
+        partial.write_text("\n".join(lines) + "\n")
+    code = main(_quick(out, "--quiet"))
+    err = capsys.readouterr().err
+    if spoil in ("deeply nested", "empty"):  # a line that cannot be read is where a crash cut the journal
+        assert code == 0 and ran == [0, 1, 2], err
+        return
+    assert code == 2 and ran == [] and err.count("\n") == 1 and "Traceback" not in err, err
+    assert str(partial) in err
+
+
+def _quick_definition() -> dict:
+    d = desc_mod.defaults("kite")
+    return sweeps.SweepPlan(d, sweeps.parse_axes(d, ["wind.speed=4.0,6.0,8.0"]), 0.05).definition()
+
+
+@pytest.mark.parametrize("where", ["journal", "table"])
+def test_a_full_disk_under_the_sweep_is_exit_4_and_one_line(where, tmp_path, monkeypatch, capsys):
+    """A write that fails (a file-size limit here, as a full disk fails it) ended in exit 1 and a traceback; now
+    exit 4, one line naming the file and what is kept, and a rerun once there is room finishes the sweep."""
+    import resource
+
+    ran = _here(monkeypatch)
+    out = tmp_path / "t.parquet"
+    limit = 2500 if where == "journal" else 9000  # the journal's definition fits 2,500 bytes; the table does not
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    previous = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (limit, hard))
+    try:
+        code = main(_quick(out, "--quiet"))
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+        signal.signal(signal.SIGXFSZ, previous)
+    err = capsys.readouterr().err
+    assert code == 4 and err.count("\n") == 1 and "Traceback" not in err, err
+    assert "File too large" in err and "run the same command again" in err
+    assert str(tmp_path / "t.parquet.partial") in err
+    assert ("writing the sweep's journal failed" in err) == (where == "journal")
+    assert not out.exists() and not [p for p in tmp_path.iterdir() if ".tmp" in p.name]
+    first = len(ran)
+    assert main(_quick(out, "--quiet")) == 0
+    assert len(pd.read_parquet(out)) == 3
+    if where == "table":  # every row was in the journal: the rerun only writes the table
+        assert first == 3 and len(ran) == 3
+    else:  # the journal kept the rows before the failed one; the rerun runs the others
+        assert 3 <= len(ran) and len(ran) - first >= 1
+
+
+def test_h5_dir_never_touches_a_recording_a_run_is_writing(tmp_path, monkeypatch, capsys):
+    """With `run --h5 DIR/cases-000000-000002.h5` writing, a sweep with --h5-dir DIR removed that file and wrote its
+    chunk in its place. The sweep now looks for a writer's lock before it starts (and each chunk's recorder takes
+    the lock before it truncates); a folder under a file is said before anything runs."""
+    from warpsim.io.hdf5 import claim
+
+    ran = _here(monkeypatch)
+    rec_dir = tmp_path / "recs"
+    rec_dir.mkdir()
+    live = rec_dir / "cases-000000-000002.h5"
+    live.write_bytes(b"a live run's frames")
+    lock = claim(live, create=False)  # what `warpsim run --h5` holds while it writes
+    try:
+        assert main(_quick(tmp_path / "t.parquet", "--chunk", "3", "--h5-dir", str(rec_dir), "--quiet")) == 2
+        err = capsys.readouterr().err
+        assert "is being written by another warpsim run" in err and err.count("\n") == 1
+        assert live.read_bytes() == b"a live run's frames" and ran == []
+    finally:
+        lock.release()
+    (tmp_path / "file").write_text("")
+    for bad, message in ((tmp_path / "file" / "recs", "lies under"), (tmp_path / "file", "is not a folder")):
+        assert main(_quick(tmp_path / "t.parquet", "--h5-dir", str(bad), "--quiet")) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, err
+    assert main(_quick(tmp_path / "t.parquet", "--chunk", "3", "--h5-dir", str(rec_dir), "--quiet")) == 0
+    from warpsim.io.hdf5 import Recording
+
+    with Recording(live) as recording:  # no run holds it any more: the sweep's chunk is written there
+        assert recording.frame_count > 1
+
+
+def test_plot_on_a_full_disk_keeps_the_old_picture_and_a_text_metric_is_one_line(tmp_path, reference, capsys):
+    """`warpsim plot` wrote in place: on a full disk a traceback and the previous PNG replaced by a cut one. It now
+    writes a temporary and renames it (exit 4, one line, the old picture intact); `--metric blowup_reason` (text)
+    was a TypeError traceback."""
+    import resource
+
+    table, png = tmp_path / "s.parquet", tmp_path / "p.png"
+    reference.to_parquet(table)
+    argv = ["plot", str(table), str(png), "--x", "kite.tow_point", "--metric", "altitude_mean"]
+    assert main(argv) == 0
+    before = png.read_bytes()
+    assert main([*argv[:-1], "line_angle_mean"]) == 0 and png.read_bytes() != before  # it does redraw
+    before = png.read_bytes()
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    previous = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (4096, hard))
+    try:
+        code = main(argv)
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+        signal.signal(signal.SIGXFSZ, previous)
+    err = capsys.readouterr().err
+    assert code == 4 and err.count("\n") == 1 and "File too large" in err and str(png) in err, err
+    assert png.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["p.png", "s.parquet"]
+    assert main([*argv[:-1], "blowup_reason"]) == 2
+    err = capsys.readouterr().err
+    assert "--metric blowup_reason is not a number" in err and err.count("\n") == 1
+
+
+def test_a_sweep_over_an_edited_terrain_file_is_not_resumed(tmp_path, monkeypatch, capsys):
+    """A sweep's resume check stored only the terrain's path, so rows flown over old heights were kept after the
+    file changed; the definition now holds the heights' digest, and the file is found beside its scene."""
+    _here(monkeypatch)
+    np.save(tmp_path / "hills.npy", np.random.default_rng(3).normal(0.0, 2.0, (32, 32)))
+    scene = tmp_path / "hills.toml"
+    scene.write_text("[scene]\nobject = 'kite'\n[terrain]\nkind = 'file'\nfile = 'hills.npy'\nsize = 200\n")
+    monkeypatch.chdir(ROOT_DIR)  # not the scene's folder
+    argv = ["sweep", str(scene), "--vary", "wind.speed=4.0,6.0", "--seconds", "0.05", "--quiet"]
+    out = tmp_path / "t.parquet"
+    assert main([*argv, "--out", str(out)]) == 0
+    assert main([*argv, "--out", str(out)]) == 0  # the same heights: nothing to run, accepted
+    np.save(tmp_path / "hills.npy", np.zeros((32, 32)))
+    assert main([*argv, "--out", str(out)]) == 2
+    assert "whose terrain heights differ" in capsys.readouterr().err
+    assert main([*argv, "--out", str(out), "--restart"]) == 0
+
+
+ROOT_DIR = Path(__file__).resolve().parent.parent
+
+
+def test_the_local_cluster_cannot_be_joined_by_another_process():
+    """The default LocalCluster listened on 127.0.0.1 without TLS or authentication, and another local process ran
+    its own function on a worker. Now every connection is mutual TLS with credentials made for this cluster: a
+    plain client, a TCP client and a client with credentials of its own are all refused; the sweep's runs code."""
+    from dask.distributed import Client
+    from distributed.security import Security
+
+    client, cluster = sweeps._local_cluster(1)
+    try:
+        address = cluster.scheduler_address
+        assert address.startswith("tls://127.0.0.1:")
+        assert client.submit(sum, [1, 2, 3]).result(timeout=30) == 6
+        for attempt in (
+            lambda: Client(address, timeout="3s"),
+            lambda: Client(address.replace("tls://", "tcp://"), timeout="3s"),
+            lambda: Client(address, security=Security.temporary(), timeout="3s"),
+        ):
+            with pytest.raises(Exception) as caught:  # noqa: PT011 - each way fails with an error of its own
+                intruder = attempt()
+                intruder.close()
+            assert not isinstance(caught.value, AssertionError)
+    finally:
+        sweeps._close(client, cluster)
+
+
+def test_sigterm_stops_a_sweep_like_ctrl_c(tmp_path):
+    """SIGTERM to `warpsim sweep` killed it by the signal (143), leaving only the journal and a 'leaked semaphore'
+    warning; it now stops like Ctrl-C: workers stopped, the finished rows written to the table, exit 130."""
+    journal = tmp_path / "s.parquet.partial"
+    proc = subprocess.Popen(_cli(tmp_path, workers=1), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None:
+        if journal.exists() and len(journal.read_text().splitlines()) >= 2:
+            break
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGTERM)  # the sweep's own process only, as `kill PID` or a batch system does
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, (out, err)
+    assert "Traceback" not in err and "leaked" not in err and "interrupted:" in out, err
+    kept = pd.read_parquet(tmp_path / "s.parquet")
+    assert 1 <= len(kept) <= 6 and not journal.exists()
+
+
+def test_a_failed_task_is_one_line_naming_dasks_log(tmp_path, monkeypatch, capsys):
+    """A killed scheduler ended in exit 1 with 36 lines (a Dask traceback, a literal \\n in the error line) and
+    "done:" on stdout; Dask's ERROR lines reached the terminal. Now Dask logs into a file beside the table, and the
+    sweep says "failed:", then one line that names the file."""
+    import logging
+
+    def fail(client, tasks, results, total, started, on_progress):
+        results.add(sweeps.run_chunk(tasks[0]))
+        logging.getLogger("distributed.client").error("Couldn't gather keys\nTraceback (most recent call last): ...")
+        try:
+            raise RuntimeError("warpsim-cases-1-1 cancelled for reason: scheduler-connection-lost.\nmore\nlines")
+        except RuntimeError as err:
+            raise sweeps._TaskFailedError() from err
+
+    monkeypatch.setattr(sweeps, "_run_tasks", fail)
+    monkeypatch.setattr(sweeps, "_local_cluster", lambda count, log=None: (None, None))
+    monkeypatch.setattr(sweeps, "_warm_kernels", lambda tasks, device: None)
+    client = logging.getLogger("distributed.client")
+    saved = client.handlers[:], client.propagate, client.disabled
+    client.addHandler(logging.StreamHandler(sys.stderr))  # as Dask's own configuration gives it one
+    try:
+        assert main(_quick(tmp_path / "t.parquet", "--chunk", "1")) == 1
+    finally:
+        client.handlers, client.propagate, client.disabled = saved
+        for logger in sweeps._dask_loggers():  # the command turned them off for the rest of its process
+            logger.disabled = False
+    captured = capsys.readouterr()
+    log = tmp_path / "t.parquet.dask.log"
+    assert captured.err == (
+        "warpsim sweep: error: a task failed: warpsim-cases-1-1 cancelled for reason: scheduler-connection-lost.; "
+        f"the finished rows are kept; Dask's log: {log}\n"
+    )
+    assert "failed: 1 cases run" in captured.out and "done:" not in captured.out
+    assert "Couldn't gather keys" in log.read_text()
+    assert len(pd.read_parquet(tmp_path / "t.parquet")) == 1
+
+
+def test_a_spoiled_table_is_one_line_before_anything_runs(tmp_path, monkeypatch, capsys):
+    """The table's rows are checked as the journal's are: one without a metric column of this sweep (a table
+    edited by hand, or written by another tool with the sweep's metadata kept) is one line, exit 2, before any case
+    runs, and again on a rerun until --restart."""
+    import pyarrow.parquet as pq
+
+    ran = _here(monkeypatch)
+    out = tmp_path / "t.parquet"
+    assert main(_quick(out, "--quiet")) == 0
+    table = pq.read_table(out)
+    pq.write_table(table.drop(["altitude_mean"]).replace_schema_metadata(table.schema.metadata), out)
+    ran.clear()
+    for _ in range(2):
+        assert main(_quick(out, "--quiet")) == 2
+        err = capsys.readouterr().err
+        assert f"{out}: row 1 lacks altitude_mean" in err and err.count("\n") == 1 and ran == [], err
+    assert main(_quick(out, "--quiet", "--restart")) == 0 and ran == [0, 1, 2]
+    assert "altitude_mean" in pq.read_table(out).column_names

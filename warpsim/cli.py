@@ -10,12 +10,14 @@ kept); an interrupted run ends with 130.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 from . import __version__
+from ._interrupt import interruptible
 
 EXIT_USAGE = 2
 EXIT_BLOWUP = 3
@@ -510,6 +512,88 @@ class _StopRequests:
             signal.signal(sig, handler)
 
 
+@contextlib.contextmanager
+def _terminate_as_interrupt():
+    """Inside the block, the first SIGTERM raises ``KeyboardInterrupt`` where Ctrl-C would (so that a sweep closes
+    its cluster and writes its rows as it does on Ctrl-C, instead of dying with them unwritten); later ones are
+    ignored, so that the clean-up itself is not cut short. Off the main thread, signals are left alone."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    raised = []
+
+    def handle(signum, frame):
+        if not raised:
+            raised.append(signum)
+            raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, handle)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _on_display_lost(viewer, backend, shot):
+    """Install an Xlib I/O error handler for when the X server goes away under the viewer (Xlib's own printed two
+    lines and exited 1 with the recording open and no screenshot): close the recording with every frame flown, save
+    the screenshot, say so in one line and exit 130. Returns the handler (keep it referenced), or None without
+    Xlib."""
+    import os
+
+    try:
+        from pyglet.libs.x11 import xlib
+    except Exception:  # noqa: BLE001 - not X11 (or no pyglet): nothing to watch
+        return None
+
+    def lost(display):
+        try:
+            viewer.close_recording()
+            saved = ""
+            if shot is not None:
+                from .io.render import save_png
+
+                saved = f"; screenshot: {save_png(shot, backend.screenshot())}"
+            kept = f"; recording: {', '.join(str(p) for p in viewer.takes)}" if viewer.takes else ""
+            sys.stderr.write(
+                f"warpsim view: error: the display went away (its X server ended) at t = {viewer.sim.state.time:.2f} s"
+                f"{kept}{saved}\n"
+            )
+            sys.stderr.flush()
+        finally:
+            os._exit(EXIT_INTERRUPTED)  # Xlib exits the process once this returns; nothing more can be drawn
+        return 0
+
+    handler = xlib.XIOErrorHandler(lost)
+    xlib.XSetIOErrorHandler(handler)
+    return handler
+
+
+@contextlib.contextmanager
+def _signals_quit(viewer):
+    """Inside the block SIGINT and SIGTERM ask ``viewer`` to quit (its ``quit`` flag, read between frames), as Esc
+    does. Off the main thread, signals are left alone."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handle(signum, frame):
+        viewer.quit = True
+
+    previous = {sig: signal.signal(sig, handle) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
 def _same_file_check(scene: str, outputs: dict, what: str = "the scene file") -> None:
     """Refuse an output that would overwrite the scene file being run."""
     from .io import same_file
@@ -524,8 +608,6 @@ def _same_file_check(scene: str, outputs: dict, what: str = "the scene file") ->
 def cmd_run(args) -> int:
     """Run a scene (or continue a recording) and print the summary: check the options, resolve the scene, open
     the outputs, run, report."""
-    import contextlib
-
     from .runner import BlowUpError, RecordedControls
 
     usd_path, h5_path = _check_run_options(args)
@@ -593,6 +675,7 @@ def _claim_recording(outputs, args, h5_path: Path | None):
     if args.resume:
         _checked_output(check_recording_path, args.resume, "--resume")
     flag, path = ("--h5", h5_path) if h5_path else ("--resume", args.resume)
+    interruptible()  # from here on Ctrl-C must close what is opened
     try:
         lock = claim(path, create=bool(h5_path))  # held to the end: nobody else writes it meanwhile
     except RecordingError as err:
@@ -612,11 +695,11 @@ class _RunInputs:
     checkpoint: object = None
     frame: int = -1
     controls: list | None = None  # --replay: the recorded controls of each frame
+    terrain: object = None  # --resume/--replay: the recording's own terrain (a Heightfield; None: the descriptor's)
 
 
 def _resolve_run(args) -> _RunInputs:
     """The scene of the command line, or the one a ``--resume`` recording holds with its checkpoint."""
-    from .descriptor import load_text
     from .io.hdf5 import Recording, RecordingError
 
     if args.replay:
@@ -625,24 +708,24 @@ def _resolve_run(args) -> _RunInputs:
                 if recording.frame_count == 0:
                     raise RecordingError(f"{args.replay}: the recording has no frames")
                 controls = recording.controls()
-                text, length = recording.descriptor_text, float(recording.time[-1])
+                descriptor = recording.descriptor(f"{args.replay} (replayed)")
+                length, terrain = float(recording.time[-1]), recording.terrain()
         except RecordingError as err:
             raise UsageError(f"--replay {err}") from None
-        descriptor = load_text(text, f"{args.replay} (replayed)")
         seconds = args.seconds if args.seconds is not None else length
-        return _RunInputs(descriptor, f"{args.replay} (replayed)", seconds, controls=controls)
+        return _RunInputs(descriptor, f"{args.replay} (replayed)", seconds, controls=controls, terrain=terrain)
     if not args.resume:
         descriptor, _, where = _load(args)
         return _RunInputs(descriptor, where, descriptor["scene"]["seconds"])
     try:
         with Recording(args.resume, owner=True) as recording:
             checkpoint, frame = recording.checkpoint(), recording.checkpoint_frame
-            text, where = recording.descriptor_text, f"{args.resume} (resumed)"
+            where = f"{args.resume} (resumed)"
+            descriptor, terrain = recording.descriptor(where), recording.terrain()
     except RecordingError as err:
         raise UsageError(f"--resume {err}") from None
-    descriptor = load_text(text, where)
     seconds = args.seconds if args.seconds is not None else descriptor["scene"]["seconds"]
-    return _RunInputs(descriptor, where, seconds, checkpoint, frame)
+    return _RunInputs(descriptor, where, seconds, checkpoint, frame, terrain=terrain)
 
 
 def _start(run: _RunInputs, device: str, args):
@@ -650,7 +733,7 @@ def _start(run: _RunInputs, device: str, args):
     ``--quiet``."""
     from .runner import Simulation
 
-    sim = Simulation(run.descriptor, device=device, where=run.where)
+    sim = Simulation(run.descriptor, device=device, where=run.where, terrain=run.terrain)
     if run.checkpoint is not None:
         try:
             sim.restore(run.checkpoint)
@@ -767,6 +850,7 @@ def cmd_convert(args) -> int:
     from .io.hdf5 import RecordingError
     from .io.usd import recording_to_stage
 
+    interruptible()  # the output's temporary is made next
     try:
         path = recording_to_stage(args.recording, args.output)
     except (RecordingError, OutputPathError) as err:
@@ -781,6 +865,7 @@ def cmd_render(args) -> int:
     from .io.hdf5 import RecordingError
     from .io.render import render_recording
 
+    interruptible()  # the output's temporary is made next
     try:
         path = render_recording(args.recording, args.output, args.frame, args.size, args.azimuth, args.elevation)
     except (RecordingError, OutputPathError, RuntimeError) as err:
@@ -797,6 +882,8 @@ def cmd_sweep(args) -> int:
     try:
         sweeps.require("distributed")
         sweeps.require("pandas")
+        if not args.scheduler:
+            sweeps.require("cryptography")
     except sweeps.SweepError as err:
         raise UsageError(str(err)) from None
     descriptor, _, where = _load(args, worlds_from_vary=False)  # here --vary makes the sweep's axes
@@ -822,11 +909,12 @@ def cmd_sweep(args) -> int:
     try:
         axes = sweeps.parse_axes(descriptor, args.vary)
         plan = sweeps.SweepPlan(descriptor, axes, args.seconds, args.window, args.metrics)
+        if not args.scheduler:
+            sweeps.check_workers(args.workers)
     except sweeps.SweepError as err:
         raise UsageError(str(err)) from None
-    h5_dir = Path(args.h5_dir) if args.h5_dir else None
-    if h5_dir is not None and h5_dir.exists() and not h5_dir.is_dir():
-        raise UsageError(f"--h5-dir {h5_dir} is a file, not a folder")
+    h5_dir = _check_h5_dir(args.h5_dir) if args.h5_dir and not args.scheduler else args.h5_dir
+    h5_dir = Path(h5_dir) if h5_dir else None
     total = len(plan.cases)
     if not args.quiet:
         sizes = " x ".join(f"{len(a.values)} {a.name}" for a in plan.axes)
@@ -834,12 +922,16 @@ def cmd_sweep(args) -> int:
             f"{where}: {total} cases ({sizes}), {plan.seconds:g} s each, window {plan.window[0]:g}-{plan.window[1]:g} s"
         )
     progress = _sweep_progress if not args.quiet and sys.stderr.isatty() else None
+    interruptible()  # the sweep's journal and table open inside
     try:
-        outcome = sweeps.run_sweep(
-            plan, out, args.workers, args.scheduler, args.chunk, args.device, h5_dir, args.restart, progress
-        )
+        with _terminate_as_interrupt():  # SIGTERM stops the sweep like Ctrl-C: workers stopped, rows written, 130
+            outcome = sweeps.run_sweep(
+                plan, out, args.workers, args.scheduler, args.chunk, args.device, h5_dir, args.restart, progress
+            )
     except sweeps.SweepError as err:
         raise UsageError(str(err)) from None
+    finally:
+        sweeps.silence_dask()  # what a closing client says after the sweep (a scheduler gone) is not the user's
     if progress is not None:
         sys.stderr.write("\r" + " " * 70 + "\r")
     table = outcome.table
@@ -848,17 +940,47 @@ def cmd_sweep(args) -> int:
         rate = outcome.ran / outcome.wall if outcome.wall > 0 else 0.0
         kept = f"{outcome.kept} already in {out}; " if outcome.kept else ""
         where_run = f"{outcome.workers} workers" if outcome.ran else "nothing to run"
-        status = "interrupted" if outcome.interrupted else "done"
+        status = "failed" if outcome.failures else "interrupted" if outcome.interrupted else "done"
         print(
             f"{status}: {kept}{outcome.ran} cases run in {outcome.wall:.1f} s on {where_run} ({rate:.2f} cases/s); "
             f"{len(table)} rows, {blew} blew up"
         )
         print(f"  table: {out}")
-    for err in outcome.failures:
-        sys.stderr.write(f"warpsim sweep: error: a task failed: {one_line(str(err) or type(err).__name__)}\n")
-    if outcome.failures:
+    if outcome.failures:  # one line: the first failure's first line (a Dask error text runs over many)
+        err = outcome.failures[0]
+        text = (str(err).strip().splitlines() or [type(err).__name__])[0]
+        more = f" (and {len(outcome.failures) - 1} more)" if len(outcome.failures) > 1 else ""
+        log = f"; Dask's log: {outcome.log}" if outcome.log else ""
+        sys.stderr.write(
+            f"warpsim sweep: error: a task failed{more}: {one_line(text)}; the finished rows are kept{log}\n"
+        )
         return 1
     return EXIT_INTERRUPTED if outcome.interrupted else 0
+
+
+def _check_h5_dir(text: str) -> Path:
+    """The ``--h5-dir`` of a local sweep, checked before anything runs: a folder (or one that can be made in the
+    nearest folder that exists) that takes new files and has room (a full disk, a file in the way or a read-only
+    folder ended in a Dask traceback once the workers tried)."""
+    import os
+
+    from .io import OutputPathError, check_output_path
+
+    h5_dir = Path(text)
+    existing = h5_dir
+    while not existing.exists() and existing != existing.parent and not existing.is_symlink():
+        existing = existing.parent
+    if not existing.is_dir():
+        what = "is" if existing == h5_dir else f"lies under {existing}, which is"
+        raise UsageError(f"--h5-dir {h5_dir} {what} not a folder")
+    try:
+        check_output_path(existing / "cases-000000-000000.h5", (".h5",), "HDF5")
+    except OutputPathError:
+        raise UsageError(f"--h5-dir {h5_dir}: recordings cannot be written in {existing}") from None
+    info = os.statvfs(existing)
+    if info.f_bavail * info.f_frsize < 1 << 20:
+        raise UsageError(f"--h5-dir {h5_dir}: no space left on its disk (less than 1 MiB free)")
+    return h5_dir
 
 
 def _sweep_progress(done: int, total: int, wall: float) -> None:
@@ -872,6 +994,7 @@ def cmd_plot(args) -> int:
     """Draw a sweep's metric as a PNG."""
     from .io.plot import PlotError, plot_sweep
 
+    interruptible()  # the output's temporary is made next
     try:
         path = plot_sweep(args.table, args.output, args.x, args.metric, args.y, args.where)
     except PlotError as err:
@@ -882,8 +1005,6 @@ def cmd_plot(args) -> int:
 
 def cmd_view(args) -> int:
     """Fly a scene in a window until the user quits (or --seconds); print where the outputs went."""
-    import contextlib
-
     from .descriptor import to_toml
     from .io.hdf5 import RecordingError, check_recording_path
     from .io.render import check_picture_path
@@ -908,16 +1029,22 @@ def cmd_view(args) -> int:
     gl.check_display()  # a missing extra or display is said before the model is built
     sim = Simulation(descriptor, device=device, where=where)
     backend = PygletBackend(args.size, keep_pictures=shot is not None)
+    interruptible()  # the recording opens next
     try:
         viewer = Viewer(sim, backend, f"warpsim: {where}", h5_path, to_toml(descriptor), where, seconds=args.seconds)
     except RecordingError as err:
         raise UsageError(f"--h5 {err}") from None
-    with contextlib.suppress(KeyboardInterrupt):  # Ctrl-C in the terminal quits like Esc
+    lost = _on_display_lost(viewer, backend, shot)  # kept referenced: Xlib holds only a C pointer to it
+    # Ctrl-C in the terminal, or SIGTERM, quits like Esc, between two frames: the recording closed with every frame
+    # flown (an interrupt raised between a step and its write once cost the frames since the last checkpoint), the
+    # screenshot saved
+    with _signals_quit(viewer), contextlib.suppress(KeyboardInterrupt):
         viewer.run()  # closes the recording and the window, however it ends
     if shot is not None:
         from .io.render import save_png
 
         print(f"screenshot: {save_png(shot, backend.screenshot())}")
+    del lost
     print(f"simulated {sim.state.time:.2f} s; drew {viewer.pictures} pictures")
     for path in viewer.takes:
         print(f"recording: {path}")
@@ -925,7 +1052,7 @@ def cmd_view(args) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``warpsim`` console script."""
+    """The ``warpsim`` command line (``argv``: its arguments; default ``sys.argv[1:]``); returns the exit code."""
     try:
         return _main(argv)
     except KeyboardInterrupt:  # Ctrl-C before a run's own handling starts (start-up, model building)

@@ -456,14 +456,14 @@ def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, st
         if not path.is_file():
             raise DescriptorError(f"{scene}: scene file not found")
         text = _read_text(path)
-        return load_text(text, str(path)), text, str(path)
+        return _files_beside(load_text(text, str(path)), path), text, str(path)
     if scene in registry.OBJECTS:
         return defaults(scene), "", f"built-in {scene}"
     for directory in search_dirs or []:
         candidate = Path(directory) / f"{scene.replace('-', '_')}.toml"
         if candidate.is_file():
             text = _read_text(candidate)
-            return load_text(text, str(candidate)), text, str(candidate)
+            return _files_beside(load_text(text, str(candidate)), candidate), text, str(candidate)
     names = list(registry.OBJECTS)
     for directory in search_dirs or []:
         names += [p.stem for p in sorted(Path(directory).glob("*.toml"))]
@@ -471,6 +471,17 @@ def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, st
         f"unknown scene '{scene}'{_suggest(scene, names)}: use a built-in object ({', '.join(registry.OBJECTS)}), "
         "a scene name from `warpsim list`, or a path to a .toml descriptor"
     )
+
+
+def _files_beside(descriptor: dict, scene: Path) -> dict:
+    """``descriptor`` read from the file ``scene`` with a relative ``terrain.file`` made absolute against the scene
+    file's folder (where its author put it), not the current directory, so that the scene runs from anywhere."""
+    import os
+
+    name = descriptor.get("terrain", {}).get("file")
+    if name and not os.path.isabs(name):
+        descriptor["terrain"]["file"] = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(scene)), name))
+    return descriptor
 
 
 def _read_text(path: Path) -> str:

@@ -123,6 +123,16 @@ class _Pace:
         return time.perf_counter() - self.start
 
 
+FRAME_GRAPH_BYTES_PER_STEP = 16 * 1024
+"""Memory [bytes] one solver step takes in a captured frame graph (measured: a kite frame of 1,000 steps adds
+about 15 MB per graph on the CPU, whatever ``solver.iterations``); capturing it takes about 0.6 ms per step."""
+
+MAX_FRAME_GRAPH_STEPS = (4 << 20) // FRAME_GRAPH_BYTES_PER_STEP
+"""Most steps a frame may have and still be captured as one graph (256: 4 MB and about 0.15 s per graph). A
+longer frame (``fps`` below about 0.4 at ``dt`` = 0.01 s) replays the solver's one-step graph once per step,
+which computes the same bits; without this bound ``--fps 0.001`` captured 100,000 steps twice, gigabytes."""
+
+
 class Simulation:
     """A scene ready to run: model, state, control, solver and inputs built from a validated descriptor.
 
@@ -131,15 +141,23 @@ class Simulation:
         device: Warp device (``cpu`` default, ``cuda`` when present).
         use_graph: replay the step as a captured graph (default True).
         where: origin of the descriptor for error messages.
+        terrain: heights to use instead of the descriptor's ``[terrain]`` (a recording's stored terrain).
     """
 
-    def __init__(self, descriptor: dict, device: str | None = "cpu", use_graph: bool = True, where: str = "scene"):
+    def __init__(
+        self,
+        descriptor: dict,
+        device: str | None = "cpu",
+        use_graph: bool = True,
+        where: str = "scene",
+        terrain=None,
+    ):
         started = time.perf_counter()
         self.descriptor = descriptor
         self.settings = cfg = settings(descriptor)
         # every kernel module the run launches, compiled together on a cold cache before anything else uses one
         load_modules((*SOLVERS[cfg.solver.method].modules, frame_kernels), device)
-        self.model = build_model(descriptor, device, where)
+        self.model = build_model(descriptor, device, where, terrain)
         self.dt = cfg.solver.dt
         self.solver = make_solver(
             self.model, cfg.solver, air=cfg.air, wind=cfg.wind, ground=cfg.ground, use_graph=use_graph
@@ -171,8 +189,11 @@ class Simulation:
         self._keep_good(first)
         del first
         self.steps_per_frame = cfg.scene.steps_per_frame(self.dt)
-        # per probe slot, the whole frame (probe, steps, probe) as one graph
-        self._graphs = (self._capture_frame(0), self._capture_frame(1)) if self.solver.use_graph else None
+        # per probe slot, the whole frame (probe, steps, probe) as one graph; a frame of more steps than
+        # MAX_FRAME_GRAPH_STEPS (a low --fps) is stepped through the solver's one-step graph instead, so that the
+        # graphs' memory and capture time stay bounded whatever the frame rate
+        whole = self.solver.use_graph and self.steps_per_frame <= MAX_FRAME_GRAPH_STEPS
+        self._graphs = (self._capture_frame(0), self._capture_frame(1)) if whole else None
         wp.synchronize_device(self.model.device)
         self.startup_time = time.perf_counter() - started  # [s] model build, kernel load/compilation
 

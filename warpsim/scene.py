@@ -71,12 +71,17 @@ def world_name(name: str, world: int, world_count: int) -> str:
     return f"{name}_w{world:0{len(str(world_count - 1))}d}"
 
 
-def build_model(descriptor: dict, device: str | None = "cpu", where: str = "scene") -> Model:
+def build_model(
+    descriptor: dict, device: str | None = "cpu", where: str = "scene", terrain: Heightfield | None = None
+) -> Model:
     """Build the model of a validated descriptor on ``device``: ``worlds.count`` copies of its object, each
-    with its own ``[worlds]`` values, in one model (they share the terrain and never touch each other)."""
+    with its own ``[worlds]`` values, in one model (they share the terrain and never touch each other).
+    ``terrain``: the heights to use instead of the ``[terrain]`` section's (a recording's own, so that a resumed
+    or converted recording does not depend on a terrain file that may have changed or moved)."""
     kind = descriptor["scene"]["object"]
     builder = ModelBuilder(air_density=descriptor["air"]["density"])
-    terrain = make_terrain(from_section(TerrainConfig, descriptor["terrain"]), where)
+    if terrain is None:
+        terrain = make_terrain(from_section(TerrainConfig, descriptor["terrain"]), where)
     builder.set_terrain(terrain)
     spec = registry.OBJECTS[kind]
     count = descriptor["worlds"]["count"]

@@ -55,7 +55,7 @@ def require(module: str):
     try:
         return importlib.import_module(module)
     except ImportError:
-        name = {"distributed": "Dask", "dask": "Dask", "pyarrow": "pyarrow", "pandas": "pandas"}.get(
+        name = {"distributed": "Dask", "dask": "Dask", "cryptography": "cryptography (TLS for the local cluster)"}.get(
             module.split(".")[0], module
         )
         raise SweepError(f"sweeps need {name}: {EXTRA_HINT}") from None
@@ -236,6 +236,7 @@ class SweepPlan:
         if count > MAX_CASES:
             raise SweepError(f"{count:,} cases is more than a sweep takes ({MAX_CASES:,}); sweep fewer values")
         self.cases = list(itertools.product(*(a.values for a in self.axes)))
+        self._terrain = _terrain_digest(self.base)  # read once: a terrain file may be hundreds of MB
         variable = (_object_section(self.kind), *VARIABLE_SECTIONS)
         # an object's design also sets shared sections (air, solver): like them, it splits the chunks
         self._per_world = [a.section in variable and a.key != "design" for a in self.axes]
@@ -254,6 +255,7 @@ class SweepPlan:
         a sweep may gain values and keep the rows it has)."""
         return {
             "scene": to_toml(self.base),
+            "terrain": self._terrain,
             "seconds": self.seconds,
             "window": list(self.window),
             "axes": [a.name for a in self.axes],
@@ -304,6 +306,24 @@ class SweepPlan:
                     )
                 )
         return tasks
+
+
+def _terrain_digest(descriptor: dict) -> str | None:
+    """sha256 of the terrain file a descriptor names (None without one): a sweep resumed after the heights were
+    edited must not keep rows flown over the old ones (the path alone stays the same)."""
+    import hashlib
+
+    terrain = descriptor.get("terrain", {})
+    if terrain.get("kind") != "file" or not terrain.get("file"):
+        return None
+    digest = hashlib.sha256()
+    try:
+        with open(terrain["file"], "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                digest.update(block)
+    except OSError:
+        return None  # the build says what is wrong with the file
+    return digest.hexdigest()
 
 
 def _object_section(kind: str) -> str:
@@ -448,11 +468,55 @@ def _chunk_recorder(task: ChunkTask, sim):
 
     path = Path(task.h5)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.unlink(missing_ok=True)
+    # the recorder takes the file's writer lock before it truncates it: a run writing it is never overwritten
     return H5Recorder(path, sim.model, sim.descriptor, sim.checkpoint, to_toml(sim.descriptor), "warpsim sweep")
 
 
 # ---------------------------------------------------------------------------------------------------- the rows
+
+
+def _check_plain_file(path: Path, links: bool = False) -> None:
+    """Raise :class:`SweepError` when ``path`` exists and is not a regular file (a folder, a FIFO, or unless
+    ``links``, a link)."""
+    import stat
+
+    try:
+        info = os.lstat(path)
+    except FileNotFoundError:
+        return
+    except OSError as err:
+        raise SweepError(f"{path}: cannot be read ({err.strerror or err})") from None
+    if stat.S_ISLNK(info.st_mode) and not links:
+        raise SweepError(f"{path} is a link; a sweep never writes through one: remove it, or choose another --out")
+    if not (stat.S_ISREG(info.st_mode) or stat.S_ISLNK(info.st_mode)):
+        raise SweepError(f"{path} is not a regular file; remove it, or choose another --out")
+
+
+def _plain_value(value, depth: int = 0) -> bool:
+    """True for what a swept value may be in a row: a number, a boolean, text, or a short list of them."""
+    if isinstance(value, (bool, int, float, str)):
+        return True
+    return isinstance(value, list) and depth < 2 and len(value) <= 16 and all(_plain_value(v, depth + 1) for v in value)
+
+
+def _check_row(row, axes: list[str], metrics: tuple[str, ...], source: Path, number: int) -> None:
+    """Raise :class:`SweepError` unless ``row`` (the ``number``-th of ``source``) is a row of this sweep."""
+    problem = None
+    if not isinstance(row, dict):
+        problem = "is not a row"
+    else:
+        missing = [c for c in (*axes, *metrics) if c not in row]
+        if missing:
+            problem = f"lacks {', '.join(missing[:3])}"
+        elif not all(_plain_value(row[a]) for a in axes):
+            problem = "has a swept value that is not a number, text or list"
+        elif not all(row[m] is None or isinstance(row[m], (bool, int, float, str)) for m in metrics):
+            problem = "has a metric that is not a number or text"
+    if problem:
+        raise SweepError(
+            f"{source}: row {number + 1} {problem}; the file is not this sweep's or is spoiled: choose another "
+            "--out, or --restart to replace it"
+        )
 
 
 class _Results:
@@ -473,29 +537,38 @@ class _Results:
         self.partial = out.with_name(out.name + ".partial")
         self.sidecar = out.with_name(out.name + ".json")
         definition = plan.definition()
+        for path in (out, self.partial, self.sidecar):  # outputs are never written or read through links
+            _check_plain_file(path, links=restart)  # --restart replaces a link; it never reads or writes through it
         if restart:  # the old rows are not read; the files are replaced once this run has rows of its own
             return
         if out.exists():
             found, rows = self._read_output()
             self._check(found, definition, out)
-            self._keep(rows)
+            self._keep(rows, out)
         if self.partial.exists():
             found, rows = self._read_journal()
-            self._check(found, definition, self.partial)
-            self._keep(rows)
+            if self.journal_size:  # an empty journal (a sweep stopped before its first line) holds nothing
+                self._check(found, definition, self.partial)
+                self._keep(rows, self.partial)
 
-    def _keep(self, rows: list[dict]) -> None:
+    def _keep(self, rows: list[dict], source: Path | None = None) -> None:
+        """Keep ``rows`` by case; rows read from ``source`` are checked first: every column of this sweep, swept
+        values of JSON's plain types, metrics numbers, booleans or text (a spoiled file is one line, at once)."""
         names = [a.name for a in self.plan.axes]
-        for row in rows:
+        for number, row in enumerate(rows):
+            if source is not None:
+                _check_row(row, names, self.plan.metrics, source, number)
             self.rows[case_key([row[n] for n in names])] = row
 
     @staticmethod
     def _check(found: dict | None, definition: dict, path: Path) -> None:
-        if found is None:
+        if not isinstance(found, dict):
             raise SweepError(f"{path} is not the output of a warpsim sweep; choose another --out")
-        for key in ("seconds", "window", "axes", "metrics", "scene"):  # the most telling first
+        for key in ("seconds", "window", "axes", "metrics", "scene", "terrain"):  # the most telling first
             if found.get(key) != definition[key]:
-                what = {"scene": "scene or settings", "axes": "swept keys"}.get(key, f"--{key}")
+                what = {"scene": "scene or settings", "axes": "swept keys", "terrain": "terrain heights"}.get(
+                    key, f"--{key}"
+                )
                 raise SweepError(
                     f"{path} holds a sweep whose {what} differ from this one's; choose another --out, or --restart "
                     "to replace it"
@@ -519,29 +592,57 @@ class _Results:
         if found is not None and "blowup_reason" in frame:
             reasons = frame["blowup_reason"]
             frame["blowup_reason"] = [r if isinstance(r, str) else "" for r in reasons]  # CSV: '' reads as NaN
+        if self.format == "csv":  # CSV holds a vector value (wind.velocity) as text: read it back as the list
+            for axis in self.plan.axes:
+                if axis.name in frame:
+                    frame[axis.name] = [_vector(v) for v in frame[axis.name]]
         return found, [{k: _plain(v) for k, v in row.items()} for row in frame.to_dict("records")]
 
     def _read_journal(self) -> tuple[dict | None, list[dict]]:
         found, rows = None, []
-        with open(self.partial, "rb") as journal:
+        try:
+            journal = open(self.partial, "rb")  # noqa: SIM115
+        except OSError as err:
+            raise SweepError(f"{self.partial}: cannot be read ({err.strerror or err}); choose another --out") from None
+        with journal:
             for number, line in enumerate(journal):
                 try:
                     item = json.loads(line) if line.endswith(b"\n") else None
-                except ValueError:
+                except (ValueError, RecursionError):  # RecursionError: JSON nested thousands deep
                     item = None
                 if item is None:  # a line cut by a crash: the rows before it are whole
                     break
                 self.journal_size += len(line)
                 if number == 0:
                     found = item.get("definition") if isinstance(item, dict) else None
-                elif isinstance(item, dict):
+                else:
                     rows.append(item)
         return found, rows
 
     def _append(self, item: dict) -> None:
+        """Write ``item`` as the journal's next line, synced; a failed write (disk full) raises
+        :class:`~warpsim.io.OutputWriteError` saying what is kept."""
+        from .io import OutputWriteError, reason, with_disk_state
+
+        try:
+            self._write_line(item)
+        except OSError as err:
+            kept = len(self.rows) - 1  # the row being written is not in the journal
+            raise OutputWriteError(
+                f"{self.partial}: writing the sweep's journal failed ({with_disk_state(reason(err), self.partial)}); "
+                f"the sweep stopped with {kept} rows kept; run the same command again to continue once fixed"
+            ) from None
+
+    def _write_line(self, item: dict) -> None:
         if self.journal is None:  # opened with the first rows: a sweep that never starts leaves no file
-            fresh = self.restart or not self.partial.exists()
-            self.journal = open(self.partial, "w" if fresh else "r+", encoding="utf-8")  # noqa: SIM115
+            fresh = self.restart or self.journal_size == 0
+            nofollow = getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+            if fresh:  # a file (or link) left there is removed, never written through
+                self.partial.unlink(missing_ok=True)
+                fd = os.open(self.partial, os.O_RDWR | os.O_CREAT | os.O_EXCL | nofollow, 0o666)
+            else:
+                fd = os.open(self.partial, os.O_RDWR | nofollow)
+            self.journal = open(fd, "r+", encoding="utf-8")  # noqa: SIM115
             if fresh:
                 self._append({"definition": self.plan.definition()})
             else:
@@ -579,26 +680,53 @@ class _Results:
     def finish(self):
         """Write the output (atomically: a temporary file renamed over it) and drop the journal; returns the
         DataFrame."""
+        from .io import OutputWriteError
+
         table = self.frame()
         if self.journal is not None:
-            self.journal.close()
+            with contextlib.suppress(OSError):  # after a failed write: its error is reported already
+                self.journal.close()
             self.journal = None
         if self.out is not None and (self.added or self.journal_size):  # else the output stays as it was
-            tmp = self.out.with_name(f".{self.out.name}.tmp")
-            meta = json.dumps(self.plan.definition())
-            if self.format == "parquet":
-                import pyarrow as pa
-                import pyarrow.parquet as pq
-
-                arrow = pa.Table.from_pandas(table, preserve_index=False)
-                arrow = arrow.replace_schema_metadata({**(arrow.schema.metadata or {}), b"warpsim.sweep": meta})
-                pq.write_table(arrow, tmp)
-            else:
-                table.to_csv(tmp, index=False)
-                self.sidecar.write_text(meta, encoding="utf-8")
-            os.replace(tmp, self.out)
+            try:
+                self._write_output(table)
+            except OutputWriteError as err:
+                raise OutputWriteError(
+                    f"{err}; the rows are kept in {self.partial}: run the same command again once fixed"
+                ) from None
             self.partial.unlink(missing_ok=True)
         return table
+
+    def _write_output(self, table) -> None:
+        """Write ``table`` (and a CSV's definition beside it), each whole or not at all."""
+        from .io import replacing
+
+        meta = json.dumps(self.plan.definition())
+        if self.format == "parquet":
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+
+            arrow = pa.Table.from_pandas(table, preserve_index=False)
+            arrow = arrow.replace_schema_metadata({**(arrow.schema.metadata or {}), b"warpsim.sweep": meta})
+            with replacing(self.out, "table") as file:
+                pq.write_table(arrow, file)
+        else:
+            with replacing(self.sidecar, "table's definition") as file:
+                file.write(meta.encode("utf-8"))
+            with replacing(self.out, "table") as file:
+                table.to_csv(file, index=False)
+
+
+def _vector(value):
+    """``value`` read from a CSV cell: a list when it is the text of one (``[4.0, 0.0, 0.0]``), else itself."""
+    if isinstance(value, str) and value.startswith("["):
+        try:
+            parsed = json.loads(value)
+        except ValueError:
+            return value
+        if isinstance(parsed, list):
+            return parsed
+    return value
 
 
 def read_csv(path):
@@ -622,13 +750,17 @@ def _format_of(out: Path) -> str:
 # ---------------------------------------------------------------------------------------------------- Dask
 
 
-def _ignore_interrupt_plugin():
+def _ignore_interrupt_plugin(log: Path | None = None):
     """A worker plugin for the local cluster: Ctrl-C in the terminal reaches every process of its group, the
-    workers included; they ignore it, and the sweep itself stops them cleanly."""
+    workers included; they ignore it, and the sweep itself stops them cleanly. With ``log``, what the worker's Dask
+    logs goes there (see :func:`_dask_log`) instead of the terminal."""
     from dask.distributed import WorkerPlugin
 
     class IgnoreInterrupt(WorkerPlugin):
         name = "warpsim-ignore-interrupt"
+
+        def __init__(self, log: str | None):
+            self.log = log
 
         def setup(self, worker):
             import signal
@@ -636,8 +768,86 @@ def _ignore_interrupt_plugin():
 
             if threading.current_thread() is threading.main_thread():
                 signal.signal(signal.SIGINT, signal.SIG_IGN)
+            if self.log:
+                _log_to(self.log)
 
-    return IgnoreInterrupt()
+    return IgnoreInterrupt(str(log) if log else None)
+
+
+_DASK_LOGGERS = ("distributed", "tornado", "asyncio")
+
+
+def _log_to(path) -> list:
+    """Send what Dask and its network layers log in this process to ``path`` (appended; a link there is never
+    followed) instead of the terminal; returns what to give back to :func:`_restore_logging`."""
+    import logging
+
+    flags = os.O_WRONLY | os.O_CREAT | os.O_APPEND | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    handler = logging.StreamHandler(open(os.open(path, flags, 0o666), "a", encoding="utf-8"))  # noqa: SIM115
+    handler.setFormatter(logging.Formatter("%(asctime)s %(process)d %(name)s %(levelname)s: %(message)s"))
+    saved = []
+    for logger in _dask_loggers():
+        saved.append((logger, logger.handlers[:], logger.propagate))
+        logger.handlers = [handler]
+        logger.propagate = False
+    return [handler, saved]
+
+
+def _dask_loggers() -> list:
+    """Dask's loggers and those of its network layers: the top ones, and every one below them that Dask gave a
+    handler of its own (``distributed.client`` has one)."""
+    import logging
+
+    names = set(_DASK_LOGGERS)
+    for name, logger in list(logging.root.manager.loggerDict.items()):
+        if name.split(".")[0] in _DASK_LOGGERS and getattr(logger, "handlers", None):
+            names.add(name)
+    return [logging.getLogger(name) for name in sorted(names)]
+
+
+def silence_dask() -> None:
+    """Turn off Dask's logging in this process for good: for a command whose sweep is over, whose client may still
+    be tearing down connections (a killed scheduler gave 36 lines of tracebacks after the sweep had ended)."""
+    for logger in _dask_loggers():
+        logger.disabled = True
+
+
+def _restore_logging(state: list) -> None:
+    handler, saved = state
+    for logger, handlers, propagate in saved:
+        logger.handlers, logger.propagate = handlers, propagate
+    handler.close()
+
+
+@contextlib.contextmanager
+def _dask_log(path: Path | None):
+    """Inside the block, Dask's log lines (a lost worker, "Couldn't gather keys", a scheduler gone: dozens of lines
+    and tracebacks) go to ``path`` beside the table, not the terminal; yields ``path`` (None without one). The file is
+    removed when nothing was logged. Without ``path`` logging is left as it is."""
+    if path is None:
+        yield None
+        return
+    with contextlib.suppress(FileNotFoundError):
+        if os.path.islink(path):
+            path.unlink()
+    state = _log_to(path)
+    try:
+        yield path
+    finally:
+        _restore_logging(state)
+        with contextlib.suppress(OSError):
+            if os.path.getsize(path) == 0:
+                path.unlink()
+
+
+def _check_recordings_free(tasks: Sequence[ChunkTask]) -> None:
+    """Raise :class:`SweepError` when a run is writing one of the recordings the tasks will write (``--h5-dir``):
+    a sweep once deleted a live run's recording and wrote its chunk in its place."""
+    from .io.h5safe import writer_active
+
+    for task in tasks:
+        if task.h5 and writer_active(task.h5):
+            raise SweepError(f"--h5-dir: {task.h5} is being written by another warpsim run; wait for it to end")
 
 
 def _warm_kernels(tasks: Sequence[ChunkTask], device: str) -> None:
@@ -668,7 +878,8 @@ _SHARED = ("solver", "air", "terrain", "ground")
 class SweepOutcome:
     """What :func:`run_sweep` did. ``table``: the rows (pandas DataFrame); ``ran``: cases run now;
     ``kept``: cases already done before; ``wall``: seconds; ``workers``: worker threads used;
-    ``interrupted``: stopped by Ctrl-C (the rows finished so far are kept)."""
+    ``interrupted``: stopped by Ctrl-C (the rows finished so far are kept); ``failures``: the exceptions of tasks
+    that failed for good; ``log``: the file Dask's log lines went to, when there were any."""
 
     table: object
     ran: int
@@ -677,6 +888,7 @@ class SweepOutcome:
     workers: int
     interrupted: bool = False
     failures: list = field(default_factory=list)
+    log: Path | None = None  # Dask's log of this sweep, when it logged anything (see _dask_log)
 
 
 def run_sweep(
@@ -705,6 +917,40 @@ def run_sweep(
     ``interrupted``.
     """
     require("distributed")
+    if scheduler is None:
+        check_workers(workers)
+    with _owning(out), _dask_log(out.with_name(out.name + ".dask.log") if out is not None else None) as log:
+        outcome = _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress, log)
+    outcome.log = log if log is not None and log.exists() else None
+    return outcome
+
+
+@contextlib.contextmanager
+def _owning(out: Path | None):
+    """Hold ``out``'s :class:`~warpsim.io.OutputLock` inside the block (one sweep per table and journal: two sweeps
+    on one ``--out`` each wrote the table, and the last to finish kept only its own rows)."""
+    if out is None:
+        yield
+        return
+    from .io import OutputLock, OutputLockedError, reason
+
+    try:
+        lock = OutputLock(out)
+    except OutputLockedError:
+        raise SweepError(f"--out {out}: another warpsim sweep is writing this table; wait for it to end") from None
+    except OSError as err:
+        raise SweepError(f"--out {out}: cannot be locked for writing ({reason(err)})") from None
+    try:
+        yield
+    finally:
+        lock.release()
+
+
+def _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress, log) -> SweepOutcome:
+    """:func:`run_sweep` once ``out`` is this sweep's own."""
+    from .io import OutputWriteError
+
+    failed_write = None
     results = _Results(out, plan, restart)
     todo = [i for i in range(len(plan.cases)) if not results.done(i)]
     started = time.perf_counter()
@@ -716,22 +962,69 @@ def run_sweep(
             client, own_client, used = _connect(scheduler, workers)
             size = chunk or max(1, min(MAX_CHUNK, math.ceil(len(todo) / (4 * max(used, 1)))))
             tasks = plan.chunks(size, set(range(len(plan.cases))) - set(todo), device, h5_dir)
+            _check_recordings_free(tasks)
             if client is None:  # the local cluster: kernels compiled once, here, then the workers start
                 _warm_kernels(tasks, device)
-                client, cluster = _local_cluster(used)
+                client, cluster = _local_cluster(used, log)
                 own_client = True
             _run_tasks(client, tasks, results, len(todo), started, on_progress)
     except KeyboardInterrupt:
         interrupted = True
     except _TaskFailedError as err:  # e.g. a task that killed its workers again and again
         failures.append(err.__cause__)
+    except OutputWriteError as err:  # the journal could not be written (disk full): stop, keep what is kept
+        failed_write = err
     finally:
         if own_client:
             _close(client, cluster)
-        table = results.finish()
+        try:
+            table = results.finish()
+        except OutputWriteError as err:
+            raise (failed_write or err) from None
+    if failed_write is not None:
+        raise failed_write
     ran = sum(1 for i in todo if results.done(i))
     wall = time.perf_counter() - started
     return SweepOutcome(table, ran, len(plan.cases) - len(todo), wall, used, interrupted, failures)
+
+
+WORKER_BYTES = 384 << 20
+"""Memory [bytes] one local worker process takes: about 220 MB at rest (Python, Warp, NumPy, Dask, pandas;
+measured RSS of a worker running kite chunks on the CPU) and room for a chunk of up to :data:`MAX_CHUNK` worlds."""
+
+WORKERS_PER_CORE = 4
+"""Most local worker processes per core: each is single-threaded and CPU-bound, so more only time-slice."""
+
+
+def cores() -> int:
+    """Cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def max_local_workers() -> int:
+    """Most worker processes a local cluster may start here: :data:`WORKERS_PER_CORE` per core, and no more than
+    80 % of the available memory holds at :data:`WORKER_BYTES` each (at least 1)."""
+    from .builder import available_memory
+
+    limit = WORKERS_PER_CORE * cores()
+    available = available_memory()
+    if available is not None:
+        limit = min(limit, int(0.8 * available) // WORKER_BYTES)
+    return max(1, limit)
+
+
+def check_workers(workers: int | None) -> None:
+    """Raise :class:`SweepError` when ``workers`` local processes are more than :func:`max_local_workers` (a
+    thousand workers took more than 10 GB within a minute; 64 ended in Dask tracebacks)."""
+    if workers is None:
+        return
+    limit = max_local_workers()
+    if workers > limit:
+        raise SweepError(
+            f"--workers {workers} is more than this machine can run ({limit}: {WORKERS_PER_CORE} per core on "
+            f"{cores()} cores, about {WORKER_BYTES >> 20} MB each of the memory available); use --workers {limit} "
+            "or fewer, or a --scheduler with workers on more machines"
+        )
 
 
 def _connect(scheduler, workers: int | None):
@@ -740,7 +1033,7 @@ def _connect(scheduler, workers: int | None):
     if scheduler is None:
         if workers is not None:
             return None, False, workers
-        return None, False, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+        return None, False, min(cores(), max_local_workers())
     from dask.distributed import Client
 
     if workers is not None:
@@ -754,23 +1047,31 @@ def _connect(scheduler, workers: int | None):
     return client, True, sum(client.nthreads().values())
 
 
-def _local_cluster(count: int):
+def _local_cluster(count: int, log: Path | None = None):
     """A ``LocalCluster`` of ``count`` single-threaded worker processes (NumPy/BLAS on one thread each), and
-    its client."""
+    its client (``log``: where the workers' Dask logs go, see :func:`_dask_log`). Nobody else can join it: every
+    connection is TLS with mutual authentication by temporary credentials made for this cluster
+    (``Security.temporary()``), which only this process and its workers hold; without them any local process could
+    connect to the scheduler on 127.0.0.1 and run its own code on a worker as the sweep's user."""
     import logging
 
     from dask.distributed import Client, LocalCluster
+    from distributed.security import Security
 
+    security = Security.temporary()  # needs `cryptography` (the [sweep] extra)
     cluster = LocalCluster(
         n_workers=count,
         threads_per_worker=1,
         processes=True,
+        host="127.0.0.1",
+        protocol="tls://",
+        security=security,
         dashboard_address="127.0.0.1:0",  # the HTTP server always starts: on a free port
         silence_logs=logging.ERROR,
         env=ONE_THREAD,
     )
-    client = Client(cluster)
-    client.register_plugin(_ignore_interrupt_plugin())
+    client = Client(cluster, security=security)
+    client.register_plugin(_ignore_interrupt_plugin(log))
     return client, cluster
 
 
@@ -812,9 +1113,10 @@ def _run_tasks(client, tasks: list[ChunkTask], results: _Results, total: int, st
 
 @contextlib.contextmanager
 def _ctrl_c_flag():
-    """While inside, Ctrl-C (SIGINT) sets the event this yields instead of raising ``KeyboardInterrupt`` wherever
-    the main thread happens to be (inside Dask's client code it could be lost); the sweep's loop raises it when
-    it looks next, at once if it was waiting. Off the main thread (where no signal lands) the event is never set."""
+    """While inside, Ctrl-C (SIGINT) or SIGTERM sets the event this yields instead of raising ``KeyboardInterrupt``
+    wherever the main thread happens to be (inside Dask's client code it could be lost); the sweep's loop raises it
+    when it looks next, at once if it was waiting. Off the main thread (where no signal lands) the event is never
+    set."""
     import signal
     import threading
 
@@ -822,11 +1124,13 @@ def _ctrl_c_flag():
     if threading.current_thread() is not threading.main_thread():
         yield stop
         return
-    previous = signal.signal(signal.SIGINT, lambda *_: stop.set())
+    # SIGTERM too: a sweep asked to end (by a scheduler, `kill`) stops like Ctrl-C and keeps its rows
+    previous = {sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         yield stop
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 class _TaskFailedError(Exception):

@@ -7,7 +7,9 @@ ones left by a killed process are removed by the next output written there).
 
 from __future__ import annotations
 
+import contextlib
 import errno
+import fcntl
 import os
 import stat
 from pathlib import Path
@@ -146,3 +148,91 @@ def same_file(a, b) -> bool:
         return os.path.samefile(a, b)
     except OSError:
         return Path(a).resolve() == Path(b).resolve()
+
+
+def create_temporary(path, suffix: str | None = None) -> tuple[Path, int]:
+    """Create the temporary file of ``path`` (:func:`temporary_path`) afresh and return ``(its path, a descriptor
+    open for writing)``. Created with ``O_EXCL | O_NOFOLLOW``: a file or link planted under that name (in a shared
+    folder such as /tmp) is removed first, never written through, so the output cannot land in someone else's file.
+    Temporaries of killed processes are removed (:func:`remove_stale_temporaries`). Raises ``OSError``."""
+    remove_stale_temporaries(path)
+    tmp = temporary_path(path, suffix)
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:
+        return tmp, os.open(tmp, flags, 0o600)
+    except FileExistsError:  # planted under our process's name: unlink removes the link, not what it names
+        tmp.unlink()
+        return tmp, os.open(tmp, flags, 0o600)
+
+
+@contextlib.contextmanager
+def replacing(path, what: str = "output", suffix: str | None = None):
+    """Write ``path`` whole or not at all: yields a binary file open on a fresh temporary beside it
+    (:func:`create_temporary`); when the block ends cleanly the file is synced, given the mode a new file gets
+    (0666 less the umask) and renamed over ``path`` (a link at ``path`` is replaced, never followed). On any
+    error the temporary is removed and ``path`` keeps what it held; an ``OSError`` (disk full) becomes
+    :class:`OutputWriteError` naming ``path`` and ``what`` (``"table"``, ``"plot"``)."""
+    path = Path(path)
+    tmp = None
+    try:
+        tmp, fd = create_temporary(path, suffix)
+        with os.fdopen(fd, "wb") as file:
+            yield file
+            file.flush()
+            os.fsync(file.fileno())
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)
+        os.replace(tmp, path)
+        tmp = None
+    except OSError as err:
+        raise OutputWriteError(f"{path}: could not write the {what} ({with_disk_state(reason(err), path)})") from None
+    finally:
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+
+
+class OutputLockedError(OSError):
+    """Another process owns the output path."""
+
+
+class OutputLock:
+    """One owner per output path: an exclusive ``flock`` on ``.NAME.lock`` beside ``path``, held until
+    :meth:`release` (or the end of the process: a killed owner's lock goes with it). For outputs replaced by a
+    rename (a sweep's table and its journal), whose own file changes under a lock on it.
+
+    The lock file is created without following a link and removed on release; a lock taken on a file that its
+    previous owner removed meanwhile is taken again on the new one. Raises :class:`OutputLockedError` at once
+    when another process holds it, ``OSError`` when the folder takes no file.
+    """
+
+    def __init__(self, path):
+        self.path = Path(path)
+        self.lock_path = self.path.with_name(f".{self.path.name}.lock")
+        flags = os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+        while True:
+            fd = os.open(self.lock_path, flags, 0o600)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as err:
+                os.close(fd)
+                if err.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                    raise OutputLockedError(err.errno, "another process is writing it") from None
+                raise
+            try:
+                same = os.path.samestat(os.fstat(fd), os.stat(self.lock_path, follow_symlinks=False))
+            except FileNotFoundError:
+                same = False
+            if same:
+                self.fd: int | None = fd
+                return
+            os.close(fd)  # its owner removed it between our open and our lock: take the new one
+
+    def release(self) -> None:
+        """Remove the lock file and give the lock back (safe to call twice)."""
+        if self.fd is not None:
+            with contextlib.suppress(OSError):
+                self.lock_path.unlink()
+            os.close(self.fd)
+            self.fd = None

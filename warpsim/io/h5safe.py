@@ -215,6 +215,14 @@ def _superblock(f) -> tuple[bytes, int] | None:
     return head, end
 
 
+def status_flags(path) -> int:
+    """The superblock's status flags of ``path`` (0: closed cleanly; bit 0 open for write, bit 2 for SWMR write),
+    or 0 when the superblock is not a version 2 or 3 one whose checksum holds."""
+    with open(path, "rb") as f:
+        found = _superblock(f)
+    return found[0][11] if found is not None else 0
+
+
 def clear_status_flags(path) -> bool:
     """Clear the superblock's "open for write / SWMR write" flags that a killed writer left (``h5clear -s``).
 

@@ -68,6 +68,7 @@ from .h5safe import (
     extend_to_stored_end,
     open_for_reading,
     open_for_writing,
+    status_flags,
     writer_active,
 )
 
@@ -313,6 +314,18 @@ class H5Recorder:
             top.create_dataset(
                 name, data=data, chunks=data.shape if data.size else None, **(_CHECKSUM if data.size else {})
             )
+        terrain = model.terrain  # the heights themselves: a resume or a convert never reads a terrain file again
+        heights = top.create_dataset(
+            "terrain_heights",
+            data=terrain.heights,
+            chunks=(min(256, terrain.heights.shape[0]), terrain.heights.shape[1]),
+            compression="gzip",
+            compression_opts=4,
+            shuffle=True,
+            **_CHECKSUM,
+        )
+        heights.attrs["size"] = np.asarray(terrain.size, dtype=np.float64)
+        heights.attrs["origin"] = np.asarray(terrain.origin, dtype=np.float64)
         gz = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
         for name, (frame_shape, dtype, rows) in _frame_layout(n, objects, len(cp.control_names)).items():
             f.create_dataset(
@@ -501,9 +514,11 @@ class Recording:
             try:
                 self.file = open_for_reading(self.path, self.live)
             except OSError:
-                if _is_hdf5(self.path):
+                if not _is_hdf5(self.path):
+                    raise RecordingError(f"{path}: not an HDF5 file (expected a warpsim recording)") from None
+                if self.live or not _recover_killed_writer(self.path, owner):
                     raise
-                raise RecordingError(f"{path}: not an HDF5 file (expected a warpsim recording)") from None
+                self.file = open_for_reading(self.path, False)
         try:
             with _reading(path):
                 self._check()
@@ -538,6 +553,7 @@ class Recording:
             raise RecordingError(f"{path}: the checkpoint holds {self._checkpoint.q.shape[0]} particles, not {n}")
         written = min(f[name].shape[0] for name in _FRAME_DATASETS)
         self.frame_count = min(written, self.checkpoint_frame + 1)
+        self._check_stored(n)
         if self.owner and self.frame_count:  # a resume appends: read what it will rewrite now, not half-way through
             for name in _FRAME_DATASETS:
                 f[name].id.get_num_chunks()  # the whole chunk index
@@ -545,6 +561,31 @@ class Recording:
         self.time = f["time"][: self.frame_count]
         if not np.isfinite(self.time).all():
             raise RecordingError(f"{path}: frame times are not finite")
+        # frames lie on a fixed grid of frame_interval (the last one may be shorter): a time off it (1e308) is not
+        # a frame of this recording, and would overflow the stage's time codes
+        grid = np.arange(self.frame_count) * self.frame_interval
+        if np.any(np.abs(self.time - grid) > 1.001 * self.frame_interval):
+            raise RecordingError(f"{path}: frame times do not follow its frame_interval of {self.frame_interval:g} s")
+
+    def _check_stored(self, particles: int) -> None:
+        """Trust the declared frame count only as far as the file holds it: every frame dataset must be chunked as
+        warpsim writes it (one chunk's rows bounded by the layout) and hold enough stored chunks for every frame
+        shown. A crafted file of 187 KB that declared 10 M frames kept `convert` busy for minutes and `--replay`
+        at 4 GB; a file must now be about as large as the frames it shows."""
+        f, path = self.file, self.path
+        objects, controls = len(f["topology"].attrs.get("objects", [])), f["controls"].shape[1:2]
+        layout = _frame_layout(particles, objects, controls[0] if controls else 0)
+        for name, (frame_shape, _, rows) in layout.items():
+            d = f[name]
+            if d.shape[1:] != frame_shape or d.chunks is None or d.chunks[0] > rows or d.chunks[1:] != frame_shape:
+                raise RecordingError(
+                    f"{path}: dataset {name} is not stored as warpsim writes it (shape {d.shape}, chunks {d.chunks})"
+                )
+            if self.frame_count and d.id.get_num_chunks() * d.chunks[0] < self.frame_count:
+                raise RecordingError(
+                    f"{path}: declares {self.frame_count:,} frames but dataset {name} holds data for only "
+                    f"{d.id.get_num_chunks() * d.chunks[0]:,}"
+                )
 
     @property
     def particle_count(self) -> int:
@@ -570,10 +611,19 @@ class Recording:
         :meth:`warpsim.runner.Simulation.set_controls`); without ``frame``, those of every frame, in one read."""
         if frame is not None and not 0 <= frame < self.frame_count:
             raise RecordingError(f"{self.path}: no frame {frame}; the recording has frames 0..{self.frame_count - 1}")
+        path = self.path
         names = tuple(str(n) for n in self.file["checkpoint"].attrs["control_names"])
         with _reading(self.path):
             tables = self.file["controls"][: self.frame_count] if frame is None else self.file["controls"][frame][None]
         rows = [unpack_controls(names, ~np.isnan(table[:, 0]), table) for table in tables]
+        from ..inputs import check_value
+
+        for k, row in enumerate(rows):  # a replay sets them again: out-of-range values are the file's fault
+            for name, value in row.items():
+                try:
+                    check_value(name, value)
+                except ValueError as err:
+                    raise RecordingError(f"{path}: frame {k if frame is None else frame} holds {err}") from None
         return rows if frame is None else rows[0]
 
     def checkpoint(self) -> Checkpoint:
@@ -582,13 +632,55 @@ class Recording:
             raise RecordingError(f"{self.path}: the recording has no frame to resume from")
         return self._checkpoint
 
+    def terrain(self):
+        """The recorded terrain (:class:`warpsim.terrain.Heightfield`), or None for a recording made before
+        terrains were stored (its ``[terrain]`` section is built then). Its size is checked against the limits of a
+        terrain file and the memory available before it is read."""
+        from ..builder import available_memory
+        from ..terrain import MAX_HEIGHT, MAX_SIDE, Heightfield
+
+        d = self.file["topology"].get("terrain_heights")
+        if d is None:
+            return None
+        path = self.path
+        with _reading(path):
+            if d.ndim != 2 or not all(2 <= n <= MAX_SIDE for n in d.shape):
+                raise RecordingError(f"{path}: its terrain is {list(d.shape)} samples, not 2 to {MAX_SIDE} a side")
+            need, available = 8 * d.shape[0] * d.shape[1], available_memory()  # float32, and a float32 copy
+            if available is not None and need > 0.5 * available:
+                raise RecordingError(
+                    f"{path}: its terrain of {d.shape[0]:,} x {d.shape[1]:,} samples needs {need / 1e9:.1f} GB; "
+                    f"{available / 1e9:.1f} GB are available"
+                )
+            heights = d[()]
+            size, origin = (tuple(float(v) for v in d.attrs[name]) for name in ("size", "origin"))
+            if not np.isfinite(heights).all() or np.abs(heights).max() > MAX_HEIGHT:
+                raise RecordingError(f"{path}: its terrain heights are not finite or beyond +-{MAX_HEIGHT:g} m")
+            try:
+                return Heightfield(heights, size, origin)
+            except ValueError as err:
+                raise RecordingError(f"{path}: its terrain cannot be used ({err})") from None
+
+    def descriptor(self, where: str | None = None) -> dict:
+        """The recorded scene's validated descriptor, checked against what the file holds before anything is built
+        from it: one world per recorded object (a crafted descriptor of 4,096 worlds was built for minutes before
+        its particle count was compared). ``where`` names it in errors (default: the file's descriptor)."""
+        from ..descriptor import load_text
+
+        descriptor = load_text(self.descriptor_text, where or f"{self.path}: descriptor")
+        objects = len(self.file["topology"].attrs.get("objects", []))
+        if descriptor["worlds"]["count"] != objects:
+            raise RecordingError(
+                f"{self.path}: its descriptor asks for {descriptor['worlds']['count']:,} worlds, its frames hold "
+                f"{objects:,} objects"
+            )
+        return descriptor
+
     def build_model(self, device: str = "cpu"):
         """The recorded scene's :class:`warpsim.Model`, checked against the recorded particle count."""
-        from ..descriptor import load_text
         from ..scene import build_model
 
-        descriptor = load_text(self.descriptor_text, f"{self.path}: descriptor")
-        model = build_model(descriptor, device, str(self.path))
+        model = build_model(self.descriptor(), device, str(self.path), self.terrain())
         if model.particle_count != self.particle_count:
             raise RecordingError(
                 f"{self.path}: its descriptor builds {model.particle_count} particles, its frames hold "
@@ -605,6 +697,29 @@ class Recording:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def _recover_killed_writer(path: Path, owner: bool) -> bool:
+    """Clear the "open for write" flags a writer killed while it held the file in plain (not SWMR) write mode left
+    set (a ``run --resume`` killed at start-up, while it checks the layout), which SWMR readers refuse: what
+    ``h5clear -s`` does, under the writer's lock (``owner``: the caller holds it). Returns True when cleared;
+    raises :class:`RecordingError` saying to run ``h5clear -s`` when the file cannot be changed here."""
+    if not status_flags(path):
+        return False
+    try:
+        lock = None if owner else WriterLock(path, create=False)
+    except LockedError:  # a writer started meanwhile: its flags are its own
+        return False
+    except OSError as err:
+        raise RecordingError(
+            f"{path}: a writer was killed while it had the file open and left it marked open for writing, and it "
+            f"cannot be cleared here ({reason(err)}); run `h5clear -s {path}` (HDF5's tool) where it can"
+        ) from None
+    try:
+        return clear_status_flags(path)
+    finally:
+        if lock is not None:
+            lock.release()
 
 
 def _is_hdf5(path) -> bool:

@@ -105,8 +105,9 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
     table, chosen = _select(table, where)
     if not len(table):
         raise PlotError("no case is left after --where")
-    if not np.issubdtype(table[metric].dtype, np.number) and table[metric].dtype != bool:
-        raise PlotError(f"--metric {metric} is not a number")
+    pd = _require("pandas")
+    if not (pd.api.types.is_numeric_dtype(table[metric]) or pd.api.types.is_bool_dtype(table[metric])):
+        raise PlotError(f"--metric {metric} is not a number (it holds text); choose a metric with a unit")
     blew = table["blew_up"].astype(bool) if "blew_up" in table else np.zeros(len(table), dtype=bool)
     values = table[metric].astype(float).where(~blew)
     others = [k for k in keys if k not in (x, y) and table[k].nunique() > 1]
@@ -156,7 +157,10 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
             title += "\n" + ", ".join(chosen)
         axes.set_title(title, fontsize=10)
         figure.tight_layout()
-        figure.savefig(out)
+        from . import replacing
+
+        with replacing(out, "plot") as file:  # whole or not at all: a full disk leaves the old picture as it was
+            figure.savefig(file, format="png")
     finally:
         plt.close(figure)
     return out

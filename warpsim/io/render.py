@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import OutputWriteError, check_output_path, reason, remove_stale_temporaries, temporary_path
+from . import OutputWriteError, check_output_path, create_temporary, reason
 from .style import COLOURS, SPHERE_PARTS
 
 EXTENSIONS = (".png", ".gif")
@@ -178,10 +178,11 @@ class Scene:
 def _atomic_save(path: Path, save) -> Path:
     """Call ``save(temporary name)`` and rename the result over ``path``; a failure (full disk) leaves ``path``
     as it was and raises :class:`warpsim.io.OutputWriteError`."""
-    remove_stale_temporaries(path)
-    tmp = temporary_path(path)
+    tmp = None
     try:
         try:
+            tmp, fd = create_temporary(path)  # our own regular file: a link planted there is removed, not followed
+            os.close(fd)
             save(tmp)
             with open(tmp, "rb+") as f:
                 os.fsync(f.fileno())
@@ -192,7 +193,8 @@ def _atomic_save(path: Path, save) -> Path:
         os.chmod(tmp, 0o666 & ~mask)
         os.replace(tmp, path)
     finally:
-        tmp.unlink(missing_ok=True)
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)
     return path
 
 
@@ -216,7 +218,6 @@ def render_recording(
     or the whole run to an animated .gif (every k-th frame so that at most ``max_frames`` are drawn, played
     at the simulated speed). Returns the path written.
     """
-    from ..descriptor import load_text
     from .hdf5 import Recording, RecordingError
 
     output = check_picture_path(output)
@@ -225,7 +226,7 @@ def render_recording(
         count = recording.frame_count
         if count == 0:
             raise RecordingError(f"{recording_path}: the recording has no frames")
-        descriptor = load_text(recording.descriptor_text, f"{recording_path}: descriptor")
+        descriptor = recording.descriptor()
         scene = Scene(recording.build_model())
         name = descriptor["scene"]["object"]
         if output.suffix.lower() == ".png":

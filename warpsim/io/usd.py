@@ -35,8 +35,7 @@ from . import (
     OutputWriteError,
     cause,
     check_stage_path,
-    remove_stale_temporaries,
-    temporary_path,
+    create_temporary,
     with_disk_state,
 )
 from .style import COLOURS, CURVE_WIDTH, SPHERE_PARTS
@@ -185,13 +184,14 @@ class UsdWriter:
             return None
         self.stage.SetStartTimeCode(self.first)
         self.stage.SetEndTimeCode(self.last)
-        remove_stale_temporaries(self.path)
-        tmp = temporary_path(self.path)
         umask = os.umask(0)
         os.umask(umask)
+        tmp = None
         try:
             with _stderr_captured() as captured:
                 try:
+                    tmp, fd = create_temporary(self.path)  # our own regular file: a planted link is removed
+                    os.close(fd)
                     self._export(tmp)
                     _check_stage(tmp)
                 except Exception as err:  # noqa: BLE001 - USD reports write errors as several exception types
@@ -202,7 +202,8 @@ class UsdWriter:
             os.chmod(tmp, 0o666 & ~umask)  # an ordinary output file
             os.replace(tmp, self.path)
         finally:
-            tmp.unlink(missing_ok=True)
+            if tmp is not None:
+                tmp.unlink(missing_ok=True)
         return self.path
 
     def _export(self, tmp: Path) -> None:

@@ -392,6 +392,11 @@ class Viewer:
         finally:
             self.close()
 
+    def close_recording(self) -> None:
+        """Close the recording now (its frames are kept), leaving the window alone: what is left to do when the
+        display itself has gone (the window can no longer be closed)."""
+        self._close_recorder()
+
     def close(self) -> None:
         """Close the recording (its frames are kept) and the window."""
         self._close_recorder()

@@ -28,7 +28,7 @@ import math
 import os
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -173,6 +173,7 @@ class ChunkTask:
         cases: plan indices of the cases, in world order. columns: their swept values, by axis name.
         seconds: simulated time [s]. window: ``(start, stop)`` [s] the window metrics cover.
         metrics: metric columns to report. device: Warp device. h5: recording to write, or None.
+        threads: threads stepping the chunk's worlds (:class:`~warpsim.runner.Simulation`).
     """
 
     descriptor: dict
@@ -183,6 +184,7 @@ class ChunkTask:
     metrics: tuple[str, ...]
     device: str = "cpu"
     h5: str | None = None
+    threads: int = 1
 
     def single(self, k: int) -> ChunkTask:
         """The task of this chunk's ``k``-th case alone."""
@@ -192,9 +194,7 @@ class ChunkTask:
                 worlds[section] = {key: [per[k]] for key, per in values.items()}
         descriptor = copy.deepcopy(self.descriptor)
         descriptor["worlds"] = worlds
-        return ChunkTask(
-            descriptor, [self.cases[k]], [self.columns[k]], self.seconds, self.window, self.metrics, self.device
-        )
+        return replace(self, descriptor=descriptor, cases=[self.cases[k]], columns=[self.columns[k]], h5=None)
 
 
 class SweepPlan:
@@ -386,7 +386,7 @@ def run_chunk(task: ChunkTask) -> list[dict]:
     from .runner import Simulation
 
     try:
-        sim = Simulation(task.descriptor, device=task.device, where="sweep case")
+        sim = Simulation(task.descriptor, device=task.device, where="sweep case", threads=task.threads)
     except DescriptorError as err:
         if len(task.cases) == 1:
             return _failed_rows(task, f"not built: {err}")
@@ -689,6 +689,7 @@ def run_sweep(
     h5_dir: Path | None = None,
     restart: bool = False,
     on_progress: Callable[[int, int, float], None] | None = None,
+    threads: int | None = None,
 ) -> SweepOutcome:
     """Run the cases of ``plan`` that ``out`` does not hold yet on a Dask cluster and keep their rows.
 
@@ -700,6 +701,8 @@ def run_sweep(
         device: Warp device of the workers. h5_dir: write one recording per chunk there.
         restart: forget the rows ``out`` holds and run every case again.
         on_progress: ``(cases done, cases to run, wall seconds)``, after every chunk.
+        threads: threads stepping each chunk's worlds (default: on the local cluster, the cores per worker
+            process, so that the workers' threads fill the cores; on a ``scheduler``'s cluster, 1).
 
     Ctrl-C (``KeyboardInterrupt``) stops the sweep: the finished rows are written and the outcome says
     ``interrupted``.
@@ -716,6 +719,10 @@ def run_sweep(
             client, own_client, used = _connect(scheduler, workers)
             size = chunk or max(1, min(MAX_CHUNK, math.ceil(len(todo) / (4 * max(used, 1)))))
             tasks = plan.chunks(size, set(range(len(plan.cases))) - set(todo), device, h5_dir)
+            if threads is None:
+                cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+                threads = 1 if scheduler is not None else max(1, cores // max(used, 1))
+            tasks = [replace(task, threads=threads) for task in tasks]
             if client is None:  # the local cluster: kernels compiled once, here, then the workers start
                 _warm_kernels(tasks, device)
                 client, cluster = _local_cluster(used)

@@ -204,3 +204,30 @@ def test_ctrl_c_stops_a_threaded_run_and_keeps_its_recording(tmp_path):
     assert proc.returncode == EXIT_INTERRUPTED and "Traceback" not in err, err
     with Recording(rec) as r:
         assert r.frame_count >= 5 and np.isfinite(r.positions()).all() and not r.live
+
+
+def test_the_viewer_flies_threaded_worlds_as_one_thread():
+    """Keys, the heads-up display (its figures read the air forces) and R on 3 threads: the frames of 1."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from viewer_driver import Clock
+
+    from warpsim.viewer.backend import NullBackend
+    from warpsim.viewer.core import Viewer
+
+    seen = {}
+    for threads in (1, 3):
+        backend = NullBackend()
+        viewer = Viewer(Simulation(_kites(), threads=threads), backend, say=lambda line: None)
+        clock = Clock(viewer)
+        backend.press("W")  # walk the anchor
+        clock.seconds(0.5)
+        backend.release("W")
+        hud = viewer.hud()
+        positions = viewer.frame.positions.copy()
+        backend.tap("R")
+        clock.ticks(3)
+        seen[threads] = (hud, positions, viewer.frame.positions.copy())
+    assert seen[1][0][1:] == seen[3][0][1:]  # the first line gives wall-clock shares
+    assert sum("pull ~" in line for line in seen[3][0]) == WORLDS  # every group's air forces reach the figures
+    for a, b in zip(seen[1][1:], seen[3][1:], strict=True):
+        np.testing.assert_array_equal(a, b)

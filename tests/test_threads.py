@@ -231,3 +231,15 @@ def test_the_viewer_flies_threaded_worlds_as_one_thread():
     assert sum("pull ~" in line for line in seen[3][0]) == WORLDS  # every group's air forces reach the figures
     for a, b in zip(seen[1][1:], seen[3][1:], strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("kind", ["flag", "hang-glider", "parachute"])
+def test_every_object_threads_bit_for_bit(kind):
+    desc = desc_mod.merge("test", desc_mod.defaults(kind), {"worlds": {"count": 3}, "scene": {"fps": 25.0}})
+    finals = []
+    for threads in (1, 2):
+        sim = Simulation(desc, threads=threads)
+        sim.run(0.3)
+        finals.append(sim.checkpoint())
+    for name in ("q", "q_prev", "time", "steps"):
+        np.testing.assert_array_equal(getattr(finals[0], name), getattr(finals[1], name))

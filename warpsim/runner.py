@@ -223,6 +223,12 @@ class Simulation:
         p = s = t = n = 0  # where the group's particles, sticks, triangles and nails start in the whole model
         for first, end in itertools.pairwise(bounds):
             model = build_model(self.descriptor, self.model.device, where, range(first, end))
+            whole = self.model
+            if not (  # the views below need each world's particles, sticks and triangles in one run, in order
+                np.array_equal(model.stick_particles_np + p, whole.stick_particles_np[s : s + model.stick_count])
+                and np.array_equal(model.tri_indices_np + p, whole.tri_indices_np[t : t + model.tri_count])
+            ):
+                raise RuntimeError(f"worlds {first}-{end - 1} are not laid out one after another: cannot thread them")
             state = State(
                 particle_q=self.state.particle_q[p : p + model.particle_count],
                 particle_q_prev=self.state.particle_q_prev[p : p + model.particle_count],

@@ -22,7 +22,7 @@ import warp as wp
 
 wp.config.log_level = wp.LOG_WARNING  # before Warp initialises: no per-module load lines
 
-from .suite import CASES, Options  # noqa: E402
+from .suite import CASES, Options, constraint_rate  # noqa: E402
 
 
 def machine() -> dict:
@@ -57,18 +57,18 @@ def _fmt(value, digits: int = 0) -> str:
 def table(rows: list[dict]) -> str:
     """A Markdown table of the rows: the case, its rate, ms/step, real-time factor, sizes and comparison."""
     lines = [
-        "| case | steps/s | ms/step | real-time | particles | sticks | iters | compared with | theirs, steps/s "
-        "| ratio |",
-        "|---|--:|--:|--:|--:|--:|--:|---|--:|--:|",
+        "| case | steps/s | ms/step | real-time | particles | sticks | iters | constraint-iters/s | compared with "
+        "| theirs, steps/s | ratio |",
+        "|---|--:|--:|--:|--:|--:|--:|--:|---|--:|--:|",
     ]
     for r in rows:
         if "skipped" in r:
-            lines.append(f"| {r['case']} | skipped: {r['skipped']} |||||||||")
+            lines.append(f"| {r['case']} | skipped: {r['skipped']} ||||||||||")
             continue
         if r["case"] == "startup":
             lines.append(
                 f"| startup | cold {r['cold_start_s']:.2f} s, warm {r['warm_start_s']:.2f} s "
-                "(`warpsim run hang-glider --seconds 1`, fresh process) |||||||||"
+                "(`warpsim run hang-glider --seconds 1`, fresh process) ||||||||||"
             )
             continue
         if r["case"] == "viewer":
@@ -78,7 +78,7 @@ def table(rows: list[dict]) -> str:
                 for name, v in r["scenes"].items()
             )
             renderer = next(iter(r["scenes"].values()))["renderer"]
-            lines.append(f"| viewer | `warpsim view` at {r['size']} on {renderer}: {scenes} |||||||||")
+            lines.append(f"| viewer | `warpsim view` at {r['size']} on {renderer}: {scenes} ||||||||||")
             continue
         if r["case"] == "sweep-kites-64":
             lines.append(
@@ -87,7 +87,7 @@ def table(rows: list[dict]) -> str:
                 f"{r['workers_2_cases_per_s']:.2f} with 2 ({r['speedup_2_workers']:.2f}x); the same chunks in one "
                 f"process {r['in_process_cases_per_s']:.2f} cases/s, so Dask costs {r['overhead_per_task_pct']:.1f}% "
                 f"({r['overhead_per_task_ms']:.0f} ms per task); cluster start "
-                f"{r['cluster_startup_s']['1']:.1f} s / {r['cluster_startup_s']['2']:.1f} s (1 / 2 workers) |||||||||"
+                f"{r['cluster_startup_s']['1']:.1f} s / {r['cluster_startup_s']['2']:.1f} s (1 / 2 workers) ||||||||||"
             )
             continue
         if r["case"] == "build-scaling":
@@ -96,7 +96,22 @@ def table(rows: list[dict]) -> str:
             lines.append(
                 f"| build-scaling | model build per particle, {sizes}; growth {r['growth']:.2f}x per 4x particles "
                 f"(1 = linear); batched kites per world, {worlds}; growth {r['world_growth']:.2f}x per 4x worlds "
-                "|||||||||"
+                "||||||||||"
+            )
+            continue
+        if r["case"] == "threads-kites":
+            parts = []
+            for count, v in r["worlds"].items():
+                one, two = v["steps_per_s_1_thread"], v["steps_per_s_2_threads"]
+                parts.append(
+                    f"x{count}: {max(one):.1f} steps/s with 1 thread ({min(one):.1f}-{max(one):.1f}), "
+                    f"{max(two):.1f} with 2 ({min(two):.1f}-{max(two):.1f}), {v['speedup_best']:.2f}x best to best "
+                    f"(rounds {', '.join(f'{x:.2f}' for x in v['speedup_per_round'])}), "
+                    f"{v['constraint_iterations_per_s_2_threads']:.3g} constraint-iters/s"
+                )
+            lines.append(
+                f"| threads-kites | batched kites, `warpsim run --threads 1` vs `--threads 2`, {r['rounds']} "
+                f"alternating rounds: {'; '.join(parts)} ||||||||||"
             )
             continue
         rt = r.get("realtime_factor")
@@ -111,6 +126,7 @@ def table(rows: list[dict]) -> str:
                     _fmt(r.get("particles")),
                     _fmt(r.get("sticks")),
                     _fmt(r.get("iterations")),
+                    f"{r['constraint_iterations_per_s']:.3g}" if r.get("constraint_iterations_per_s") else "-",
                     r.get("baseline", ""),
                     _fmt(r.get("baseline_steps_per_s"), 1) if "baseline" in r else "",
                     f"{r['ratio']:,.1f}x" if "ratio" in r else "",
@@ -175,7 +191,10 @@ def main(argv: list[str] | None = None) -> int:
     for name in names:
         start = time.perf_counter()
         print(f"  {name} ...", end="", flush=True, file=sys.stderr)
-        rows.append(CASES[name](opts))
+        row = CASES[name](opts)
+        if "steps_per_s" in row:
+            row["constraint_iterations_per_s"] = constraint_rate(row)
+        rows.append(row)
         print(f" {time.perf_counter() - start:.1f} s", file=sys.stderr)
     print(table(rows))
     if args.json:

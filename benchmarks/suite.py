@@ -2,8 +2,10 @@
 their baseline in the same run so that the ratio is fair.
 
 Every case returns a row (a dict) with at least ``case``, ``steps_per_s``, ``ms_per_step``; scene cases add
-the real-time factor at the scene's ``dt``, counts, iterations and device; comparisons add ``baseline``,
-``baseline_steps_per_s`` and ``ratio`` (warpsim / baseline, except where ``baseline`` says otherwise).
+the real-time factor at the scene's ``dt``, counts, iterations and device, and the runner adds
+``constraint_iterations_per_s`` (sticks x iterations x steps/s: what GPU cloth papers report) to each;
+comparisons add ``baseline``, ``baseline_steps_per_s`` and ``ratio`` (warpsim / baseline, except where
+``baseline`` says otherwise).
 Timings replay the captured step graph (the way ``warpsim run`` steps) after one warm-up step that
 compiles and captures, and repeat until at least ``min_time`` seconds of wall time have been measured.
 """
@@ -81,6 +83,15 @@ def _row(case: str, sim: Simulation, rate: float) -> dict:
         "method": sim.descriptor["solver"]["method"],
         "device": str(m.device),
     }
+
+
+def constraint_rate(row: dict) -> float | None:
+    """Constraint iterations per second of a row: sticks x iterations x steps/s (every stick solved once per
+    Jacobi iteration), the unit GPU cloth reports (Ten Minute Physics: 1.35e9/s on a GPU); None without
+    iterations (the Euler integrator) or counts."""
+    if not row.get("sticks") or not row.get("iterations") or not row.get("steps_per_s"):
+        return None
+    return row["sticks"] * row["iterations"] * row["steps_per_s"]
 
 
 def measure(case: str, desc: dict, opts: Options) -> dict:
@@ -418,6 +429,43 @@ def case_sweep(opts: Options) -> dict:
     }
 
 
+THREAD_WORLDS = (64, 256)
+
+
+def case_threads(opts: Options, rounds: int = 3) -> dict:
+    """64 and 256 batched kites (wind 4-12 m/s) run by 1 and by 2 threads (`warpsim run --threads`: frames,
+    checks), alternating rounds in one run: steps/s, best and spread of each, and the speed-up of 2 threads"""
+    if opts.device != "cpu":
+        return {"case": "threads-kites", "skipped": "threads step worlds on the CPU only"}
+    out = {"case": "threads-kites", "rounds": rounds, "device": opts.device, "worlds": {}}
+    for count in THREAD_WORLDS:
+        desc = scene("kite", {"worlds": {"count": count, "wind": {"speed": list(np.linspace(4.0, 12.0, count))}}})
+        sims = {threads: Simulation(desc, device=opts.device, threads=threads) for threads in (1, 2)}
+        seconds = 0.25
+        while sims[1].run(seconds).wall_time < opts.min_time:  # warm-up, and a run that lasts min_time
+            seconds *= 2.0
+        sims[2].run(seconds)
+        rates = {1: [], 2: []}
+        for _ in range(rounds):  # the machine's speed drifts and is shared: alternate, keep every round
+            for threads, sim in sims.items():
+                summary = sim.run(seconds)
+                rates[threads].append(summary.steps / summary.wall_time)
+        m = sims[1].model
+        best = {threads: max(r) for threads, r in rates.items()}
+        out["worlds"][str(count)] = {
+            "particles": m.particle_count,
+            "sticks": m.stick_count,
+            "iterations": sims[1].solver.config.iterations,
+            "steps_per_s_1_thread": rates[1],
+            "steps_per_s_2_threads": rates[2],
+            "speedup_best": best[2] / best[1],
+            "speedup_per_round": [b / a for a, b in zip(rates[1], rates[2], strict=True)],
+            "constraint_iterations_per_s_2_threads": m.stick_count * sims[1].solver.config.iterations * best[2],
+            "startup_s": {str(threads): sim.startup_time for threads, sim in sims.items()},
+        }
+    return out
+
+
 BUILD_SIZES = (32, 64, 128, 256, 512)
 BUILD_WORLDS = (16, 64, 256)
 
@@ -463,4 +511,5 @@ CASES: dict[str, Callable[[Options], dict]] = {
     "viewer": case_viewer,
     "build-scaling": case_build_scaling,
     "sweep-kites-64": case_sweep,
+    "threads-kites": case_threads,
 }

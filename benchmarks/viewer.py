@@ -3,9 +3,10 @@
 Run by the ``viewer`` benchmark case in a subprocess on an X display (a virtual one when the machine has
 none)::
 
-    python -m benchmarks.viewer SECONDS WIDTHxHEIGHT
+    python -m benchmarks.viewer SECONDS WIDTHxHEIGHT [SCENE WORLDS THREADS]
 
-prints one JSON object: per scene, pictures per wall second, real-time factor (simulated / wall seconds), the
+prints one JSON object: per scene (every built-in one, or SCENE with WORLDS batched worlds stepped by THREADS
+threads), pictures per wall second, real-time factor (simulated / wall seconds), the
 shares of the wall time spent stepping and drawing, and the OpenGL renderer.
 """
 
@@ -16,7 +17,7 @@ import sys
 import time
 
 from warpsim import _warp
-from warpsim.descriptor import resolve
+from warpsim.descriptor import merge, resolve
 from warpsim.runner import Simulation
 from warpsim.viewer.core import Viewer
 from warpsim.viewer.gl import PygletBackend
@@ -24,9 +25,13 @@ from warpsim.viewer.gl import PygletBackend
 SCENES = ("flag", "hang-glider", "kite", "parachute")
 
 
-def measure(scene: str, seconds: float, size: tuple[int, int]) -> dict:
-    """Fly ``scene`` hands off for ``seconds`` of wall time after one warm-up second; the rates."""
-    sim = Simulation(resolve(scene)[0])
+def measure(scene: str, seconds: float, size: tuple[int, int], worlds: int = 1, threads: int = 1) -> dict:
+    """Fly ``scene`` (``worlds`` batched worlds stepped by ``threads`` threads) hands off for ``seconds`` of wall
+    time after one warm-up second; the rates."""
+    desc = resolve(scene)[0]
+    if worlds > 1:
+        desc = merge("benchmark", desc, {"worlds": {"count": worlds}})
+    sim = Simulation(desc, threads=threads)
     viewer = Viewer(sim, PygletBackend(size), f"warpsim benchmark {scene}", say=lambda line: None)
     try:
         end = time.perf_counter() + 1.0
@@ -54,4 +59,8 @@ if __name__ == "__main__":
     _warp.init()
     seconds = float(sys.argv[1])
     width, height = (int(v) for v in sys.argv[2].split("x"))
-    print(json.dumps({scene: measure(scene, seconds, (width, height)) for scene in SCENES}))
+    if len(sys.argv) > 3:
+        scene, worlds, threads = sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
+        print(json.dumps({scene: measure(scene, seconds, (width, height), worlds, threads)}))
+    else:
+        print(json.dumps({scene: measure(scene, seconds, (width, height)) for scene in SCENES}))

@@ -21,6 +21,8 @@ def test_suite_writes_rows_with_comparisons(tmp_path, capsys):
     glider = rows["hang-glider"]
     assert glider["steps_per_s"] > 0 and glider["particles"] == 52 and glider["iterations"] == 55  # the flying design
     assert glider["baseline_steps_per_s"] == 100.0  # the paper's figure
+    rate = glider["sticks"] * glider["iterations"] * glider["steps_per_s"]  # constraint iterations per second
+    assert glider["constraint_iterations_per_s"] == pytest.approx(rate)
     assert glider["ratio"] == pytest.approx(glider["steps_per_s"] / 100.0)
     numpy_row = rows["numpy-hang-glider"]
     assert numpy_row["baseline_steps_per_s"] > 0 and numpy_row["ratio"] > 0

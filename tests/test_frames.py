@@ -131,10 +131,10 @@ def test_long_frames_step_without_a_frame_graph_and_give_the_same_bits(monkeypat
     d["scene"]["fps"] = 1.0 / (60 * d["solver"]["dt"])  # 60 steps a frame
     monkeypatch.setattr(runner, "MAX_FRAME_GRAPH_STEPS", 30)
     stepped = Simulation(d)
-    assert stepped.steps_per_frame == 60 and stepped._graphs is None
+    assert stepped.steps_per_frame == 60 and stepped._groups[0].graphs is None
     monkeypatch.setattr(runner, "MAX_FRAME_GRAPH_STEPS", 60)
     whole = Simulation(d)
-    assert whole._graphs is not None
+    assert whole._groups[0].graphs is not None
     for sim in (stepped, whole):
         sim.run(2 * 60 * sim.dt)
         assert sim.steps_taken == 120
@@ -149,7 +149,7 @@ def test_a_low_frame_rate_starts_in_bounded_time(fps):
     d = defaults("kite")
     d["scene"]["fps"] = fps
     sim = Simulation(d)
-    assert sim._graphs is None
+    assert sim._groups[0].graphs is None
     assert sim.startup_time < 5.0
     sim.run(0.1)
     assert sim.steps_taken == round(0.1 / sim.dt)

@@ -330,6 +330,13 @@ def _scene_arguments(parser, worlds: bool = True) -> None:
     parser.add_argument("--fps", type=_number("--fps"), help="output frames per simulated second")
     parser.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
     parser.add_argument(
+        "--threads",
+        type=_world_count,
+        metavar="N",
+        help="threads stepping the worlds, each a group of them, on the CPU (default: every core this process may "
+        "use; in a sweep, the cores per worker process); the frames are the same, bit for bit, for any N",
+    )
+    parser.add_argument(
         "--set",
         action="append",
         default=[],
@@ -731,9 +738,15 @@ def _resolve_run(args) -> _RunInputs:
 def _start(run: _RunInputs, device: str, args):
     """The :class:`~warpsim.runner.Simulation` of ``run`` (restored from its checkpoint), announced unless
     ``--quiet``."""
-    from .runner import Simulation
+    from .runner import Simulation, available_cores
 
-    sim = Simulation(run.descriptor, device=device, where=run.where, terrain=run.terrain)
+    sim = Simulation(
+        run.descriptor,
+        device=device,
+        where=run.where,
+        terrain=run.terrain,
+        threads=args.threads or available_cores(),
+    )
     if run.checkpoint is not None:
         try:
             sim.restore(run.checkpoint)
@@ -744,6 +757,7 @@ def _start(run: _RunInputs, device: str, args):
         print(
             f"{run.where}: {m.particle_count} particles, {m.stick_count} sticks, {m.tri_count} triangles; "
             f"dt {sim.dt:g} s, {run.descriptor['solver']['method']}, device {device}"
+            + (f", {sim.threads} threads" if sim.threads > 1 else "")
             + (f"; from t = {sim.state.time:.3f} s, frame {run.frame}" if run.checkpoint is not None else "")
         )
     return sim
@@ -926,7 +940,16 @@ def cmd_sweep(args) -> int:
     try:
         with _terminate_as_interrupt():  # SIGTERM stops the sweep like Ctrl-C: workers stopped, rows written, 130
             outcome = sweeps.run_sweep(
-                plan, out, args.workers, args.scheduler, args.chunk, args.device, h5_dir, args.restart, progress
+                plan,
+                out,
+                args.workers,
+                args.scheduler,
+                args.chunk,
+                args.device,
+                h5_dir,
+                args.restart,
+                progress,
+                threads=args.threads,
             )
     except sweeps.SweepError as err:
         raise UsageError(str(err)) from None
@@ -1008,7 +1031,7 @@ def cmd_view(args) -> int:
     from .descriptor import to_toml
     from .io.hdf5 import RecordingError, check_recording_path
     from .io.render import check_picture_path
-    from .runner import Simulation
+    from .runner import Simulation, available_cores
     from .viewer.core import Viewer
     from .viewer.gl import PygletBackend
 
@@ -1027,7 +1050,7 @@ def cmd_view(args) -> int:
     from .viewer import gl
 
     gl.check_display()  # a missing extra or display is said before the model is built
-    sim = Simulation(descriptor, device=device, where=where)
+    sim = Simulation(descriptor, device=device, where=where, threads=args.threads or available_cores())
     backend = PygletBackend(args.size, keep_pictures=shot is not None)
     interruptible()  # the recording opens next
     try:

@@ -6,10 +6,19 @@ steps of ``dt`` as one frame lasts. The pieces live beside it: :mod:`warpsim.sce
 control arrays, :mod:`warpsim.diagnostics` says what a frame shows. After each frame the device reports a few
 numbers (worst stretch, non-finite particles, terrain clearance: :mod:`warpsim.kernels.frame`), captured in one
 graph with the frame's steps; positions reach the host only when an output, the viewer or a check asks.
+
+With ``threads > 1`` on the CPU the worlds of a batch are cut into one group per thread (:class:`_Group`): each
+group has its own model, solver, probe and frame graphs, working on views of the simulation's state and control
+arrays, and its graph is replayed by its own thread (Warp's CPU graph replay releases the GIL). The threads meet
+at every frame end, where outputs, controls and checks see one whole frame; a world computes exactly what it
+computes alone, so the frames are bit for bit those of one thread.
 """
 
 from __future__ import annotations
 
+import concurrent.futures
+import itertools
+import os
 import time
 import weakref
 from collections.abc import Callable
@@ -25,10 +34,19 @@ from .descriptor import DescriptorError, world_descriptor
 from .diagnostics import Frame, FrameSource, GroundContacts, find_blowup
 from .inputs import Inputs, control_names
 from .kernels import frame as frame_kernels
+from .model import Control, State
 from .scene import build_model, settings
 from .solver import SOLVERS, load_modules, make_solver
 
-__all__ = ["BlowUpError", "Frame", "RunSummary", "Simulation"]
+__all__ = ["BlowUpError", "Frame", "RunSummary", "Simulation", "available_cores"]
+
+
+def available_cores() -> int:
+    """The CPU cores this process may run on (``os.sched_getaffinity``; ``os.cpu_count`` where there is none):
+    the default number of threads of the command line."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
 
 
 class BlowUpError(RuntimeError):
@@ -142,6 +160,9 @@ class Simulation:
         use_graph: replay the step as a captured graph (default True).
         where: origin of the descriptor for error messages.
         terrain: heights to use instead of the descriptor's ``[terrain]`` (a recording's stored terrain).
+        threads: how many threads step the worlds, each a group of consecutive worlds (default 1; at most one
+            per world; on the CPU only, a GPU steps every world in one launch). The frames are bit for bit the
+            same for any number: only the wall time changes.
     """
 
     def __init__(
@@ -151,6 +172,7 @@ class Simulation:
         use_graph: bool = True,
         where: str = "scene",
         terrain=None,
+        threads: int = 1,
     ):
         started = time.perf_counter()
         self.descriptor = descriptor
@@ -173,7 +195,13 @@ class Simulation:
             raise DescriptorError(str(err)) from None
         self.inputs = Inputs(self.model, self.control, winds, schedule)
         self.contacts = GroundContacts(self.model)
-        self.probe = frame_kernels.FrameProbe(self.model, self.contacts.owners())
+        self._groups = self._make_groups(threads, where)
+        self.threads = len(self._groups)
+        # the other groups' graphs are replayed by these threads, the first group's by the caller's
+        self._pool = None
+        if self.threads > 1:
+            self._pool = concurrent.futures.ThreadPoolExecutor(self.threads - 1, thread_name_prefix="warpsim-group")
+            weakref.finalize(self, self._pool.shutdown, wait=False)
         self._source = FrameSource(self.model, self.state, self.control, self.dt)
         self._out = _nothing  # the last frame handed out (a weak reference), copied before the state moves on
         # the last good frame: index, time [s], steps, and the probe slot its positions are kept in (a frame is
@@ -189,13 +217,60 @@ class Simulation:
         self._keep_good(first)
         del first
         self.steps_per_frame = cfg.scene.steps_per_frame(self.dt)
-        # per probe slot, the whole frame (probe, steps, probe) as one graph; a frame of more steps than
+        # per group and probe slot, the whole frame (probe, steps, probe) as one graph; a frame of more steps than
         # MAX_FRAME_GRAPH_STEPS (a low --fps) is stepped through the solver's one-step graph instead, so that the
         # graphs' memory and capture time stay bounded whatever the frame rate
-        whole = self.solver.use_graph and self.steps_per_frame <= MAX_FRAME_GRAPH_STEPS
-        self._graphs = (self._capture_frame(0), self._capture_frame(1)) if whole else None
+        if self.solver.use_graph and self.steps_per_frame <= MAX_FRAME_GRAPH_STEPS:
+            for group in self._groups:
+                group.graphs = (self._capture_frame(group, 0), self._capture_frame(group, 1))
         wp.synchronize_device(self.model.device)
         self.startup_time = time.perf_counter() - started  # [s] model build, kernel load/compilation
+
+    def _make_groups(self, threads: int, where: str) -> list[_Group]:
+        """One :class:`_Group` per thread, of consecutive worlds (as even in size as they can be); one group is
+        the simulation's own model, state, control and solver."""
+        count = max(1, min(int(threads), self.world_count)) if self.model.device.is_cpu else 1
+        if count == 1:
+            probe = frame_kernels.FrameProbe(self.model, self.contacts.owners())
+            return [_Group(self.model, self.state, self.control, self.solver, probe)]
+        cfg, groups = self.settings, []
+        bounds = [self.world_count * k // count for k in range(count + 1)]
+        p = s = t = n = 0  # where the group's particles, sticks, triangles and nails start in the whole model
+        for first, end in itertools.pairwise(bounds):
+            model = build_model(
+                self.descriptor, self.model.device, where, terrain=self.model.terrain, worlds=range(first, end)
+            )
+            whole = self.model
+            if not (  # the views below need each world's particles, sticks and triangles in one run, in order
+                np.array_equal(model.stick_particles_np + p, whole.stick_particles_np[s : s + model.stick_count])
+                and np.array_equal(model.tri_indices_np + p, whole.tri_indices_np[t : t + model.tri_count])
+            ):
+                raise RuntimeError(f"worlds {first}-{end - 1} are not laid out one after another: cannot thread them")
+            state = State(
+                particle_q=self.state.particle_q[p : p + model.particle_count],
+                particle_q_prev=self.state.particle_q_prev[p : p + model.particle_count],
+            )
+            c = self.control
+            control = Control(
+                stick_rest=c.stick_rest[s : s + model.stick_count],
+                stick_rest_target=c.stick_rest_target[s : s + model.stick_count],
+                nail_target=c.nail_target[n : n + model.nail_count] if model.nail_count else None,
+                nail_target_goal=c.nail_target_goal[n : n + model.nail_count] if model.nail_count else None,
+                wind=c.wind[first:end],
+            )
+            if control.nail_target is None:  # a model without nails keeps one unused target
+                unused = model.control()
+                control.nail_target, control.nail_target_goal = unused.nail_target, unused.nail_target_goal
+            solver = make_solver(
+                model, cfg.solver, air=cfg.air, wind=cfg.wind, ground=cfg.ground, use_graph=self.solver.use_graph
+            )
+            if model.tri_count:  # readers of self.solver.tri_force (figures) see every group's air forces
+                solver.tri_force = self.solver.tri_force[t : t + model.tri_count]
+            probe = frame_kernels.FrameProbe(model, GroundContacts(model).owners())
+            groups.append(_Group(model, state, control, solver, probe))
+            p, s, t = p + model.particle_count, s + model.stick_count, t + model.tri_count
+            n += model.nail_count
+        return groups
 
     @property
     def controls(self) -> dict:
@@ -222,24 +297,39 @@ class Simulation:
         self.inputs.frame_start(self.state.time, self.steps_per_frame * self.dt)
 
     def step(self, count: int = 1) -> None:
-        """Take ``count`` solver steps of ``dt``."""
+        """Take ``count`` solver steps of ``dt`` (the groups one after another: a frame's steps run in threads)."""
         self._release()
-        for _ in range(count):
-            self.solver.step(self.state, self.control, self.dt)
+        for group in self._groups:
+            for _ in range(count):
+                group.solver.step(group.state, group.control, self.dt)
+        if len(self._groups) > 1:  # the groups' states kept their own time
+            for _ in range(count):
+                self.state.time += self.dt
         self.steps_taken += count
 
     def frame(self, index: int) -> Frame:
         """The current state measured as frame ``index`` (see :class:`warpsim.diagnostics.Frame`), with the
         controls in force."""
-        self.probe.begin()
-        self.probe.measure(self.state, self.control, 1 - self._good[3])  # never over the last good frame's slot
+        self._measure(1 - self._good[3])  # never over the last good frame's slot
         return self._hand_out(index)
+
+    def _measure(self, slot: int) -> None:
+        """Have every group's probe report the state as it is and keep its positions in ``slot``."""
+        for group in self._groups:
+            group.probe.begin()
+            group.probe.measure(group.state, group.control, slot)
+
+    def _report(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The probes' report of the whole simulation (see :meth:`warpsim.kernels.frame.FrameProbe.read`): the
+        groups' reports joined, in world and object order."""
+        parts = [group.probe.read() for group in self._groups]
+        return parts[0] if len(parts) == 1 else tuple(np.concatenate(part) for part in zip(*parts, strict=True))
 
     def _hand_out(self, index: int) -> Frame:
         """Frame ``index`` of the probe's report, remembered so that :meth:`_release` can copy what it needs."""
         self._release()
         controls = dict(self.inputs.in_force)
-        frame = Frame(index, self.state.time, self.steps_taken, self.probe.read(), self._source, controls)
+        frame = Frame(index, self.state.time, self.steps_taken, self._report(), self._source, controls)
         self._out = weakref.ref(frame)
         return frame
 
@@ -251,31 +341,49 @@ class Simulation:
             frame.fetch()
             self._out = _nothing
 
-    def _capture_frame(self, slot: int):
-        """The graph of one whole frame kept in probe ``slot``: the probe's start, ``steps_per_frame`` solver
-        steps, the probe's report (for this simulation's state and control, whose kernels are loaded; the same
+    def _capture_frame(self, group: _Group, slot: int):
+        """The graph of one whole frame of ``group`` kept in probe ``slot``: the probe's start, ``steps_per_frame``
+        solver steps, the probe's report (for the group's state and control, whose kernels are loaded; the same
         kernels as stepping one by one)."""
         with wp.ScopedCapture(device=self.model.device) as capture:
-            self.probe.begin()
+            group.probe.begin()
             for _ in range(self.steps_per_frame):
-                self.solver.launch(self.state, self.control, self.dt)
-            self.probe.measure(self.state, self.control, slot)
+                group.solver.launch(group.state, group.control, self.dt)
+            group.probe.measure(group.state, group.control, slot)
         return capture.graph
+
+    def _replay(self, slot: int) -> None:
+        """Replay every group's frame graph for probe ``slot``, each group on its own thread (the first on this
+        one), and return when all are done, also when this thread is interrupted (no thread is left writing the
+        state)."""
+        graphs = [group.graphs[slot] for group in self._groups]
+        if self._pool is None:
+            wp.capture_launch(graphs[0])
+            return
+        others = [self._pool.submit(wp.capture_launch, graph) for graph in graphs[1:]]
+        try:
+            wp.capture_launch(graphs[0])
+        finally:
+            concurrent.futures.wait(others)
+        for done in others:
+            done.result()  # a thread's error is raised here
 
     def _step_frame(self, count: int) -> None:
         """Take ``count`` steps (one frame or what is left of it) and have the probe report and keep the state in
         the slot that is not the last good frame's."""
         self._release()
         slot = 1 - self._good[3]
-        if count == self.steps_per_frame and self._graphs is not None:
-            wp.capture_launch(self._graphs[slot])
+        if count == self.steps_per_frame and self._groups[0].graphs is not None:
+            self._replay(slot)
             for _ in range(count):  # the same sum of dt as the solver keeps step by step
                 self.state.time += self.dt
             self.steps_taken += count
         else:
-            self.probe.begin()
+            for group in self._groups:
+                group.probe.begin()
             self.step(count)
-            self.probe.measure(self.state, self.control, slot)
+            for group in self._groups:
+                group.probe.measure(group.state, group.control, slot)
 
     def _keep_good(self, frame: Frame) -> None:
         """Make ``frame``, the last one measured and just checked, the last good frame, with the controls in force
@@ -375,8 +483,13 @@ class Simulation:
         self._release()
         inputs, stick_rest_target, nail_target_goal, wind = self._saved
         _, time, steps, slot = self._good
-        # the rest lengths and nail targets ramp every step: the probe keeps them with the positions
-        q, q_prev, stick_rest, nail_target = self.probe.kept(slot)
+        # the rest lengths and nail targets ramp every step: each group's probe keeps them with the positions
+        kept = [group.probe.kept(slot) for group in self._groups]
+        q, q_prev, stick_rest = (np.concatenate(arrays) for arrays in list(zip(*kept, strict=True))[:3])
+        if self.model.nail_count:  # a group without nails keeps one unused target
+            nail_target = np.concatenate([k[3][: g.model.nail_count] for k, g in zip(kept, self._groups, strict=True)])
+        else:
+            nail_target = self.control.nail_target.numpy().copy()
         self.restore(
             Checkpoint(
                 q=q,
@@ -461,6 +574,17 @@ class Simulation:
             ground_contacts=self.contacts.by_time(),
             **flags,
         )
+
+
+class _Group:
+    """Consecutive worlds of a simulation that one thread steps: their own model (built from those worlds'
+    descriptors, numbered from 0), solver, frame probe and frame graphs (one per probe slot), on views of the
+    simulation's state and control arrays, so that inputs, checkpoints and frames see every world in one array
+    and nothing is copied when the threads meet."""
+
+    def __init__(self, model, state: State, control: Control, solver, probe: frame_kernels.FrameProbe):
+        self.model, self.state, self.control, self.solver, self.probe = model, state, control, solver, probe
+        self.graphs = None  # (slot 0, slot 1) frame graphs, when the solver replays graphs
 
 
 def _nothing() -> None:

@@ -72,12 +72,20 @@ def world_name(name: str, world: int, world_count: int) -> str:
 
 
 def build_model(
-    descriptor: dict, device: str | None = "cpu", where: str = "scene", terrain: Heightfield | None = None
+    descriptor: dict,
+    device: str | None = "cpu",
+    where: str = "scene",
+    terrain: Heightfield | None = None,
+    worlds: range | None = None,
 ) -> Model:
     """Build the model of a validated descriptor on ``device``: ``worlds.count`` copies of its object, each
     with its own ``[worlds]`` values, in one model (they share the terrain and never touch each other).
+
     ``terrain``: the heights to use instead of the ``[terrain]`` section's (a recording's own, so that a resumed
-    or converted recording does not depend on a terrain file that may have changed or moved)."""
+    or converted recording does not depend on a terrain file that may have changed or moved). ``worlds`` (default:
+    all) builds only those worlds of the batch, numbered from 0 in the model but each with its own values and
+    name, as in the whole batch: a part of a batch that threads step apart from the rest.
+    """
     kind = descriptor["scene"]["object"]
     builder = ModelBuilder(air_density=descriptor["air"]["density"])
     if terrain is None:
@@ -85,15 +93,17 @@ def build_model(
     builder.set_terrain(terrain)
     spec = registry.OBJECTS[kind]
     count = descriptor["worlds"]["count"]
-    builder.world_count = count
-    for world in range(count):
-        builder.current_world = world
+    worlds = range(count) if worlds is None else worlds
+    builder.world_count = len(worlds)
+    for world in worlds:
+        builder.current_world = world - worlds.start
         values = world_descriptor(descriptor, world)[registry.section(kind)]
         try:
             record = spec.build(builder, from_section(spec.config, values), terrain)
-            if world == 0 and count > 1:  # the first world tells the size of all: refuse what cannot fit
+            if world == worlds.start and count > 1:  # the first world tells the size of all: refuse what cannot fit
                 check_memory(
-                    builder.particle_count * count, f"{count:,} worlds of {builder.particle_count:,} particles"
+                    builder.particle_count * len(worlds),
+                    f"{len(worlds):,} worlds of {builder.particle_count:,} particles",
                 )
         except ValueError as err:
             at = f" (world {world})" if count > 1 else ""

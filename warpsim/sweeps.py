@@ -28,7 +28,7 @@ import math
 import os
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -173,6 +173,7 @@ class ChunkTask:
         cases: plan indices of the cases, in world order. columns: their swept values, by axis name.
         seconds: simulated time [s]. window: ``(start, stop)`` [s] the window metrics cover.
         metrics: metric columns to report. device: Warp device. h5: recording to write, or None.
+        threads: threads stepping the chunk's worlds (:class:`~warpsim.runner.Simulation`).
     """
 
     descriptor: dict
@@ -183,6 +184,7 @@ class ChunkTask:
     metrics: tuple[str, ...]
     device: str = "cpu"
     h5: str | None = None
+    threads: int = 1
 
     def single(self, k: int) -> ChunkTask:
         """The task of this chunk's ``k``-th case alone."""
@@ -192,9 +194,7 @@ class ChunkTask:
                 worlds[section] = {key: [per[k]] for key, per in values.items()}
         descriptor = copy.deepcopy(self.descriptor)
         descriptor["worlds"] = worlds
-        return ChunkTask(
-            descriptor, [self.cases[k]], [self.columns[k]], self.seconds, self.window, self.metrics, self.device
-        )
+        return replace(self, descriptor=descriptor, cases=[self.cases[k]], columns=[self.columns[k]], h5=None)
 
 
 class SweepPlan:
@@ -406,7 +406,7 @@ def run_chunk(task: ChunkTask) -> list[dict]:
     from .runner import Simulation
 
     try:
-        sim = Simulation(task.descriptor, device=task.device, where="sweep case")
+        sim = Simulation(task.descriptor, device=task.device, where="sweep case", threads=task.threads)
     except DescriptorError as err:
         if len(task.cases) == 1:
             return _failed_rows(task, f"not built: {err}")
@@ -901,6 +901,7 @@ def run_sweep(
     h5_dir: Path | None = None,
     restart: bool = False,
     on_progress: Callable[[int, int, float], None] | None = None,
+    threads: int | None = None,
 ) -> SweepOutcome:
     """Run the cases of ``plan`` that ``out`` does not hold yet on a Dask cluster and keep their rows.
 
@@ -912,6 +913,8 @@ def run_sweep(
         device: Warp device of the workers. h5_dir: write one recording per chunk there.
         restart: forget the rows ``out`` holds and run every case again.
         on_progress: ``(cases done, cases to run, wall seconds)``, after every chunk.
+        threads: threads stepping each chunk's worlds (default: on the local cluster, the cores per worker
+            process, so that the workers' threads fill the cores; on a ``scheduler``'s cluster, 1).
 
     Ctrl-C (``KeyboardInterrupt``) stops the sweep: the finished rows are written and the outcome says
     ``interrupted``.
@@ -920,7 +923,7 @@ def run_sweep(
     if scheduler is None:
         check_workers(workers)
     with _owning(out), _dask_log(out.with_name(out.name + ".dask.log") if out is not None else None) as log:
-        outcome = _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress, log)
+        outcome = _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress, log, threads)
     outcome.log = log if log is not None and log.exists() else None
     return outcome
 
@@ -946,7 +949,9 @@ def _owning(out: Path | None):
         lock.release()
 
 
-def _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress, log) -> SweepOutcome:
+def _run_owned(
+    plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress, log, threads=None
+) -> SweepOutcome:
     """:func:`run_sweep` once ``out`` is this sweep's own."""
     from .io import OutputWriteError
 
@@ -963,6 +968,10 @@ def _run_owned(plan, out, workers, scheduler, chunk, device, h5_dir, restart, on
             size = chunk or max(1, min(MAX_CHUNK, math.ceil(len(todo) / (4 * max(used, 1)))))
             tasks = plan.chunks(size, set(range(len(plan.cases))) - set(todo), device, h5_dir)
             _check_recordings_free(tasks)
+            if threads is None:
+                cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+                threads = 1 if scheduler is not None else max(1, cores // max(used, 1))
+            tasks = [replace(task, threads=threads) for task in tasks]
             if client is None:  # the local cluster: kernels compiled once, here, then the workers start
                 _warm_kernels(tasks, device)
                 client, cluster = _local_cluster(used, log)

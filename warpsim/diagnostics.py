@@ -8,6 +8,8 @@ needs come from the device (:mod:`warpsim.kernels.frame`); the rest is host-side
 from __future__ import annotations
 
 import functools
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -340,3 +342,50 @@ class GroundContacts:
     def by_time(self) -> tuple[tuple[str, float], ...]:
         """``(object name, time [s])`` of each first contact, earliest first."""
         return tuple(sorted(self.first.items(), key=lambda item: item[1]))
+
+
+class FigureWindow:
+    """Window means, minima and maxima of each world's figures (:data:`FIGURES`, in their units), the share of
+    frames airborne, the first ground contact [s] and the worst stretch, for ``count`` worlds (float64, frame
+    order: the same sums for a case whatever chunk it runs in). A sweep's metrics and ``warpsim run``'s closing
+    figures are both these."""
+
+    def __init__(self, count: int, figures: Sequence[str]):
+        self.figures = list(figures)
+        self.sum = np.zeros((len(figures), count))
+        self.n = np.zeros((len(figures), count))
+        self.low = np.full((len(figures), count), np.inf)
+        self.high = np.full((len(figures), count), -np.inf)
+        self.frames = np.zeros(count, dtype=np.int64)
+        self.airborne = np.zeros(count, dtype=np.int64)
+        self.ground_time = np.full(count, np.nan)
+        self.worst = np.zeros(count)
+
+    def add(self, values: np.ndarray, live: np.ndarray, in_window: bool, touching: np.ndarray, t: float) -> None:
+        """Add one frame: ``values`` ``[F, count]`` figures, for the ``live`` worlds."""
+        first = live & touching & np.isnan(self.ground_time)
+        self.ground_time[first] = t
+        if not in_window:
+            return
+        self.frames[live] += 1
+        self.airborne[live & ~touching] += 1
+        ok = np.isfinite(values) & live[None, :]
+        self.sum += np.where(ok, values, 0.0)
+        self.n += ok
+        self.low = np.where(ok, np.minimum(self.low, values), self.low)
+        self.high = np.where(ok, np.maximum(self.high, values), self.high)
+
+    def row(self, k: int) -> dict:
+        """The metrics of world ``k``."""
+        out: dict = {}
+        for f, name in enumerate(self.figures):
+            n = self.n[f, k]
+            out[f"{name}_mean"] = self.sum[f, k] / n if n else math.nan
+            out[f"{name}_min"] = self.low[f, k] if n else math.nan
+            out[f"{name}_max"] = self.high[f, k] if n else math.nan
+        frames = int(self.frames[k])
+        out["airborne"] = self.airborne[k] / frames if frames else math.nan
+        out["ground_time"] = float(self.ground_time[k])
+        out["worst_stretch"] = float(self.worst[k])
+        out["window_frames"] = frames
+        return {key: float(v) if isinstance(v, np.floating) else v for key, v in out.items()}

@@ -45,12 +45,17 @@ def fly_piloted(
     sim = Simulation(d)
     record = sim.model.objects[0]
     steps = max(1, int(round(every / sim.dt)))
+    inv = sim.model.particle_inv_mass.numpy()[record.particles]
+    mass = np.where(inv > 0, 1.0 / np.where(inv > 0, inv, 1.0), 0.0)
     history, wanted, controls = [], {"pitch": 0.0, "roll": 0.0}, {"pitch": 0.0, "roll": 0.0}
     step_most = slew * steps * sim.dt
     for i in range(int(round(seconds / every))):
         sim.step(steps)
         state = flight_state(record, sim.state.positions(), sim.state.particle_q_prev.numpy(), sim.dt, (0, 0, 0))
         state["t"] = (i + 1) * steps * sim.dt
+        q, q_prev = sim.state.positions()[record.particles], sim.state.particle_q_prev.numpy()[record.particles]
+        state["cg_velocity"] = mass @ (q - q_prev) / (mass.sum() * sim.dt)
+        state["cg_speed"] = float(np.linalg.norm(state["cg_velocity"]))
         wanted.update((pilot(state) if pilot else None) or {})
         moved = {k: controls[k] + float(np.clip(v - controls[k], -step_most, step_most)) for k, v in wanted.items()}
         if moved != controls:

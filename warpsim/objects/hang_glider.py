@@ -32,7 +32,8 @@ class HangGliderConfig(Checked):
 
     Attributes:
         design: ``flying`` (the default: the pilot on a hang strap holding a control bar, a tensioned sail with
-            washout struts, a keel pocket and 2 degrees of dihedral, under the ``sail`` air model) or ``paper``
+            washout struts, a keel pocket, 1 degree of dihedral and a billow shift under weight shift, under the
+            ``sail`` air model) or ``paper``
             (Section 6: the pilot on seven control sticks, an untensioned flat sail, the paper's air law). In a
             scene or with ``--set`` it is a preset (:data:`PRESETS`): it sets those keys and ``air.model``, and
             keys given beside it win. The builder itself reads only the individual keys.
@@ -45,7 +46,7 @@ class HangGliderConfig(Checked):
         pilot_station: pilot's neutral position along the keel, fraction of the chord from the nose.
         frame_height: distance of the upper/lower virtual particles from the sail plane [m].
         pitch_travel: pilot travel forward/back at |pitch| = 1 [m].
-        roll_travel: pilot travel sideways at |roll| = 1 [m].
+        roll_travel: pilot travel sideways at |roll| = 1 [m] (a pilot moves about half a metre each way on the bar).
         altitude: start height of the nose above the terrain [m].
         position: start (x, y) of the nose [m].
         heading: flight direction, degrees from +x towards +y.
@@ -77,8 +78,9 @@ class HangGliderConfig(Checked):
             about 0.15-0.25; Dees, AIAA 2010-9300 drag build-up).
         frame_drag_area: ``sail`` air model, ``strap``: drag area [m^2] of the control frame, wires and kingpost.
         dihedral: the wings rise from the keel by this angle [deg] (sweep and dihedral roll a wing away from a
-            sideslip: with 0 the flex wing turns ever tighter, with 3 or more it answers weight shift the
-            wrong way; 2 gives a steady turn that levels off when released).
+            sideslip: with 0 the flex wing slowly steepens a turn, with 2 it rolls back towards level within
+            20 s, with 3 or more it answers weight shift the wrong way without ``billow_shift``; 1 with the billow
+            shift holds a 30 degree turn nearly neutrally, as real flex wings do: issue 34, README "How it flies").
         keel_pocket: hold the cloth on both sides of the keel tube to it (a sail's keel pocket), so the sail
             cannot fold along the keel between keel particles.
         washout_struts: share of each half of the trailing edge, from the tip, held rigid at its washout by
@@ -90,6 +92,13 @@ class HangGliderConfig(Checked):
             (:func:`~warpsim.kernels.aero.sail_coefficients`).
         profile_drag: ``sail`` air model: the sail's zero-lift drag coefficient.
         stall_angle: ``sail`` air model: angle of attack [deg] where a triangle's flow separates.
+        billow_shift: share of the cloth's length that full weight shift moves from one half of the sail to the
+            other (0 = none; the sail's billow shift): on a real flex wing the keel floats and swings under the
+            pilot's weight against the leading edges and crossbar, so the half the pilot moves towards gets more
+            cloth (more billow, more twist, less lift: that wing drops) and the other half less. At ``roll`` the
+            cloth sticks of the half towards the pilot are ``sail_tension - billow_shift * |roll|`` shorter than
+            built (longer where negative: the lifted sail billows into the extra cloth), the other half's
+            ``sail_tension + billow_shift * |roll|``.
     """
 
     design: str = choice("flying", ("flying", "paper"))
@@ -102,7 +111,7 @@ class HangGliderConfig(Checked):
     pilot_station: float = number(0.55, Bounds(0.0, 1.0))
     frame_height: float = number(1.5, POSITIVE)
     pitch_travel: float = number(0.2, NON_NEGATIVE)
-    roll_travel: float = number(0.4, NON_NEGATIVE)
+    roll_travel: float = number(0.5, NON_NEGATIVE)
     altitude: float = number(300.0, POSITIVE)
     position: tuple[float, float] = (-300.0, 0.0)
     heading: float = 0.0
@@ -120,13 +129,14 @@ class HangGliderConfig(Checked):
     control_frame_mass: float = number(4.0, POSITIVE)
     pilot_drag_area: float = number(0.2, NON_NEGATIVE)
     frame_drag_area: float = number(0.1, NON_NEGATIVE)
-    dihedral: float = number(2.0, Bounds(-30.0, 30.0))
+    dihedral: float = number(1.0, Bounds(-30.0, 30.0))
     keel_pocket: bool = True
     washout_struts: float = number(0.5, Bounds(0.0, 1.0))
     sail_tension: float = number(0.03, Bounds(0.0, 0.2))
     oswald: float = number(0.8, Bounds(0.0, 1.0, low_open=True))
     profile_drag: float = number(0.025, NON_NEGATIVE)
     stall_angle: float = number(18.0, Bounds(0.0, 90.0, low_open=True, high_open=True))
+    billow_shift: float = number(0.055, Bounds(0.0, 0.2))
 
 
 # The keys a design sets (README, hang glider): the paper's glider differs from the flying one only in these.
@@ -136,6 +146,8 @@ _PAPER_GLIDER = {
     "washout_struts": 0.0,
     "sail_tension": 0.0,
     "dihedral": 0.0,
+    "billow_shift": 0.0,
+    "roll_travel": 0.4,
 }
 PRESETS = {
     "flying": {"air": {"model": "sail"}, "hang_glider": {k: getattr(HangGliderConfig(), k) for k in _PAPER_GLIDER}},
@@ -156,6 +168,9 @@ class HangGliderRecord(ObjectRecord):
             (forward, left, up) [m] from the nose.
         pilot_neutral_frame: ``[3]`` the pilot's neutral position in that frame [m].
         pitch_travel, roll_travel: pilot travel at full pitch / roll [m].
+        hang_point_frame: ``strap``: the hang point in the build frame [m] (None: control sticks).
+        billow_sticks: the cloth sticks either side of the keel (billow shift); billow_built: their lengths as
+            built [m]; billow_side: +1 left of the keel, -1 right. sail_tension, billow_shift: as configured.
     """
 
     nose: int
@@ -169,6 +184,11 @@ class HangGliderRecord(ObjectRecord):
     pitch_travel: float
     roll_travel: float
     hang_point_frame: np.ndarray | None = None
+    billow_sticks: np.ndarray | None = None
+    billow_built: np.ndarray | None = None
+    billow_side: np.ndarray | None = None
+    sail_tension: float = 0.0
+    billow_shift: float = 0.0
 
 
 def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Heightfield) -> HangGliderRecord:
@@ -255,10 +275,14 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
             for p in (rows[i][(i - 1) // 2], rows[i][(i + 1) // 2]):
                 for a in (*frame.virtual, rows[i - 1][(i - 1) // 2], rows[i + 1][(i + 1) // 2]):
                     tie(p, a)
+    cloth_sticks = np.setdiff1d(sail_sticks, np.concatenate([frame.sticks, frame_ties]).astype(int))
+    built = np.array([builder.stick_rest[st] for st in cloth_sticks])
     if cfg.sail_tension > 0.0:
-        builder.pretension(
-            np.setdiff1d(sail_sticks, np.concatenate([frame.sticks, frame_ties]).astype(int)), cfg.sail_tension
-        )
+        builder.pretension(cloth_sticks, cfg.sail_tension)
+    # each cloth stick's half of the sail: +1 left of the keel, -1 right, 0 across it (billow shift)
+    ends = np.array([builder.stick_particles[st] for st in cloth_sticks], dtype=int).reshape(-1, 2)
+    mid = (builder.positions(ends[:, 0]) + builder.positions(ends[:, 1])) / 2.0 if len(ends) else np.zeros((0, 3))
+    side = np.sign(np.round((mid - nose) @ left, 9))
     frame_set = set(frame.points)
     cloth = [p for p in sail if p not in frame_set]
     frame_mass = cfg.frame_mass_fraction * cfg.glider_mass
@@ -303,6 +327,11 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
             hang_point_frame=None if hang is None else _to_frame(hang[None], nose, fwd, left, up)[0],
             pitch_travel=cfg.pitch_travel,
             roll_travel=cfg.roll_travel,
+            billow_sticks=cloth_sticks[side != 0].astype(int),
+            billow_built=built[side != 0],
+            billow_side=side[side != 0],
+            sail_tension=cfg.sail_tension,
+            billow_shift=cfg.billow_shift,
         )
     )
 
@@ -392,6 +421,16 @@ def apply_controls(record: HangGliderRecord, targets: dict, values: dict) -> Non
     force; one never set is 0) into ``targets['stick_rest']`` (a host copy of ``Control.stick_rest``)."""
     pitch, roll = float(values.get("pitch", 0.0)), float(values.get("roll", 0.0))
     targets["stick_rest"][record.control_sticks] = control_rest_lengths(record, pitch, roll)
+    if record.billow_shift > 0.0 and record.billow_sticks is not None and len(record.billow_sticks):
+        targets["stick_rest"][record.billow_sticks] = billow_rest_lengths(record, roll)
+
+
+def billow_rest_lengths(record: HangGliderRecord, roll: float) -> np.ndarray:
+    """Rest lengths [m] of the sail's cloth sticks either side of the keel at ``roll`` in [-1, 1] (billow shift):
+    the half the pilot moves towards (``roll > 0``: the right, ``billow_side = -1``) ``sail_tension - billow_shift
+    * |roll|`` shorter than built, the other ``sail_tension + billow_shift * |roll|``."""
+    share = record.sail_tension + record.billow_side * record.billow_shift * roll
+    return record.billow_built * (1.0 - share)
 
 
 def bank(record: HangGliderRecord, q: np.ndarray) -> float:

@@ -33,7 +33,12 @@ def scene_descriptor(scene: str | dict, solver: dict | None = None, glider: dict
 
 
 def fly_piloted(
-    d: dict, seconds: float, pilot: Pilot | None = None, every: float = 0.05, slew: float = 2.0
+    d: dict,
+    seconds: float,
+    pilot: Pilot | None = None,
+    every: float = 0.05,
+    slew: float = 2.0,
+    stop: Callable[[dict], bool] | None = None,
 ) -> list[dict]:
     """Fly the hang glider of descriptor ``d`` for ``seconds`` [s] with ``pilot`` deciding the controls every
     ``every`` seconds; the flight state at each decision, with ``t`` [s] and the ``roll``/``pitch`` then set.
@@ -63,6 +68,8 @@ def fly_piloted(
             sim.set_controls(**controls)
         state.update(controls)
         history.append(state)
+        if stop is not None and stop(state):
+            break
     return history
 
 
@@ -71,7 +78,7 @@ def _crossing(history: list[dict], t0: float, test: Callable[[dict], bool]) -> f
     return next((f["t"] for f in history if f["t"] >= t0 and test(f)), math.inf)
 
 
-def roll_flight(scene: str | dict, solver: dict | None = None, level: float = 15.0, hold: float = 20.0) -> dict:
+def roll_flight(scene: str | dict, solver: dict | None = None, level: float = 10.0, hold: float = 20.0) -> dict:
     """Full weight shift from level flight: ``roll = -1`` at ``level`` [s] until 30° of left bank, then ``roll = +1``
     until 30° of right bank (the reversal), then the bar centred for ``hold`` [s].
 
@@ -93,7 +100,8 @@ def roll_flight(scene: str | dict, solver: dict | None = None, level: float = 15
         return None
 
     seconds = level + 60.0 + hold
-    history = fly_piloted(scene_descriptor(scene, solver), seconds, pilot)
+    done = lambda s: phase["name"] == "hold" and s["t"] >= phase["t_right"] + hold + 0.06  # noqa: E731
+    history = fly_piloted(scene_descriptor(scene, solver), seconds, pilot, stop=done)
     t_left = _crossing(history, level, lambda f: f["bank_deg"] <= -30.0)
     t_right = _crossing(history, t_left, lambda f: f["bank_deg"] >= 30.0)
     held = [f for f in history if t_right <= f["t"] <= t_right + hold + 1e-9]
@@ -144,10 +152,10 @@ def turn_circle(frames: list[dict]) -> dict:
     }
 
 
-def turn_flight(scene: str | dict, solver: dict | None = None, banks=(20.0, 40.0), settle=15.0, hold=15.0) -> dict:
-    """Steady turns held by :func:`bank_holder` at each of ``banks`` [deg] in turn (from 15 s, ``settle`` + ``hold``
+def turn_flight(scene: str | dict, solver: dict | None = None, banks=(20.0, 40.0), settle=10.0, hold=10.0) -> dict:
+    """Steady turns held by :func:`bank_holder` at each of ``banks`` [deg] in turn (from 10 s, ``settle`` + ``hold``
     seconds each); :func:`turn_circle` over each ``hold``, keyed by the bank."""
-    start = 15.0
+    start = 10.0
     span = settle + hold
 
     def target(t):
@@ -181,13 +189,35 @@ def dive_flight(scene: str | dict, solver: dict | None = None, nose_down: float 
     }
 
 
-def jones_recovery_height(wing_loading: float, lift_coefficient: float) -> float:
+def jones_recovery_height(wing_loading: float, lift_coefficient: float, density: float = AIR_DENSITY) -> float:
     """Height [m] a glider released from rest loses before its path is level again, after R.T. Jones (1977):
     without drag and at a constant lift coefficient C_L, energy gives V^2 = 2 g z after a drop z, and the path's
     curvature ``V dgamma/dt = (rho S C_L / 2m) V^2 - g cos gamma`` integrates (Lanchester's phugoid) to
     ``cos gamma = (2/3) (rho C_L / (2 m/S)) 2 z``, from a vertical start: level (cos gamma = 1) at
-    ``z = 3 (m/S) / (rho C_L)``, whatever the nose's start attitude. ``wing_loading`` m/S [kg/m^2]."""
-    return 3.0 * wing_loading / (AIR_DENSITY * lift_coefficient)
+    ``z = 3 (m/S) / (rho C_L)``, whatever the nose's start attitude. ``wing_loading`` m/S [kg/m^2], ``density`` rho
+    [kg/m^3]."""
+    return 3.0 * wing_loading / (density * lift_coefficient)
+
+
+def point_mass_recovery(
+    wing_loading: float, lift_coefficient: float, glide_ratio: float, density: float = AIR_DENSITY, step: float = 1e-3
+) -> float:
+    """Height [m] lost from rest until the path is level, integrating Jones's point mass with drag: constant
+    ``lift_coefficient`` across the path and drag ``lift / glide_ratio`` along it (midpoint rule, ``step`` [s]);
+    ``wing_loading`` [kg/m^2], ``density`` [kg/m^3]."""
+    k = density * lift_coefficient / (2.0 * wing_loading)  # lift per unit mass over V^2 [1/m]
+
+    def accel(v):
+        speed = math.hypot(*v)
+        lift = k * speed  # times V^2 / V: the lift per unit mass along the unit normal, scaled by V
+        return np.array([-lift * v[1] - lift * v[0] / glide_ratio, lift * v[0] - lift * v[1] / glide_ratio - GRAVITY])
+
+    v, z = np.array([0.0, -1e-3]), 0.0
+    while not (v[1] >= 0.0 and v[0] > 0.0):
+        half = v + 0.5 * step * accel(v)
+        z -= step * half[1]
+        v = v + step * accel(half)
+    return z
 
 
 def phugoid_flight(scene: str | dict, solver: dict | None = None) -> dict:
@@ -223,21 +253,24 @@ def phugoid_flight(scene: str | dict, solver: dict | None = None) -> dict:
 
 
 def stall_flight(scene: str | dict, solver: dict | None = None) -> dict:
-    """Full bar out (pitch -1) from 20 s, released at 30 s: the time [s] to fly at 9 m/s again and the largest
-    |pitch| [deg] after the release."""
+    """Full bar out (pitch -1) from 15 s, released at 25 s, flown to 40 s: the time [s] to fly at 9 m/s again, the
+    largest |pitch| [deg] after the release, the lowest airspeed [m/s] and highest pitch [deg] while held."""
 
     def pilot(s):
-        if abs(s["t"] - 20.0) < 1e-6:
+        if abs(s["t"] - 15.0) < 1e-6:
             return {"pitch": -1.0}
-        if abs(s["t"] - 30.0) < 1e-6:
+        if abs(s["t"] - 25.0) < 1e-6:
             return {"pitch": 0.0}
         return None
 
-    history = fly_piloted(scene_descriptor(scene, solver), 50.0, pilot, every=0.1)
-    after = [f for f in history if f["t"] > 30.05]
+    history = fly_piloted(scene_descriptor(scene, solver), 40.0, pilot, every=0.1)
+    held = [f for f in history if 15.0 < f["t"] <= 25.05]
+    after = [f for f in history if f["t"] > 25.05]
     return {
-        "recovery": _crossing(after, 30.0, lambda f: f["airspeed"] >= 9.0) - 30.0,
+        "recovery": _crossing(after, 25.0, lambda f: f["airspeed"] >= 9.0) - 25.0,
         "max_pitch": max(abs(f["pitch_deg"]) for f in after),
+        "slowest": min(f["airspeed"] for f in held),
+        "nose_up": max(f["pitch_deg"] for f in held),
         "history": history,
     }
 
@@ -262,6 +295,27 @@ def wing_loading(scene: str | dict) -> float:
     """Total mass over the sail's planform area (span x chord / 2) [kg/m^2]."""
     g = scene_descriptor(scene)["hang_glider"]
     return (g["glider_mass"] + g["pilot_mass"] + g["control_frame_mass"]) / (0.5 * g["span"] * g["chord"])
+
+
+def dive_band(scene: str | dict, trim_speed: float, glide_ratio: float, max_lift: float = 1.0) -> dict:
+    """The band of the dive recovery height [m] from R.T. Jones (1977) at ``scene``'s wing loading and air density:
+    from his closed form at the maximum lift coefficient ``max_lift`` (his 1.0: the wing pulls out at once at its
+    highest lift, the least height) to the point mass holding the trim lift coefficient
+    ``2 (m/S) g / (rho V^2)`` (``trim_speed`` [m/s]) with the drag of the measured ``glide_ratio`` (a pitch-stable
+    wing that stays at its trim angle of attack). Returns ``wing_loading``, ``density``, ``trim_cl``, ``low``,
+    ``jones_trim`` (the closed form at the trim C_L) and ``high``."""
+    d = scene_descriptor(scene)
+    rho = float(d.get("air", {}).get("density", AIR_DENSITY))
+    load = wing_loading(d)
+    cl = 2.0 * load * GRAVITY / (rho * trim_speed**2)
+    return {
+        "wing_loading": load,
+        "density": rho,
+        "trim_cl": cl,
+        "low": jones_recovery_height(load, max_lift, rho),
+        "jones_trim": jones_recovery_height(load, cl, rho),
+        "high": point_mass_recovery(load, cl, glide_ratio, rho),
+    }
 
 
 def summary(scene: str | dict = "hang-glider", solver: dict | None = None) -> dict:

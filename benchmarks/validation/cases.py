@@ -543,19 +543,20 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider") -> list[Row]
             _fmt(t30, ".1f", " s"),
             "1-4 s at both",
             all(1.0 <= v <= 4.0 for v in t30),
-            note="full weight shift moves the pilot 0.5 m and 5.5 % of the cloth's length from one half of the sail to "
-            "the other (billow shift)" + was("15.9 s"),
+            note="full weight shift moves the pilot 0.55 m sideways and shifts the billow: the strutted trailing edge "
+            "of the low half raised as if its tip washout were 16° more, the other's lowered" + was("15.9 s"),
         ),
         Row(
             f"{label}roll reversal",
-            "from 30° of left bank (still rolling left), full weight shift the other way: time to 30° of right bank",
+            "from a steady 30° left turn (held 8 s by a pilot), full weight shift to the right: time to 30° of right "
+            "bank",
             "about 3-4 s",
             "issue 34: hang gliders reverse a 30° turn to the other side in about 3-4 s (Cook & Spottiswoode, "
             "Aeronautical Journal 2006: weak but prompt lateral control)",
             _fmt(rev, ".1f", " s"),
             "3-4 s at both",
             all(3.0 <= v <= 4.0 for v in rev),
-            note="the bar from one stop to the other in 1 s" + was("28.1 s"),
+            note="the bar from one stop to the other in 1 s" + was("26.8 s (from a rolling -30°)"),
         ),
     ]
     hold = both(lambda f: f["bank_after_hold"])

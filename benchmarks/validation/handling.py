@@ -78,47 +78,57 @@ def _crossing(history: list[dict], t0: float, test: Callable[[dict], bool]) -> f
     return next((f["t"] for f in history if f["t"] >= t0 and test(f)), math.inf)
 
 
-def roll_flight(scene: str | dict, solver: dict | None = None, level: float = 10.0, hold: float = 20.0) -> dict:
-    """Full weight shift from level flight: ``roll = -1`` at ``level`` [s] until 30° of left bank, then ``roll = +1``
-    until 30° of right bank (the reversal), then the bar centred for ``hold`` [s].
+def roll_flight(
+    scene: str | dict, solver: dict | None = None, level: float = 10.0, steady: float = 8.0, hold: float = 20.0
+) -> dict:
+    """Full weight shift from level flight, a reversal from a steady turn, and the bar centred in a turn.
 
-    Returns ``time_to_30`` [s] (level to -30°), ``reversal`` [s] (-30° to +30°), ``bank_after_hold`` [deg] (the
-    bank ``hold`` seconds after centring), ``bank_min``/``bank_max`` [deg] over the hold, ``history``.
+    From level trimmed flight at ``level`` [s], ``roll = -1`` until 30° of left bank; a pilot (:func:`bank_holder`)
+    then holds 30° left for ``steady`` [s]; then ``roll = +1`` until 30° of right bank (the reversal), and the bar is
+    centred for ``hold`` [s]. Returns ``time_to_30`` [s] (level to -30°), ``reversal`` [s] (from the full weight
+    shift right in the steady left turn to +30°), ``bank_after_hold`` [deg] (the bank ``hold`` seconds after
+    centring), ``bank_min``/``bank_max`` [deg] over the hold, ``history``.
     """
     phase = {"name": "level"}
+    holder = bank_holder(lambda t: -30.0)
 
     def pilot(s):
-        if phase["name"] == "level" and s["t"] >= level - 1e-9:
+        name = phase["name"]
+        if name == "level" and s["t"] >= level - 1e-9:
             phase.update(name="left", t=s["t"])
             return {"roll": -1.0}
-        if phase["name"] == "left" and s["bank_deg"] <= -30.0:
-            phase.update(name="right", t_left=s["t"])
+        if name == "left" and s["bank_deg"] <= -30.0:
+            phase.update(name="steady", t_left=s["t"])
+        if phase["name"] == "steady":
+            if s["t"] < phase["t_left"] + steady - 1e-9:
+                return holder(s)
+            phase.update(name="right", t_reverse=s["t"])
             return {"roll": 1.0}
-        if phase["name"] == "right" and s["bank_deg"] >= 30.0:
+        if name == "right" and s["bank_deg"] >= 30.0:
             phase.update(name="hold", t_right=s["t"])
             return {"roll": 0.0}
         return None
 
-    seconds = level + 60.0 + hold
-    done = lambda s: phase["name"] == "hold" and s["t"] >= phase["t_right"] + hold + 0.06  # noqa: E731
-    history = fly_piloted(scene_descriptor(scene, solver), seconds, pilot, stop=done)
-    t_left = _crossing(history, level, lambda f: f["bank_deg"] <= -30.0)
-    t_right = _crossing(history, t_left, lambda f: f["bank_deg"] >= 30.0)
-    held = [f for f in history if t_right <= f["t"] <= t_right + hold + 1e-9]
-    out = {
-        "time_to_30": t_left - level,
-        "reversal": t_right - t_left,
+    done = lambda s: phase["name"] == "hold" and s["t"] >= phase["t_right"] + hold - 1e-9  # noqa: E731
+    history = fly_piloted(scene_descriptor(scene, solver), level + steady + 60.0 + hold, pilot, stop=done)
+    t_right = phase.get("t_right", math.inf)
+    held = [f for f in history if t_right <= f["t"]]
+    return {
+        "time_to_30": phase.get("t_left", math.inf) - level,
+        "reversal": t_right - phase.get("t_reverse", math.inf),
         "history": history,
         "bank_after_hold": held[-1]["bank_deg"] if held and held[-1]["t"] >= t_right + hold - 0.06 else math.nan,
         "bank_min": min((f["bank_deg"] for f in held), default=math.nan),
         "bank_max": max((f["bank_deg"] for f in held), default=math.nan),
     }
-    return out
 
 
-def bank_holder(target: Callable[[float], float | None], gain: float = 0.05, integral: float = 0.02) -> Pilot:
+def bank_holder(
+    target: Callable[[float], float | None], gain: float = 0.05, integral: float = 0.005, near: float = 3.0
+) -> Pilot:
     """A pilot holding the bank at ``target(t)`` [deg] (None: hands off, bar centred): roll = gain * error +
-    integral * (error integrated over time) [per deg, per deg s], clipped to [-1, 1]."""
+    integral * (the error integrated over time while within ``near`` degrees of the target) [per deg, per deg s],
+    clipped to [-1, 1]."""
     last = {"sum": 0.0}
 
     def pilot(s):
@@ -129,7 +139,8 @@ def bank_holder(target: Callable[[float], float | None], gain: float = 0.05, int
             last["sum"] = 0.0
             return {"roll": 0.0}
         error = want - s["bank_deg"]
-        last["sum"] = float(np.clip(last["sum"] + error * dt, -1.0 / integral, 1.0 / integral))
+        if abs(error) < near:
+            last["sum"] += error * dt
         return {"roll": float(np.clip(gain * error + integral * last["sum"], -1.0, 1.0))}
 
     return pilot

@@ -44,8 +44,9 @@ def test_the_bar_slews_and_the_pilot_stops_the_flight():
 def test_intermediate_glider_handles_as_the_default_at_both_time_steps():
     """Issue 34, the intermediate glider (15 m^2, 30 + 80 kg): glide >= 8 at 9-13 m/s, 30 deg in 1-4 s, reversal
     3-4 s, 20-40 deg 20 s after centring, turn radii within 15 % of V^2 / (g tan bank), phugoid damping, stall,
-    at dt 0.01/55 and 0.005/110 (measured: 8.45/8.08, 1.6/1.7 s, 3.0/3.2 s, 27.9/27.4 deg); the dive recovery
-    and phugoid period miss as the default's (40.5 m against 17.6-25.5 m, +34 %)."""
+    at dt 0.01/55 and 0.005/110 (measured: glide 8.37/8.02, 30 deg in 2.4/2.0 s, reversal 3.6/3.8 s, 26.4/27.6 deg
+    after centring); the dive recovery and phugoid period miss as the default's (40.8 m against 17.6-25.5 m,
+    +34 %)."""
     rows = cases.CASES["flying-glider-intermediate"]()
     assert len(rows) == 11
     missing = {r.case.removeprefix("intermediate ") for r in rows if not r.ok}

@@ -356,6 +356,57 @@ def summary(scene: str | dict = "hang-glider", solver: dict | None = None) -> di
     }
 
 
+def plot_roll_reversal(path, scene: str | dict = "hang-glider") -> dict:
+    """Plot bank [deg], the pilot's roll and airspeed [m/s] against time [s] of :func:`roll_flight` (defaults and dt
+    0.005/110) to the PNG ``path``; returns the flights."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    flights = {"dt 0.01, 55 iterations": roll_flight(scene), "dt 0.005, 110": roll_flight(scene, FINE)}
+    fig, (top, mid, low) = plt.subplots(3, 1, sharex=True, figsize=(8, 7), gridspec_kw={"height_ratios": [3, 1, 2]})
+    for (label, r), style in zip(flights.items(), ("-", "--"), strict=True):
+        h = [f for f in r["history"] if f["t"] >= 8.0]
+        t = [f["t"] for f in h]
+        top.plot(t, [f["bank_deg"] for f in h], style, color="C0", label=f"bank, {label}")
+        mid.plot(t, [f["roll"] for f in h], style, color="C2", label=label)
+        low.plot(t, [f["airspeed"] for f in h], style, color="C1", label=label)
+    r = flights["dt 0.01, 55 iterations"]
+    for y in (-30.0, 30.0):
+        top.axhline(y, color="grey", lw=0.6)
+    fine = flights["dt 0.005, 110"]
+    top.text(
+        0.02,
+        0.96,
+        f"level to -30°: {r['time_to_30']:.1f} s ({fine['time_to_30']:.1f} s)\n"
+        f"reversal -30° to +30°: {r['reversal']:.1f} s ({fine['reversal']:.1f} s)\n"
+        f"bar centred at +30°: {r['bank_after_hold']:.0f}° ({fine['bank_after_hold']:.0f}°) 20 s later",
+        transform=top.transAxes,
+        va="top",
+        fontsize=8,
+        bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none"},
+    )
+    top.set_ylabel("bank [deg] (+ right)")
+    top.legend(fontsize=8, loc="lower right")
+    top.set_title("Hang glider: full weight shift from level, reversal from a steady 30° turn, bar centred")
+    mid.set_ylabel("roll (bar)")
+    mid.set_ylim(-1.15, 1.15)
+    low.set_ylabel("airspeed [m/s]")
+    low.set_xlabel("time [s]")
+    low.legend(fontsize=8, loc="upper right")
+    for ax in (top, mid, low):
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return flights
+
+
+FINE = {"dt": 0.005, "iterations": 110}
+"""The finer numerics every handling band must also hold at (issue 34)."""
+
+
 if __name__ == "__main__":  # python -m benchmarks.validation.handling [scene] [dt iterations] [key=value ...]
     import json
     import sys

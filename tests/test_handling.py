@@ -53,3 +53,37 @@ def test_intermediate_glider_handles_as_the_default_at_both_time_steps():
     assert missing == set(cases.FLYING_MISSES), [r for r in rows if not r.ok]
     turn40 = next(r for r in rows if r.case.endswith("~40°"))
     assert math.isfinite(float(turn40.measured.split()[0]))
+
+
+def test_billow_shift_twists_the_low_half_up_and_is_off_in_the_paper_design():
+    from warpsim.descriptor import defaults, merge
+    from warpsim.objects.hang_glider import billow_rest_lengths
+    from warpsim.runner import Simulation
+
+    sim = Simulation(scene_descriptor("hang-glider"))
+    rec = sim.model.objects[0]
+    built = sim.model.stick_rest.numpy()[rec.billow_sticks]
+    np.testing.assert_allclose(billow_rest_lengths(rec, 0.0), built, rtol=1e-6)
+    # the struts' particles in the build frame, raised for roll +1 (pilot right): the right half (side -1) rises
+    pilot_right = billow_rest_lengths(rec, 1.0) - built
+    assert np.abs(pilot_right).max() > 0.01
+    # mirror images: roll -1 changes the left half's ties as roll +1 the right half's
+    left_half = billow_rest_lengths(rec, -1.0) - built
+    assert sorted(np.round(left_half[rec.billow_side == 1], 9)) == pytest.approx(
+        sorted(np.round(pilot_right[rec.billow_side == -1], 9)), abs=1e-4
+    )
+    sim.step(100)
+    sim.set_controls(roll=1.0)
+    sim.step(50)
+    q = sim.state.positions()
+    nose, tail = q[rec.nose], q[rec.keel[-1]]
+    left = q[rec.tips[0]] - q[rec.tips[1]]
+    up = np.cross(nose - tail, left)
+    up /= np.linalg.norm(up)
+    side = rec.billow_side
+    points = np.unique(rec.billow_particles)
+    height = {s: np.mean([(q[p] - tail) @ up for p in points if np.sign((q[p] - tail) @ left) == s]) for s in (1, -1)}
+    assert height[-1] > height[1] + 0.02, height  # the right (low) half's trailing edge is raised
+    assert side.min() == -1 and side.max() == 1
+    paper = Simulation(merge("t", defaults("hang-glider"), {"hang_glider": {"design": "paper"}})).model.objects[0]
+    assert paper.billow_shift == 0.0

@@ -168,7 +168,8 @@ class HangGliderRecord(ObjectRecord):
         pilot_neutral_frame: ``[3]`` the pilot's neutral position in that frame [m].
         pitch_travel, roll_travel: pilot travel at full pitch / roll [m].
         hang_point_frame: ``strap``: the hang point in the build frame [m] (None: control sticks).
-        billow_shift: as configured [deg]; billow_sticks: the washout struts' ties; billow_points,
+        billow_shift: as configured [deg]; billow_sticks: the washout struts' ties; billow_particles: the strut
+            particle of each tie; billow_points,
             billow_anchors: their strut particles' and anchors' positions in the build frame [m]; billow_side: the
             strut particle's side (+1 left); billow_rise: its rise [m] per radian of extra washout at the tip.
     """
@@ -186,6 +187,7 @@ class HangGliderRecord(ObjectRecord):
     hang_point_frame: np.ndarray | None = None
     billow_shift: float = 0.0
     billow_sticks: np.ndarray | None = None
+    billow_particles: np.ndarray | None = None
     billow_points: np.ndarray | None = None
     billow_anchors: np.ndarray | None = None
     billow_side: np.ndarray | None = None
@@ -347,6 +349,7 @@ def _billow_shift_data(builder: ModelBuilder, cfg: HangGliderConfig, strut_ties,
     rise = behind_edge * (y / semi) / np.cos(washout * y / semi) ** 2
     return {
         "billow_sticks": sticks,
+        "billow_particles": ps,
         "billow_points": p_frame,
         "billow_anchors": a_frame,
         "billow_side": np.sign(p_frame[:, 1]),

@@ -54,12 +54,21 @@ def test_paper_glider_rows_report_the_model_limit():
     assert len(rows) == 4 and all(r.model_limit for r in rows.values())
 
 
-def test_flying_glider_and_kite_rows_pass_with_no_model_limit():
-    """The flying design against real flex wings and closed forms (glide, trim, the coordinated turn, Lanchester's
-    phugoid damping, stall recovery) and the kites' line angle: every row inside its band, none excused."""
-    rows = {**_rows("flying-glider"), **_rows("kite-angle")}
-    assert len(rows) == 7
-    assert all(r.ok and not r.model_limit for r in rows.values()), [r for r in rows.values() if not r.ok]
+def test_flying_glider_rows_at_both_time_steps():
+    """Issue 34: the flying design against real flex wings and closed forms, each band at dt 0.01/55 and 0.005/110
+    (glide, trim, roll from level and reversal, bank after centring, turn radii, phugoid damping, stall recovery):
+    inside, none excused. The dive recovery (Jones 1977) and the phugoid period (Lanchester) still miss their bands
+    and are reported as failures (no model-limit excuse); if one starts passing, take it out of FLYING_MISSES."""
+    rows = cases.flying_glider()
+    assert len(rows) == 11
+    missing = {r.case.removeprefix("glider ") for r in rows if not r.ok}
+    assert missing == set(cases.FLYING_MISSES), [r for r in rows if not r.ok]
+    assert not any(r.model_limit for r in rows)
+
+
+def test_kite_rows_pass_with_no_model_limit():
+    rows = _rows("kite-angle")
+    assert len(rows) == 2 and all(r.ok and not r.model_limit for r in rows.values()), list(rows.values())
 
 
 def test_elliptic_integral():
@@ -100,8 +109,10 @@ def test_glider_converges_as_dt_halves_and_iterations_double():
 
 @pytest.mark.slow
 def test_flight_figures_converge():
-    """The turn rate, the phugoid period and the parachute's descent at the defaults lie within 10 %, 10 % and 5 %
-    of dt/4 with 220 iterations (measured -5.7 %, +5.2 %, +1.0 %). (The kite's line angle does not converge, its
+    """The turn rate (bank held at 20°), the phugoid period and the parachute's descent at the defaults lie within
+    10 %, 10 % and 5 % of dt/4 with 220 iterations. (The kite's line angle does not converge, its
     launch failing at some fine settings: the validation's convergence-figures part reports it as a model limit.)"""
-    rows = cases.convergence_figures(["glider turn rate, roll 0.5", "glider phugoid period", "parachute descent"])
+    rows = cases.convergence_figures(
+        ["glider turn rate, bank held at 20°", "glider phugoid period", "parachute descent"]
+    )
     assert len(rows) == 3 and all(r.ok and not r.model_limit for r in rows), rows

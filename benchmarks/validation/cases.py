@@ -479,104 +479,199 @@ def turn_rate(frames: list[dict]) -> float:
     return math.degrees(heading[-1] - heading[0]) / (frames[-1]["t"] - frames[0]["t"])
 
 
-def flying_glider() -> list[Row]:
-    """The default (flying) hang glider against real flex wings and flight-mechanics closed forms."""
-    trim = fly("hang-glider", 60.0)
-    ratio, speed = glide(window(trim, 10.0, 60.0))
-    speeds = np.array([f["airspeed"] for f in window(trim, 10.0, 60.0)])
+FINE = {"dt": 0.005, "iterations": 110}
+"""The finer numerics every flying-glider band must also hold at (issue 34: no band met only at one dt)."""
+
+
+def _fmt(values, spec: str, unit: str = "") -> str:
+    """``values`` (defaults, then :data:`FINE`) as ``a (b at 0.005/110)``."""
+    return f"{values[0]:{spec}}{unit} ({values[1]:{spec}}{unit} at dt 0.005/110)"
+
+
+def flying_glider(scene: str = "hang-glider", name: str = "glider") -> list[Row]:
+    """The flying hang glider of ``scene`` against real flex wings and flight-mechanics closed forms (issue 34):
+    glide and trim, roll from level and its reversal at full weight shift, the bank after centring the bar, turn
+    radii, dive recovery (R.T. Jones 1977), the phugoid and the stall recovery, each at the defaults (dt 0.01, 55
+    iterations) and at dt 0.005 with 110 iterations, the band holding at both (``name`` heads each row)."""
+    from benchmarks.validation import handling as h
+
+    figs = [h.summary(scene, solver) for solver in (None, FINE)]
+    label = f"{name} "
+    main = name == "glider"  # the default glider's figures at main 8edd34f (python -m benchmarks.validation.handling)
+
+    def was(text: str) -> str:
+        return f"; was {text} at main 8edd34f" if main else ""
+
+    def both(get):
+        return [get(f) for f in figs]
+
+    glide_, speed = both(lambda f: f["glide"]["glide"]), both(lambda f: f["glide"]["speed"])
+    spread = both(lambda f: f["glide"]["spread"])
     rows = [
         Row(
-            "glider glide (flying design)",
-            "glide ratio of the built-in hang glider hands off (pitch 0), still air, 10-60 s",
+            f"{label}glide (flying design)",
+            "glide ratio hands off (pitch 0), still air, 10-60 s",
             ">= 8",
             "single-surface flex wings glide about 8-10:1 at trim, modern topless ones about 15:1 at best "
             "(issue 18's band; Wikipedia, 'Hang gliding: performance'; approximate)",
-            f"{ratio:.2f}",
-            ">= 8",
-            ratio >= 8.0,
-            note=f"sink {speed / ratio:.2f} m/s",
+            _fmt(glide_, ".2f"),
+            ">= 8 at both",
+            min(glide_) >= 8.0,
+            note=f"sink {speed[0] / glide_[0]:.2f} m/s; largest bank hands off "
+            f"{max(both(lambda f: f['glide']['max_bank'])):.1g}°",
         ),
         Row(
-            "glider trim speed (flying design)",
-            "mean airspeed hands off, 10-60 s, and its spread",
+            f"{label}trim speed (flying design)",
+            "mean airspeed hands off, 10-60 s, and its largest departure from the mean",
             "9-13 m/s, steady within ±10 %",
             "hands-off trim of flex wings, about 32-47 km/h (issue 18's band; owner manuals, e.g. Wills Wing, "
             "give about 30-43 km/h; approximate)",
-            f"{speed:.2f} m/s ({speeds.min():.2f}-{speeds.max():.2f})",
-            "9-13 m/s, ±10 %",
-            9.0 <= speed <= 13.0 and np.abs(speeds / speed - 1.0).max() <= 0.1,
-            note=f"{3.6 * speed:.1f} km/h",
+            _fmt(speed, ".2f", " m/s") + f", within ±{100 * max(spread):.0f} %",
+            "9-13 m/s, ±10 %, at both",
+            all(9.0 <= v <= 13.0 for v in speed) and max(spread) <= 0.1,
+            note=f"{3.6 * speed[0]:.1f} km/h",
         ),
     ]
-    # weight shift: roll held at 0.5 from 20 s; a steady banked turn is coordinated: rate = g tan(bank) / V
-    turning = window(fly("hang-glider", 50.0, [(20.0, {"roll": 0.5})]), 35.0, 50.0)
-    bank = float(np.mean([f["bank_deg"] for f in turning]))
-    airspeed = float(np.mean([f["airspeed"] for f in turning]))
-    rate = -turn_rate(turning)  # bank > 0 (right wing down) turns right: heading falls
-    expected = math.degrees(GRAVITY * math.tan(math.radians(bank)) / airspeed)
-    sink = (turning[0]["altitude"] - turning[-1]["altitude"]) / (turning[-1]["t"] - turning[0]["t"])
+    t30, rev = both(lambda f: f["time_to_30"]), both(lambda f: f["reversal"])
+    rows += [
+        Row(
+            f"{label}roll: level to 30°",
+            "full weight shift (roll -1, the bar moved at 2/s) from level trimmed flight: time to 30° of bank",
+            "a few seconds",
+            "issue 34: weak but prompt lateral control (Cook & Spottiswoode, Aeronautical Journal 2006); a 30° turn "
+            "reversed to the other side in about 3-4 s, so from level, half the angle from rest, about 2 s",
+            _fmt(t30, ".1f", " s"),
+            "1-4 s at both",
+            all(1.0 <= v <= 4.0 for v in t30),
+            note="full weight shift moves the pilot 0.55 m sideways and shifts the billow: the strutted trailing edge "
+            "of the low half raised as if its tip washout were 16° more, the other's lowered" + was("15.9 s"),
+        ),
+        Row(
+            f"{label}roll reversal",
+            "from a steady 30° left turn (held 8 s by a pilot), full weight shift to the right: time to 30° of right "
+            "bank",
+            "about 3-4 s",
+            "issue 34: hang gliders reverse a 30° turn to the other side in about 3-4 s (Cook & Spottiswoode, "
+            "Aeronautical Journal 2006: weak but prompt lateral control)",
+            _fmt(rev, ".1f", " s"),
+            "3-4 s at both",
+            all(3.0 <= v <= 4.0 for v in rev),
+            note="the bar from one stop to the other in 1 s" + was("26.8 s (from a rolling -30°)"),
+        ),
+    ]
+    hold = both(lambda f: f["bank_after_hold"])
+    low, high = both(lambda f: f["hold_range"][0]), both(lambda f: f["hold_range"][1])
     rows.append(
         Row(
-            "glider weight-shift turn",
-            f"turn rate with roll 0.5 held, 35-50 s: bank {bank:.1f}°, airspeed {airspeed:.1f} m/s",
-            f"{expected:.1f} °/s",
-            "coordinated turn: rate = g tan(bank) / airspeed (level-turn force balance, any flight-mechanics text)",
-            f"{rate:.1f} °/s",
-            "within ±15 %",
-            abs(rate / expected - 1.0) <= 0.15,
-            note=f"sink {sink:.2f} m/s in the turn; bank {min(f['bank_deg'] for f in turning):.0f}-"
-            f"{max(f['bank_deg'] for f in turning):.0f}°",
+            f"{label}bank after centring the bar",
+            "rolled to 30° at full weight shift, then the bar centred: the bank 20 s later",
+            "neither diverging nor snapping back (20-40°)",
+            "issue 34: a flex wing at moderate bank is close to spirally neutral; centring the bar holds or slowly "
+            "shallows the bank",
+            _fmt(hold, ".1f", "°"),
+            "20-40° at both",
+            all(20.0 <= v <= 40.0 for v in hold),
+            note=f"bank over the 20 s {low[0]:.0f}-{high[0]:.0f}° ({low[1]:.0f}-{high[1]:.0f}° at 0.005/110): the roll "
+            "carries on a little while the bar comes back, then the bank shallows slowly" + was("19.0° (31-19°)"),
         )
     )
-    # phugoid: a 2 s pulse of bar in (pitch 0.3) from trim, then hands off; troughs of the airspeed
-    pulse = window(fly("hang-glider", 60.0, [(20.0, {"pitch": 0.3}), (22.0, {"pitch": 0.0})]), 23.0, 60.0)
-    dv = np.array([f["airspeed"] for f in pulse]) - speed
-    troughs = [i for i in range(1, len(dv) - 1) if dv[i] < dv[i - 1] and dv[i] <= dv[i + 1] and dv[i] < -0.2]
-    period = (pulse[troughs[-1]]["t"] - pulse[troughs[0]]["t"]) / (len(troughs) - 1)
-    decrement = math.log(dv[troughs[0]] / dv[troughs[-1]]) / (len(troughs) - 1)
-    zeta = decrement / math.hypot(2.0 * math.pi, decrement)
-    lanchester = 1.0 / (math.sqrt(2.0) * ratio)
+    for bank in (20, 40):
+        turns = both(lambda f, b=bank: f[f"turn{b}"])
+        ratio = [t["radius"] / t["expected"] - 1.0 for t in turns]
+        rows.append(
+            Row(
+                f"{label}turn radius at ~{bank}°",
+                f"a pilot holding {bank}° of bank (proportional-integral on the bar), 10 s settled, 10 s measured: "
+                f"radius V_h / rate against V^2 / (g tan bank), V the airspeed; bank {turns[0]['bank']:.1f}° at "
+                f"{turns[0]['airspeed']:.1f} m/s",
+                f"{turns[0]['expected']:.1f} m ({turns[1]['expected']:.1f} m at 0.005/110)",
+                "coordinated turn: tan(bank) = V^2 / (g R) (level-turn force balance, any flight-mechanics text); "
+                "issue 34: within 15 % up to 45°",
+                _fmt([t["radius"] for t in turns], ".1f", " m"),
+                "within ±15 % at both",
+                all(abs(r) <= 0.15 for r in ratio),
+                note=f"{100 * ratio[0]:+.1f} % ({100 * ratio[1]:+.1f} % at 0.005/110); turn rate "
+                f"{abs(turns[0]['rate']):.1f} °/s",
+            )
+        )
+    bands = [h.dive_band(scene, v, g) for v, g in zip(speed, glide_, strict=True)]
+    dive = both(lambda f: f["dive_height"])
+    b = bands[0]
     rows.append(
         Row(
-            "glider phugoid damping",
-            "damping ratio of the airspeed's oscillation after a 2 s pulse of bar in (pitch 0.3), hands off",
-            f"{lanchester:.3f}",
+            f"{label}dive recovery",
+            "released hands off from rest, nose 60° down: height lost until the flight path is level again",
+            f"{b['low']:.1f}-{b['high']:.1f} m",
+            "R.T. Jones 1977, 'Dynamics of ultralight aircraft: dive recovery of hang gliders' (NASA TM X-73229): "
+            "at a constant C_L and without drag, energy V^2 = 2 g z and the path's curvature V dγ/dt = "
+            "(ρ S C_L / 2m) V^2 - g cos γ integrate from rest (Lanchester's phugoid) to cos γ = ρ C_L z / (1.5 m/S), "
+            "level at z = 3 (m/S) / (ρ C_L) whatever the start attitude (12 m at 5 kg/m² and C_L 1.0, as Jones). "
+            f"Here m/S = {b['wing_loading']:.2f} kg/m², ρ = {b['density']:.3f} kg/m³: {b['low']:.1f} m at Jones's "
+            f"C_Lmax 1.0 (the least), {b['jones_trim']:.1f} m at the trim C_L {b['trim_cl']:.2f} "
+            "(2 (m/S) g / (ρ V_trim²)), and "
+            f"{b['high']:.1f} m for that point mass with the drag of the measured glide (integrated): the band",
+            _fmt(dive, ".1f", " m"),
+            f"{b['low']:.1f}-{b['high']:.1f} m ({bands[1]['low']:.1f}-{bands[1]['high']:.1f} m at 0.005/110), at both",
+            all(bd["low"] <= v <= bd["high"] for v, bd in zip(dive, bands, strict=True)),
+            note=f"{figs[0]['dive_time']:.1f} s to level, {figs[0]['dive_fastest']:.1f} m/s at most, nose down to "
+            f"{-figs[0]['dive_lowest_pitch']:.0f}°; the wing pulls out below its trim angle of attack (the default "
+            "glider: 9.5° of keel angle against 12° trimmed; its pitch damping against its pitch stiffness), so at "
+            "a lower C_L than Jones's" + was("38.2 m"),
+        )
+    )
+    ph = both(lambda f: f["phugoid"])
+    period_off = [p["period"] / p["lanchester"] - 1.0 for p in ph]
+    rows.append(
+        Row(
+            f"{label}phugoid period",
+            "period of the airspeed's oscillation after a 2 s pulse of bar in (pitch 0.3), hands off",
+            f"{ph[0]['lanchester']:.2f} s ({ph[1]['lanchester']:.2f} s at 0.005/110)",
+            "Lanchester's phugoid: period π √2 V / g at the trim speed V (constant angle of attack, no drag; e.g. "
+            "Etkin & Reid, Dynamics of Flight, 4.4); issue 34: within 20 %",
+            _fmt([p["period"] for p in ph], ".2f", " s"),
+            "within ±20 % at both",
+            all(abs(o) <= 0.2 for o in period_off),
+            note=f"{100 * period_off[0]:+.0f} % ({100 * period_off[1]:+.0f} % at 0.005/110): the keel's angle of "
+            "attack falls as the speed rises (the default glider: about 0.6° per m/s; it lags the pitch rate the "
+            "phugoid asks for), so the lift grows less than V^2" + was("7.4 s (+35 %)"),
+        )
+    )
+    lanchester = [1.0 / (math.sqrt(2.0) * g) for g in glide_]
+    zeta = [p["zeta"] for p in ph]
+    rows.append(
+        Row(
+            f"{label}phugoid damping",
+            "damping ratio of the same oscillation",
+            f"{lanchester[0]:.3f} ({lanchester[1]:.3f} at 0.005/110)",
             "Lanchester's phugoid: damping ratio 1 / (sqrt(2) L/D) (e.g. Etkin & Reid, Dynamics of Flight, 4.4), "
             "L/D the measured glide ratio",
-            f"{zeta:.3f}",
-            "within ±30 %",
-            abs(zeta / lanchester - 1.0) <= 0.3,
-            note=f"period {period:.1f} s against Lanchester's pi sqrt(2) V / g = "
-            f"{math.pi * math.sqrt(2.0) * speed / GRAVITY:.1f} s (which assumes a constant angle of attack)",
+            _fmt(zeta, ".3f"),
+            "within ±30 % at both",
+            all(abs(z / lc - 1.0) <= 0.3 for z, lc in zip(zeta, lanchester, strict=True)),
+            note=f"{100 * (zeta[0] / lanchester[0] - 1):+.0f} % ({100 * (zeta[1] / lanchester[1] - 1):+.0f} % at "
+            "0.005/110)",
         )
     )
-    # stall: full bar out from 20 s, released at 30 s; recovered = flying speed (9 m/s) again, no tumble
-    stall = fly("hang-glider", 70.0, [(20.0, {"pitch": -1.0}), (30.0, {"pitch": 0.0})])
-    held = window(stall, 20.0, 30.0)
-    after = window(stall, 30.1, 70.0)
-    back = next((f["t"] - 30.0 for f in after if f["airspeed"] >= 9.0), float("inf"))
-    pitch = [abs(f["pitch_deg"]) for f in after]
-    settled = np.array([f["airspeed"] for f in window(stall, 60.0, 70.0)])  # 30-40 s after the release
-    swing = np.array([f["airspeed"] for f in window(stall, 32.0, 45.0)])
-    low, nose_up = min(f["airspeed"] for f in held), max(f["pitch_deg"] for f in held)
-    nose_down = -min(f["pitch_deg"] for f in after)
+    st = both(lambda f: f["stall"])
     rows.append(
         Row(
-            "glider stall recovery",
+            f"{label}stall recovery",
             "full bar out (pitch -1) for 10 s, then released: time to fly at 9 m/s again",
             "<= 5 s",
             "issue 18: a flex wing recovers by itself from a stall when the bar is released (HGMA-certified "
             "wings are pitch stable)",
-            f"{back:.1f} s",
-            "<= 5 s, and no tumble (|pitch| < 60°)",
-            back <= 5.0 and max(pitch) < 60.0,
-            note=f"held out: airspeed down to {low:.1f} m/s, nose up to {nose_up:.0f}°; after the release the nose "
-            f"drops to {nose_down:.0f}° below the horizon and a lightly damped phugoid follows (airspeed "
-            f"{swing.min():.1f}-{swing.max():.1f} m/s over 32-45 s, {settled.min():.1f}-{settled.max():.1f} m/s "
-            "30-40 s after the release)",
+            _fmt([x["recovery"] for x in st], ".1f", " s"),
+            "<= 5 s, and no tumble (|pitch| < 60°), at both",
+            all(x["recovery"] <= 5.0 and x["max_pitch"] < 60.0 for x in st),
+            note=f"held out: airspeed down to {st[0]['slowest']:.1f} m/s, nose up to {st[0]['nose_up']:.0f}°; after "
+            f"the release |pitch| at most {st[0]['max_pitch']:.0f}° ({st[1]['max_pitch']:.0f}° at 0.005/110)",
         )
     )
     return rows
+
+
+FLYING_MISSES = ("dive recovery", "phugoid period")
+"""The flying glider's rows still outside their bands (issue 34's report says why and what would fix them)."""
 
 
 def kite_angle() -> list[Row]:
@@ -617,8 +712,10 @@ def _glide_and_trim(dt: float, iterations: int) -> tuple[float, float]:
 
 
 def _turn_rate(dt: float, iterations: int) -> float:
-    """Turn rate [deg/s] with roll 0.5 held from 20 s, over 35-50 s."""
-    return -turn_rate(window(_fly_at("hang-glider", dt, iterations, 50.0, [(20.0, {"roll": 0.5})]), 35.0, 50.0))
+    """Turn rate [deg/s] with the bank held at 20° by a pilot (:func:`benchmarks.validation.handling.turn_flight`)."""
+    from benchmarks.validation.handling import turn_flight
+
+    return abs(turn_flight("hang-glider", {"dt": dt, "iterations": iterations}, banks=(20.0,))[20.0]["rate"])
 
 
 def _phugoid_period(dt: float, iterations: int) -> float:
@@ -662,7 +759,7 @@ CONVERGENCE = {
     # figure: (measure(dt, iterations), default dt [s], unit, band: the defaults' largest distance from the finest)
     "glider glide ratio": (lambda dt, it: _glide_and_trim(dt, it)[0], 0.01, "", 0.04),
     "glider trim speed": (lambda dt, it: _glide_and_trim(dt, it)[1], 0.01, " m/s", 0.04),
-    "glider turn rate, roll 0.5": (_turn_rate, 0.01, " °/s", 0.10),
+    "glider turn rate, bank held at 20°": (_turn_rate, 0.01, " °/s", 0.10),
     "glider phugoid period": (_phugoid_period, 0.01, " s", 0.10),
     "kite line angle at the anchor": (_kite_angle, 0.005, "°", 0.05),
     "parachute descent": (_parachute_descent, 0.01, " m/s", 0.05),
@@ -716,9 +813,15 @@ CASES: dict[str, Callable[[], list[Row]]] = {
     "kite": lambda: kite_line(False) + kite_line(True),
     "hang-glider": hang_glider,
     "flying-glider": flying_glider,
+    "flying-glider-intermediate": lambda: flying_glider("scenes/hang_glider_intermediate.toml", "intermediate"),
     "kite-angle": kite_angle,
     "convergence-glide": lambda: convergence_figures(["glider glide ratio", "glider trim speed"]),
     "convergence-figures": lambda: convergence_figures(
-        ["glider turn rate, roll 0.5", "glider phugoid period", "kite line angle at the anchor", "parachute descent"]
+        [
+            "glider turn rate, bank held at 20°",
+            "glider phugoid period",
+            "kite line angle at the anchor",
+            "parachute descent",
+        ]
     ),
 }

@@ -32,7 +32,8 @@ class HangGliderConfig(Checked):
 
     Attributes:
         design: ``flying`` (the default: the pilot on a hang strap holding a control bar, a tensioned sail with
-            washout struts, a keel pocket and 2 degrees of dihedral, under the ``sail`` air model) or ``paper``
+            washout struts, a keel pocket, 1.25 degrees of dihedral and a billow shift under weight shift, under the
+            ``sail`` air model) or ``paper``
             (Section 6: the pilot on seven control sticks, an untensioned flat sail, the paper's air law). In a
             scene or with ``--set`` it is a preset (:data:`PRESETS`): it sets those keys and ``air.model``, and
             keys given beside it win. The builder itself reads only the individual keys.
@@ -45,7 +46,7 @@ class HangGliderConfig(Checked):
         pilot_station: pilot's neutral position along the keel, fraction of the chord from the nose.
         frame_height: distance of the upper/lower virtual particles from the sail plane [m].
         pitch_travel: pilot travel forward/back at |pitch| = 1 [m].
-        roll_travel: pilot travel sideways at |roll| = 1 [m].
+        roll_travel: pilot travel sideways at |roll| = 1 [m] (a pilot moves about half a metre each way on the bar).
         altitude: start height of the nose above the terrain [m].
         position: start (x, y) of the nose [m].
         heading: flight direction, degrees from +x towards +y.
@@ -77,8 +78,10 @@ class HangGliderConfig(Checked):
             about 0.15-0.25; Dees, AIAA 2010-9300 drag build-up).
         frame_drag_area: ``sail`` air model, ``strap``: drag area [m^2] of the control frame, wires and kingpost.
         dihedral: the wings rise from the keel by this angle [deg] (sweep and dihedral roll a wing away from a
-            sideslip: with 0 the flex wing turns ever tighter, with 3 or more it answers weight shift the
-            wrong way; 2 gives a steady turn that levels off when released).
+            sideslip: with 0 the flex wing slowly steepens a turn, with 2 it rolls back towards level within
+            20 s, with 3 or more it answers weight shift the wrong way without ``billow_shift``; 1.25 with the
+            billow shift holds a 30 degree turn nearly neutrally, as real flex wings do: issue 34, README "How it
+            flies"; below 1.25 the hands-off glide moves more than 4 % with the time step).
         keel_pocket: hold the cloth on both sides of the keel tube to it (a sail's keel pocket), so the sail
             cannot fold along the keel between keel particles.
         washout_struts: share of each half of the trailing edge, from the tip, held rigid at its washout by
@@ -90,6 +93,11 @@ class HangGliderConfig(Checked):
             (:func:`~warpsim.kernels.aero.sail_coefficients`).
         profile_drag: ``sail`` air model: the sail's zero-lift drag coefficient.
         stall_angle: ``sail`` air model: angle of attack [deg] where a triangle's flow separates.
+        billow_shift: the sail's billow shift under weight shift, as twist: the extra washout [deg] at the tip that
+            full weight shift gives the strutted trailing edge of the half the pilot moves towards, and takes from
+            the other half (the struts' ties follow; needs ``washout_struts``). On a real flex wing the keel floats
+            and swings under the pilot's weight against the leading edges and crossbar, so the half the pilot moves
+            towards gets more cloth, billows and twists more, and lifts less: that wing drops (issue 34).
     """
 
     design: str = choice("flying", ("flying", "paper"))
@@ -102,7 +110,7 @@ class HangGliderConfig(Checked):
     pilot_station: float = number(0.55, Bounds(0.0, 1.0))
     frame_height: float = number(1.5, POSITIVE)
     pitch_travel: float = number(0.2, NON_NEGATIVE)
-    roll_travel: float = number(0.4, NON_NEGATIVE)
+    roll_travel: float = number(0.55, NON_NEGATIVE)
     altitude: float = number(300.0, POSITIVE)
     position: tuple[float, float] = (-300.0, 0.0)
     heading: float = 0.0
@@ -120,13 +128,14 @@ class HangGliderConfig(Checked):
     control_frame_mass: float = number(4.0, POSITIVE)
     pilot_drag_area: float = number(0.2, NON_NEGATIVE)
     frame_drag_area: float = number(0.1, NON_NEGATIVE)
-    dihedral: float = number(2.0, Bounds(-30.0, 30.0))
+    dihedral: float = number(1.25, Bounds(-30.0, 30.0))
     keel_pocket: bool = True
     washout_struts: float = number(0.5, Bounds(0.0, 1.0))
     sail_tension: float = number(0.03, Bounds(0.0, 0.2))
     oswald: float = number(0.8, Bounds(0.0, 1.0, low_open=True))
     profile_drag: float = number(0.025, NON_NEGATIVE)
     stall_angle: float = number(18.0, Bounds(0.0, 90.0, low_open=True, high_open=True))
+    billow_shift: float = number(16.0, Bounds(-30.0, 30.0))
 
 
 # The keys a design sets (README, hang glider): the paper's glider differs from the flying one only in these.
@@ -136,6 +145,8 @@ _PAPER_GLIDER = {
     "washout_struts": 0.0,
     "sail_tension": 0.0,
     "dihedral": 0.0,
+    "billow_shift": 0.0,
+    "roll_travel": 0.4,
 }
 PRESETS = {
     "flying": {"air": {"model": "sail"}, "hang_glider": {k: getattr(HangGliderConfig(), k) for k in _PAPER_GLIDER}},
@@ -156,6 +167,11 @@ class HangGliderRecord(ObjectRecord):
             (forward, left, up) [m] from the nose.
         pilot_neutral_frame: ``[3]`` the pilot's neutral position in that frame [m].
         pitch_travel, roll_travel: pilot travel at full pitch / roll [m].
+        hang_point_frame: ``strap``: the hang point in the build frame [m] (None: control sticks).
+        billow_shift: as configured [deg]; billow_sticks: the washout struts' ties; billow_particles: the strut
+            particle of each tie; billow_points,
+            billow_anchors: their strut particles' and anchors' positions in the build frame [m]; billow_side: the
+            strut particle's side (+1 left); billow_rise: its rise [m] per radian of extra washout at the tip.
     """
 
     nose: int
@@ -169,6 +185,13 @@ class HangGliderRecord(ObjectRecord):
     pitch_travel: float
     roll_travel: float
     hang_point_frame: np.ndarray | None = None
+    billow_shift: float = 0.0
+    billow_sticks: np.ndarray | None = None
+    billow_particles: np.ndarray | None = None
+    billow_points: np.ndarray | None = None
+    billow_anchors: np.ndarray | None = None
+    billow_side: np.ndarray | None = None
+    billow_rise: np.ndarray | None = None
 
 
 def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Heightfield) -> HangGliderRecord:
@@ -226,6 +249,7 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
     )
     virtual, keel = frame.virtual, frame.keel
     frame_ties = []
+    strut_ties: list[tuple[int, int, int]] = []  # (stick, strut particle, anchor): the twist shift moves them
     existing = {frozenset(ends): st for st, ends in enumerate(builder.stick_particles)}
 
     def tie(p: int, a: int) -> None:
@@ -248,6 +272,7 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
             for p, tip in ((rows[n][j], rows[n][0]), (rows[n][n - j], rows[n][n])):
                 for a in (*frame.virtual, tip, tail):
                     tie(p, a)
+                    strut_ties.append((frame_ties[-1], p, a))
     if cfg.keel_pocket:
         # the sail's pocket along the keel: the cloth particles either side of the keel tube between two keel
         # particles (odd rows) held to it, so the sail cannot fold along the keel
@@ -259,6 +284,7 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
         builder.pretension(
             np.setdiff1d(sail_sticks, np.concatenate([frame.sticks, frame_ties]).astype(int)), cfg.sail_tension
         )
+    billow = _billow_shift_data(builder, cfg, strut_ties, nose, fwd, left, up, semi, washout_rad)
     frame_set = set(frame.points)
     cloth = [p for p in sail if p not in frame_set]
     frame_mass = cfg.frame_mass_fraction * cfg.glider_mass
@@ -303,8 +329,32 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
             hang_point_frame=None if hang is None else _to_frame(hang[None], nose, fwd, left, up)[0],
             pitch_travel=cfg.pitch_travel,
             roll_travel=cfg.roll_travel,
+            billow_shift=cfg.billow_shift,
+            **billow,
         )
     )
+
+
+def _billow_shift_data(builder: ModelBuilder, cfg: HangGliderConfig, strut_ties, nose, fwd, left, up, semi, washout):
+    """The washout struts' ties for the billow shift: their sticks, the strut particle's and the anchor's positions
+    in the build frame [m], the strut particle's side (+1 left) and how far [m] it rises per radian of extra
+    washout at the tip (the derivative of the sail's twist, ``behind_edge * sec^2(washout y / semi) y / semi``)."""
+    if not strut_ties:
+        return {}
+    sticks, ps, anchors = (np.array(c, dtype=int) for c in zip(*strut_ties, strict=True))
+    p_frame = _to_frame(builder.positions(ps), nose, fwd, left, up)
+    a_frame = _to_frame(builder.positions(anchors), nose, fwd, left, up)
+    y = np.abs(p_frame[:, 1])
+    behind_edge = np.maximum(-cfg.chord * y / semi - p_frame[:, 0], 0.0)
+    rise = behind_edge * (y / semi) / np.cos(washout * y / semi) ** 2
+    return {
+        "billow_sticks": sticks,
+        "billow_particles": ps,
+        "billow_points": p_frame,
+        "billow_anchors": a_frame,
+        "billow_side": np.sign(p_frame[:, 1]),
+        "billow_rise": rise,
+    }
 
 
 def _paper_sticks(builder: ModelBuilder, cfg: HangGliderConfig, rows, virtual, nose, fwd, up, vel):
@@ -392,6 +442,17 @@ def apply_controls(record: HangGliderRecord, targets: dict, values: dict) -> Non
     force; one never set is 0) into ``targets['stick_rest']`` (a host copy of ``Control.stick_rest``)."""
     pitch, roll = float(values.get("pitch", 0.0)), float(values.get("roll", 0.0))
     targets["stick_rest"][record.control_sticks] = control_rest_lengths(record, pitch, roll)
+    if record.billow_shift != 0.0 and record.billow_sticks is not None:
+        targets["stick_rest"][record.billow_sticks] = billow_rest_lengths(record, roll)
+
+
+def billow_rest_lengths(record: HangGliderRecord, roll: float) -> np.ndarray:
+    """Rest lengths [m] of the washout struts' ties at ``roll`` in [-1, 1] (billow shift): the strutted trailing edge
+    of the half the pilot moves towards (``roll > 0``: the right) raised as if its washout at the tip were
+    ``billow_shift * |roll|`` degrees more, the other half's lowered as much (to first order in the angle)."""
+    extra = np.radians(record.billow_shift) * roll * -record.billow_side
+    target = record.billow_points + np.outer(record.billow_rise * extra, (0.0, 0.0, 1.0))
+    return np.linalg.norm(target - record.billow_anchors, axis=1)
 
 
 def bank(record: HangGliderRecord, q: np.ndarray) -> float:

@@ -1,0 +1,419 @@
+"""How the hang glider handles (issue 34), measured from the particles: roll, turns, dive recovery, phugoid.
+
+Each function flies a scene once (a built-in name, a scene file or a descriptor; ``solver`` overrides the time
+step and iterations) and returns several figures of that one flight, so a test or a validation row reuses it.
+A *pilot* here is a function of the flight state (:func:`warpsim.objects.hang_glider.flight_state`, with its
+time ``t`` [s]) that returns the controls to set (or ``None`` to keep them), called every ``every`` seconds.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from warpsim import descriptor
+from warpsim.model import AIR_DENSITY, GRAVITY
+from warpsim.runner import Simulation
+
+Pilot = Callable[[dict], dict | None]
+
+
+def scene_descriptor(scene: str | dict, solver: dict | None = None, glider: dict | None = None) -> dict:
+    """The descriptor of ``scene`` with ``solver`` (e.g. ``{"dt": 0.005, "iterations": 110}``) and ``glider``
+    (``[hang_glider]`` keys) merged over it."""
+    d = scene if isinstance(scene, dict) else descriptor.resolve(scene)[0]
+    over = {}
+    if solver:
+        over["solver"] = solver
+    if glider:
+        over["hang_glider"] = glider
+    return descriptor.merge("handling", d, over) if over else d
+
+
+def fly_piloted(
+    d: dict,
+    seconds: float,
+    pilot: Pilot | None = None,
+    every: float = 0.05,
+    slew: float = 2.0,
+    stop: Callable[[dict], bool] | None = None,
+) -> list[dict]:
+    """Fly the hang glider of descriptor ``d`` for ``seconds`` [s] with ``pilot`` deciding the controls every
+    ``every`` seconds; the flight state at each decision, with ``t`` [s] and the ``roll``/``pitch`` then set.
+
+    The bar moves at most ``slew`` per second (2: from centre to a stop in 0.5 s, as a pilot's arms do; a step of
+    the arms' lengths jerks the frame)."""
+    from warpsim.objects.hang_glider import flight_state
+
+    sim = Simulation(d)
+    record = sim.model.objects[0]
+    steps = max(1, int(round(every / sim.dt)))
+    inv = sim.model.particle_inv_mass.numpy()[record.particles]
+    mass = np.where(inv > 0, 1.0 / np.where(inv > 0, inv, 1.0), 0.0)
+    history, wanted, controls = [], {"pitch": 0.0, "roll": 0.0}, {"pitch": 0.0, "roll": 0.0}
+    step_most = slew * steps * sim.dt
+    for i in range(int(round(seconds / every))):
+        sim.step(steps)
+        state = flight_state(record, sim.state.positions(), sim.state.particle_q_prev.numpy(), sim.dt, (0, 0, 0))
+        state["t"] = (i + 1) * steps * sim.dt
+        q, q_prev = sim.state.positions()[record.particles], sim.state.particle_q_prev.numpy()[record.particles]
+        state["cg_velocity"] = mass @ (q - q_prev) / (mass.sum() * sim.dt)
+        state["cg_speed"] = float(np.linalg.norm(state["cg_velocity"]))
+        wanted.update((pilot(state) if pilot else None) or {})
+        moved = {k: controls[k] + float(np.clip(v - controls[k], -step_most, step_most)) for k, v in wanted.items()}
+        if moved != controls:
+            controls.update(moved)
+            sim.set_controls(**controls)
+        state.update(controls)
+        history.append(state)
+        if stop is not None and stop(state):
+            break
+    return history
+
+
+def _crossing(history: list[dict], t0: float, test: Callable[[dict], bool]) -> float:
+    """First time [s] at or after ``t0`` when ``test`` holds (inf if never)."""
+    return next((f["t"] for f in history if f["t"] >= t0 and test(f)), math.inf)
+
+
+def roll_flight(
+    scene: str | dict, solver: dict | None = None, level: float = 10.0, steady: float = 8.0, hold: float = 20.0
+) -> dict:
+    """Full weight shift from level flight, a reversal from a steady turn, and the bar centred in a turn.
+
+    From level trimmed flight at ``level`` [s], ``roll = -1`` until 30° of left bank; a pilot (:func:`bank_holder`)
+    then holds 30° left for ``steady`` [s]; then ``roll = +1`` until 30° of right bank (the reversal), and the bar is
+    centred for ``hold`` [s]. Returns ``time_to_30`` [s] (level to -30°), ``reversal`` [s] (from the full weight
+    shift right in the steady left turn to +30°), ``bank_after_hold`` [deg] (the bank ``hold`` seconds after
+    centring), ``bank_min``/``bank_max`` [deg] over the hold, ``history``.
+    """
+    phase = {"name": "level"}
+    holder = bank_holder(lambda t: -30.0)
+
+    def pilot(s):
+        name = phase["name"]
+        if name == "level" and s["t"] >= level - 1e-9:
+            phase.update(name="left", t=s["t"])
+            return {"roll": -1.0}
+        if name == "left" and s["bank_deg"] <= -30.0:
+            phase.update(name="steady", t_left=s["t"])
+        if phase["name"] == "steady":
+            if s["t"] < phase["t_left"] + steady - 1e-9:
+                return holder(s)
+            phase.update(name="right", t_reverse=s["t"])
+            return {"roll": 1.0}
+        if name == "right" and s["bank_deg"] >= 30.0:
+            phase.update(name="hold", t_right=s["t"])
+            return {"roll": 0.0}
+        return None
+
+    done = lambda s: phase["name"] == "hold" and s["t"] >= phase["t_right"] + hold - 1e-9  # noqa: E731
+    history = fly_piloted(scene_descriptor(scene, solver), level + steady + 60.0 + hold, pilot, stop=done)
+    t_right = phase.get("t_right", math.inf)
+    held = [f for f in history if t_right <= f["t"]]
+    return {
+        "time_to_30": phase.get("t_left", math.inf) - level,
+        "reversal": t_right - phase.get("t_reverse", math.inf),
+        "history": history,
+        "bank_after_hold": held[-1]["bank_deg"] if held and held[-1]["t"] >= t_right + hold - 0.06 else math.nan,
+        "bank_min": min((f["bank_deg"] for f in held), default=math.nan),
+        "bank_max": max((f["bank_deg"] for f in held), default=math.nan),
+    }
+
+
+def bank_holder(
+    target: Callable[[float], float | None], gain: float = 0.05, integral: float = 0.005, near: float = 3.0
+) -> Pilot:
+    """A pilot holding the bank at ``target(t)`` [deg] (None: hands off, bar centred): roll = gain * error +
+    integral * (the error integrated over time while within ``near`` degrees of the target) [per deg, per deg s],
+    clipped to [-1, 1]."""
+    last = {"sum": 0.0}
+
+    def pilot(s):
+        want = target(s["t"])
+        dt = s["t"] - last.get("t", s["t"])
+        last["t"] = s["t"]
+        if want is None:
+            last["sum"] = 0.0
+            return {"roll": 0.0}
+        error = want - s["bank_deg"]
+        if abs(error) < near:
+            last["sum"] += error * dt
+        return {"roll": float(np.clip(gain * error + integral * last["sum"], -1.0, 1.0))}
+
+    return pilot
+
+
+def turn_circle(frames: list[dict]) -> dict:
+    """The steady turn over ``frames``: mean bank [deg], airspeed [m/s], horizontal speed [m/s], turn rate [deg/s],
+    radius V_h / rate [m] and the coordinated turn's V^2 / (g tan bank) [m] (V the airspeed)."""
+    heading = np.unwrap([math.atan2(f["velocity"][1], f["velocity"][0]) for f in frames])
+    rate = (heading[-1] - heading[0]) / (frames[-1]["t"] - frames[0]["t"])
+    bank = float(np.mean([f["bank_deg"] for f in frames]))
+    airspeed = float(np.mean([f["airspeed"] for f in frames]))
+    horizontal = float(np.mean([np.hypot(*f["velocity"][:2]) for f in frames]))
+    return {
+        "bank": bank,
+        "airspeed": airspeed,
+        "rate": math.degrees(rate),
+        "radius": horizontal / abs(rate),
+        "expected": airspeed**2 / (GRAVITY * math.tan(math.radians(abs(bank)))),
+    }
+
+
+def turn_flight(scene: str | dict, solver: dict | None = None, banks=(20.0, 40.0), settle=10.0, hold=10.0) -> dict:
+    """Steady turns held by :func:`bank_holder` at each of ``banks`` [deg] in turn (from 10 s, ``settle`` + ``hold``
+    seconds each); :func:`turn_circle` over each ``hold``, keyed by the bank."""
+    start = 10.0
+    span = settle + hold
+
+    def target(t):
+        k = int((t - start) // span)
+        return None if t < start or k >= len(banks) else banks[k]
+
+    history = fly_piloted(scene_descriptor(scene, solver), start + span * len(banks), bank_holder(target))
+    out = {"history": history}
+    for k, b in enumerate(banks):
+        t0 = start + k * span + settle
+        out[b] = turn_circle([f for f in history if t0 <= f["t"] <= t0 + hold + 1e-9])
+    return out
+
+
+def dive_flight(scene: str | dict, solver: dict | None = None, nose_down: float = 60.0, seconds: float = 12.0) -> dict:
+    """Released hands off from rest with the nose ``nose_down`` [deg] below the horizon (R.T. Jones 1977): the
+    height [m] lost until the flight path is level again (the sail's mean vertical velocity back to 0), the time
+    [s] it takes, the fastest airspeed [m/s] and the lowest pitch [deg] on the way."""
+    d = scene_descriptor(scene, solver, {"speed": 0.0, "nose_up": -nose_down})
+    history = fly_piloted(d, seconds, every=0.02)
+    start = history[0]["altitude"]
+    moving = [f for f in history if f["velocity"][2] < -1.0]
+    t_level = _crossing(history, moving[0]["t"] if moving else 0.0, lambda f: f["velocity"][2] >= 0.0)
+    lowest = min((f for f in history if f["t"] <= t_level), key=lambda f: f["altitude"])
+    return {
+        "height": start - lowest["altitude"],
+        "time": t_level,
+        "fastest": max(f["airspeed"] for f in history if f["t"] <= t_level),
+        "lowest_pitch": min(f["pitch_deg"] for f in history if f["t"] <= t_level),
+        "history": history,
+    }
+
+
+def jones_recovery_height(wing_loading: float, lift_coefficient: float, density: float = AIR_DENSITY) -> float:
+    """Height [m] a glider released from rest loses before its path is level again, after R.T. Jones (1977):
+    without drag and at a constant lift coefficient C_L, energy gives V^2 = 2 g z after a drop z, and the path's
+    curvature ``V dgamma/dt = (rho S C_L / 2m) V^2 - g cos gamma`` integrates (Lanchester's phugoid) to
+    ``cos gamma = (2/3) (rho C_L / (2 m/S)) 2 z``, from a vertical start: level (cos gamma = 1) at
+    ``z = 3 (m/S) / (rho C_L)``, whatever the nose's start attitude. ``wing_loading`` m/S [kg/m^2], ``density`` rho
+    [kg/m^3]."""
+    return 3.0 * wing_loading / (density * lift_coefficient)
+
+
+def point_mass_recovery(
+    wing_loading: float, lift_coefficient: float, glide_ratio: float, density: float = AIR_DENSITY, step: float = 1e-3
+) -> float:
+    """Height [m] lost from rest until the path is level, integrating Jones's point mass with drag: constant
+    ``lift_coefficient`` across the path and drag ``lift / glide_ratio`` along it (midpoint rule, ``step`` [s]);
+    ``wing_loading`` [kg/m^2], ``density`` [kg/m^3]."""
+    k = density * lift_coefficient / (2.0 * wing_loading)  # lift per unit mass over V^2 [1/m]
+
+    def accel(v):
+        speed = math.hypot(*v)
+        lift = k * speed  # times V^2 / V: the lift per unit mass along the unit normal, scaled by V
+        return np.array([-lift * v[1] - lift * v[0] / glide_ratio, lift * v[0] - lift * v[1] / glide_ratio - GRAVITY])
+
+    v, z = np.array([0.0, -1e-3]), 0.0
+    while not (v[1] >= 0.0 and v[0] > 0.0):
+        half = v + 0.5 * step * accel(v)
+        z -= step * half[1]
+        v = v + step * accel(half)
+    return z
+
+
+def phugoid_flight(scene: str | dict, solver: dict | None = None) -> dict:
+    """A 2 s pulse of bar in (pitch 0.3) at 20 s from trim, then hands off to 60 s: the airspeed's period [s] from
+    its troughs, damping ratio, the trim airspeed [m/s] before the pulse and Lanchester's period
+    pi sqrt(2) V / g [s]."""
+
+    def pilot(s):
+        if abs(s["t"] - 20.0) < 1e-6:
+            return {"pitch": 0.3}
+        if abs(s["t"] - 22.0) < 1e-6:
+            return {"pitch": 0.0}
+        return None
+
+    history = fly_piloted(scene_descriptor(scene, solver), 60.0, pilot, every=0.1)
+    trim = float(np.mean([f["airspeed"] for f in history if 10.0 <= f["t"] <= 20.0]))
+    pulse = [f for f in history if f["t"] >= 23.0 - 1e-9]
+    dv = np.array([f["airspeed"] for f in pulse]) - trim
+    troughs = [i for i in range(1, len(dv) - 1) if dv[i] < dv[i - 1] and dv[i] <= dv[i + 1] and dv[i] < -0.2]
+    lanchester = math.pi * math.sqrt(2.0) * trim / GRAVITY
+    if len(troughs) < 2:
+        return {"period": math.nan, "zeta": math.nan, "trim": trim, "lanchester": lanchester}
+    period = (pulse[troughs[-1]]["t"] - pulse[troughs[0]]["t"]) / (len(troughs) - 1)
+    decrement = math.log(dv[troughs[0]] / dv[troughs[-1]]) / (len(troughs) - 1)
+    return {
+        "period": period,
+        "zeta": decrement / math.hypot(2.0 * math.pi, decrement),
+        "trim": trim,
+        "lanchester": lanchester,
+        "troughs": len(troughs),
+        "history": history,
+    }
+
+
+def stall_flight(scene: str | dict, solver: dict | None = None) -> dict:
+    """Full bar out (pitch -1) from 15 s, released at 25 s, flown to 40 s: the time [s] to fly at 9 m/s again, the
+    largest |pitch| [deg] after the release, the lowest airspeed [m/s] and highest pitch [deg] while held."""
+
+    def pilot(s):
+        if abs(s["t"] - 15.0) < 1e-6:
+            return {"pitch": -1.0}
+        if abs(s["t"] - 25.0) < 1e-6:
+            return {"pitch": 0.0}
+        return None
+
+    history = fly_piloted(scene_descriptor(scene, solver), 40.0, pilot, every=0.1)
+    held = [f for f in history if 15.0 < f["t"] <= 25.05]
+    after = [f for f in history if f["t"] > 25.05]
+    return {
+        "recovery": _crossing(after, 25.0, lambda f: f["airspeed"] >= 9.0) - 25.0,
+        "max_pitch": max(abs(f["pitch_deg"]) for f in after),
+        "slowest": min(f["airspeed"] for f in held),
+        "nose_up": max(f["pitch_deg"] for f in held),
+        "history": history,
+    }
+
+
+def glide_flight(scene: str | dict, solver: dict | None = None) -> dict:
+    """Hands off for 60 s: glide ratio and mean airspeed [m/s] over 10-60 s, the airspeed's spread and the largest
+    |bank| [deg]."""
+    history = fly_piloted(scene_descriptor(scene, solver), 60.0, every=0.1)
+    frames = [f for f in history if f["t"] >= 10.0 - 1e-9]
+    distance = sum(float(np.hypot(*f["velocity"][:2])) * 0.1 for f in frames[1:])
+    speeds = np.array([f["airspeed"] for f in frames])
+    return {
+        "glide": distance / (frames[0]["altitude"] - frames[-1]["altitude"]),
+        "speed": float(speeds.mean()),
+        "spread": float(np.abs(speeds / speeds.mean() - 1.0).max()),
+        "max_bank": max(abs(f["bank_deg"]) for f in frames),
+        "history": history,
+    }
+
+
+def wing_loading(scene: str | dict) -> float:
+    """Total mass over the sail's planform area (span x chord / 2) [kg/m^2]."""
+    g = scene_descriptor(scene)["hang_glider"]
+    return (g["glider_mass"] + g["pilot_mass"] + g["control_frame_mass"]) / (0.5 * g["span"] * g["chord"])
+
+
+def dive_band(scene: str | dict, trim_speed: float, glide_ratio: float, max_lift: float = 1.0) -> dict:
+    """The band of the dive recovery height [m] from R.T. Jones (1977) at ``scene``'s wing loading and air density:
+    from his closed form at the maximum lift coefficient ``max_lift`` (his 1.0: the wing pulls out at once at its
+    highest lift, the least height) to the point mass holding the trim lift coefficient
+    ``2 (m/S) g / (rho V^2)`` (``trim_speed`` [m/s]) with the drag of the measured ``glide_ratio`` (a pitch-stable
+    wing that stays at its trim angle of attack). Returns ``wing_loading``, ``density``, ``trim_cl``, ``low``,
+    ``jones_trim`` (the closed form at the trim C_L) and ``high``."""
+    d = scene_descriptor(scene)
+    rho = float(d.get("air", {}).get("density", AIR_DENSITY))
+    load = wing_loading(d)
+    cl = 2.0 * load * GRAVITY / (rho * trim_speed**2)
+    return {
+        "wing_loading": load,
+        "density": rho,
+        "trim_cl": cl,
+        "low": jones_recovery_height(load, max_lift, rho),
+        "jones_trim": jones_recovery_height(load, cl, rho),
+        "high": point_mass_recovery(load, cl, glide_ratio, rho),
+    }
+
+
+def summary(scene: str | dict = "hang-glider", solver: dict | None = None) -> dict:
+    """Every handling figure of ``scene`` (one flight each), without the histories."""
+    r, t, dv, p, s, g = (
+        roll_flight(scene, solver),
+        turn_flight(scene, solver),
+        dive_flight(scene, solver),
+        phugoid_flight(scene, solver),
+        stall_flight(scene, solver),
+        glide_flight(scene, solver),
+    )
+    return {
+        "time_to_30": r["time_to_30"],
+        "reversal": r["reversal"],
+        "bank_after_hold": r["bank_after_hold"],
+        "hold_range": (r["bank_min"], r["bank_max"]),
+        "turn20": {k: v for k, v in t[20.0].items()},
+        "turn40": {k: v for k, v in t[40.0].items()},
+        "dive_height": dv["height"],
+        "dive_time": dv["time"],
+        "dive_fastest": dv["fastest"],
+        "dive_lowest_pitch": dv["lowest_pitch"],
+        "phugoid": {k: v for k, v in p.items() if k != "history"},
+        "stall": {k: v for k, v in s.items() if k != "history"},
+        "glide": {k: v for k, v in g.items() if k != "history"},
+    }
+
+
+def plot_roll_reversal(path, scene: str | dict = "hang-glider") -> dict:
+    """Plot bank [deg], the pilot's roll and airspeed [m/s] against time [s] of :func:`roll_flight` (defaults and dt
+    0.005/110) to the PNG ``path``; returns the flights."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    flights = {"dt 0.01, 55 iterations": roll_flight(scene), "dt 0.005, 110": roll_flight(scene, FINE)}
+    fig, (top, mid, low) = plt.subplots(3, 1, sharex=True, figsize=(8, 7), gridspec_kw={"height_ratios": [3, 1, 2]})
+    for (label, r), style in zip(flights.items(), ("-", "--"), strict=True):
+        h = [f for f in r["history"] if f["t"] >= 8.0]
+        t = [f["t"] for f in h]
+        top.plot(t, [f["bank_deg"] for f in h], style, color="C0", label=f"bank, {label}")
+        mid.plot(t, [f["roll"] for f in h], style, color="C2", label=label)
+        low.plot(t, [f["airspeed"] for f in h], style, color="C1", label=label)
+    r = flights["dt 0.01, 55 iterations"]
+    for y in (-30.0, 30.0):
+        top.axhline(y, color="grey", lw=0.6)
+    fine = flights["dt 0.005, 110"]
+    top.text(
+        0.02,
+        0.96,
+        f"level to -30°: {r['time_to_30']:.1f} s ({fine['time_to_30']:.1f} s)\n"
+        f"reversal -30° to +30°: {r['reversal']:.1f} s ({fine['reversal']:.1f} s)\n"
+        f"bar centred at +30°: {r['bank_after_hold']:.0f}° ({fine['bank_after_hold']:.0f}°) 20 s later",
+        transform=top.transAxes,
+        va="top",
+        fontsize=8,
+        bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none"},
+    )
+    top.set_ylabel("bank [deg] (+ right)")
+    top.legend(fontsize=8, loc="lower right")
+    top.set_title("Hang glider: full weight shift from level, reversal from a steady 30° turn, bar centred")
+    mid.set_ylabel("roll (bar)")
+    mid.set_ylim(-1.15, 1.15)
+    low.set_ylabel("airspeed [m/s]")
+    low.set_xlabel("time [s]")
+    low.legend(fontsize=8, loc="upper right")
+    for ax in (top, mid, low):
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return flights
+
+
+FINE = {"dt": 0.005, "iterations": 110}
+"""The finer numerics every handling band must also hold at (issue 34)."""
+
+
+if __name__ == "__main__":  # python -m benchmarks.validation.handling [scene] [dt iterations] [key=value ...]
+    import json
+    import sys
+
+    args = sys.argv[1:]
+    scene = args.pop(0) if args and "=" not in args[0] and not args[0][0].isdigit() else "hang-glider"
+    solver = {"dt": float(args.pop(0)), "iterations": int(args.pop(0))} if args and "=" not in args[0] else None
+    glider = {k: json.loads(v) for k, v in (a.split("=", 1) for a in args)}
+    d = scene_descriptor(scene, None, glider or None)
+    print(json.dumps(summary(d, solver), indent=1, default=float))

@@ -109,9 +109,9 @@ def _arm_history(sim, steps: int) -> tuple[np.ndarray, float]:
 @pytest.mark.parametrize("rate", [0.8, 0.0])
 def test_a_control_ramps_instead_of_jolting_the_frame(rate):
     """Issue 33: full roll set at once from the API moved the pilot's arms in one step, and the frame's worst stick
-    stretched to 24 % (2.7 % before). The arms now move at most ``solver.control_rate`` (0.8 m/s) per second of
-    simulated time and arrive within 0.5 s (measured 0.39 s), and no stick stretches past 3 % (measured 2.81 %).
-    ``control_rate = 0`` keeps the jolt (what the ramp prevents)."""
+    stretched to 30 % (2.7 % before). The arms now move at most ``solver.control_rate`` (0.8 m/s) per second of
+    simulated time and arrive within 0.6 s (measured 0.53 s with the 0.55 m roll travel), and no stick stretches
+    past 3 % (measured 2.82 %). ``control_rate = 0`` keeps the jolt (what the ramp prevents)."""
     d = descriptor.merge("test", descriptor.resolve("hang-glider")[0], {"solver": {"control_rate": rate}})
     sim = Simulation(d)
     sim.step(500)
@@ -121,7 +121,7 @@ def test_a_control_ramps_instead_of_jolting_the_frame(rate):
     moves = np.abs(np.diff(np.vstack([before, rests]), axis=0))
     if rate > 0.0:
         assert moves.max() <= rate * sim.dt * (1 + 1e-5) and moves.max() > 0.5 * rate * sim.dt
-        assert np.array_equal(rests[50], rests[-1])  # there after 0.5 s
+        assert np.array_equal(rests[60], rests[-1])  # there after 0.6 s
         assert worst < 0.03
     else:
         assert np.array_equal(rests[0], rests[-1]) and worst > 0.15

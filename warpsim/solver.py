@@ -78,7 +78,13 @@ class _Solver:
         self.use_graph = bool(use_graph)
         self.tri_force = wp.zeros(max(model.tri_count, 1), dtype=wp.vec3, device=model.device)
         self.particle_air = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)  # drag bodies' drag
-        sticks = [np.asarray(r.control_sticks) for r in model.objects if getattr(r, "control_sticks", None) is not None]
+        # the sticks whose rest lengths controls set: the pilot's arms, and the struts' ties the billow shift moves
+        sticks = [
+            np.asarray(getattr(r, name))
+            for r in model.objects
+            for name in ("control_sticks", "billow_sticks")
+            if getattr(r, name, None) is not None
+        ]
         sticks = np.unique(np.concatenate(sticks)) if sticks else np.zeros(0)
         self.control_sticks = wp.array(sticks.astype(np.int32), dtype=wp.int32, device=model.device)
         """``[K]`` the sticks whose rest lengths the controls set (they ramp: :func:`ramp_rest_lengths`)."""

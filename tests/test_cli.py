@@ -1,8 +1,10 @@
 """The warpsim command: every command runs; user mistakes give one clear line and exit code 2."""
 
+import re
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from warpsim.cli import main
@@ -75,3 +77,44 @@ def test_console_script_runs_in_a_fresh_process():
         [sys.executable, "-m", "warpsim.cli", "run", "flag", "--dt", "0"], capture_output=True, text=True
     )
     assert bad.returncode == 2 and "Traceback" not in bad.stderr
+
+
+def _figures_line(capsys, *argv) -> str:
+    assert main(["run", *argv]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if "(means over" in line]
+    assert len(lines) == 1, lines
+    return lines[0]
+
+
+def _figure_value(line: str, name: str) -> float:
+    return float(re.search(rf"{name} (-?[0-9.]+)", line).group(1))
+
+
+def test_run_ends_with_each_objects_flight_figures(capsys):
+    """Issue 36: `warpsim run` ends with the figures a pilot or an observer reads, over the second half of the run,
+    with the sweeps' definitions: the hands-off glider's glide and airspeed in the validation's bands, the kite's
+    line angle in its band and a pull, the parachute's descent within 10 % of Knacke's round canopies (5.77-5.96
+    m/s) and its canopy open."""
+    glider = _figures_line(capsys, "hang-glider", "--seconds", "30")
+    assert "means over 15-30 s" in glider
+    assert _figure_value(glider, "glide") >= 8.0 and 9.0 <= _figure_value(glider, "airspeed") <= 13.0
+    assert abs(_figure_value(glider, "bank")) < 1.0
+    kite = _figures_line(capsys, "kite", "--seconds", "30")
+    assert 45.0 <= _figure_value(kite, "line angle") <= 70.0 and _figure_value(kite, "line pull") > 1.0
+    chute = _figures_line(capsys, "parachute", "--seconds", "30")
+    assert 0.9 * 5.77 <= _figure_value(chute, "sink") <= 1.1 * 5.96 and _figure_value(chute, "radius") > 3.0
+
+
+def test_run_figures_are_the_sweep_metrics_and_spread_over_worlds(capsys):
+    """With --worlds N the line gives the mean over the worlds and the lowest and highest world; each world's figure
+    is the sweep's metric of the same case and window, to the digits printed."""
+    from warpsim import descriptor, sweeps
+
+    line = _figures_line(capsys, "kite", "--worlds", "3", "--vary", "wind.speed=4:8", "--seconds", "10")
+    assert line.startswith("  3 worlds")
+    angles = re.search(r"line angle ([0-9.]+) deg \(([0-9.]+) to ([0-9.]+)\)", line).groups()
+    base = descriptor.resolve("kite")[0]
+    plan = sweeps.SweepPlan(base, sweeps.parse_axes(base, ["wind.speed=4:8:3"]), seconds=10.0)
+    rows = sweeps.run_chunk(plan.chunks(3, set(), "cpu", None)[0])
+    means = [row["line_angle_mean"] for row in rows]
+    assert [float(a) for a in angles] == pytest.approx([np.mean(means), min(means), max(means)], abs=0.051)

@@ -626,11 +626,15 @@ def cmd_run(args) -> int:
         stop = _StopRequests()
         outputs.callback(stop.restore)
         writer = _Outputs(outputs, sim, run, args, h5_path, usd_path, lock, stop)
+        figures = None if args.quiet else _flight_figures(sim, run.seconds)
+        on_frame = writer.on_frame if writer.any else None
+        if figures is not None:
+            on_frame = _both(figures, on_frame)
         blowup = None
         try:
             summary = sim.run(
                 run.seconds,
-                on_frame=writer.on_frame if writer.any else None,
+                on_frame=on_frame,
                 on_progress=_progress(sim) if not args.quiet and sys.stderr.isatty() else None,
                 realtime=args.realtime,
                 stop=stop,
@@ -639,7 +643,28 @@ def cmd_run(args) -> int:
         except BlowUpError as err:
             blowup, summary = err, err.summary
         writer.close()
-    return _report(args, run, summary, blowup, writer.failures, h5_path, usd_path)
+    return _report(args, run, summary, blowup, writer.failures, h5_path, usd_path, figures)
+
+
+def _flight_figures(sim, seconds: float):
+    """The closing figures of a run of ``seconds`` [s] from the simulation's current time: each object's
+    :data:`~warpsim.diagnostics.FIGURES` over the second half of the run (the sweeps' default window)."""
+    from .diagnostics import FlightFigures
+
+    start = sim.state.time
+    return FlightFigures(sim, start + 0.5 * seconds, start + seconds)
+
+
+def _both(first, second):
+    """A frame callback that calls ``first`` then ``second`` (None: only ``first``)."""
+    if second is None:
+        return first
+
+    def on_frame(frame):
+        first(frame)
+        second(frame)
+
+    return on_frame
 
 
 def _check_run_options(args) -> tuple[Path | None, Path | None]:
@@ -833,12 +858,14 @@ class _Outputs:
                         self.failures.append(err)
 
 
-def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path) -> int:
-    """Print the summary, the outputs and any error line; return the exit code."""
+def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path, figures=None) -> int:
+    """Print the summary, the flight figures, the outputs and any error line; return the exit code."""
     if not args.quiet and sys.stderr.isatty():
         sys.stderr.write("\r" + " " * 70 + "\r")
     if not args.quiet:
         print(summary.text())
+        for line in figures.lines() if figures is not None else ():
+            print(line)
         for label, path in (("recording", args.resume or h5_path), ("USD stage", usd_path)):
             if path and not any(str(path) in str(err) for err in failures):
                 print(f"  {label}: {path}")

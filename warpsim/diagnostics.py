@@ -389,3 +389,75 @@ class FigureWindow:
         out["worst_stretch"] = float(self.worst[k])
         out["window_frames"] = frames
         return {key: float(v) if isinstance(v, np.floating) else v for key, v in out.items()}
+
+
+class FlightFigures:
+    """A run's closing figures: each world's :data:`FIGURES` over the window ``[start, stop]`` [s] of simulated
+    time, from the frames a run hands out (call it with each :class:`Frame`), every frame as a sweep measures it
+    (:class:`FigureWindow`), or at most ``rate`` frames per simulated second.
+
+    Args:
+        sim: the :class:`~warpsim.runner.Simulation` (its model, object kind, frame interval and air forces).
+        start, stop: the window [s].
+        rate: frames measured per simulated second, at most [1/s] (None: every frame, as a sweep).
+    """
+
+    def __init__(self, sim, start: float, stop: float, rate: float | None = None):
+        self.sim, self.start, self.stop = sim, float(start), float(stop)
+        self.kind = sim.descriptor["scene"]["object"]
+        self.names = list(figure_names(self.kind))
+        interval = sim.steps_per_frame * sim.dt
+        self.every = 1 if rate is None else max(1, int(round(1.0 / (rate * interval))))
+        self.window = FigureWindow(sim.model.world_count, self.names)
+        self.measure = Figures(sim.model)
+        self.contacts = GroundContacts(sim.model)
+        self.live = np.ones(sim.model.world_count, dtype=bool)
+        self._seen = 0
+
+    def __call__(self, frame: Frame) -> None:
+        eps = 0.25 * self.sim.dt  # frame times are sums of dt
+        if not self.start - eps <= frame.time <= self.stop + eps:
+            return
+        self._seen += 1
+        if (self._seen - 1) % self.every:
+            return
+        found = self.measure(frame, self.sim.solver.tri_force)
+        values = np.array([[f[name] for f in found] for name in self.names], dtype=np.float64)
+        self.window.add(values, self.live, True, self.contacts.touching(frame), frame.time)
+
+    def lines(self) -> list[str]:
+        """The figures as summary lines: per object with one world; over the worlds (mean, lowest, highest of the
+        worlds' window means) with several. Empty when no frame fell in the window."""
+        frames = int(self.window.frames.max()) if self.window.frames.size else 0
+        if frames == 0:
+            return []
+        count = self.window.frames.size
+        rows = [self.window.row(k) for k in range(count)]
+
+        def shown(name: str, values: list[float]) -> str | None:
+            values = [v for v in values if np.isfinite(v)]
+            if not values:
+                return None
+            unit = FIGURES[name][0]
+            unit = "" if unit == "-" else f" {unit}"
+            text = f"{name.replace('_', ' ')} {_figure(np.mean(values))}{unit}"
+            if count > 1:
+                text += f" ({_figure(min(values))} to {_figure(max(values))})"
+            return text
+
+        parts = [shown(name, [r[f"{name}_mean"] for r in rows]) for name in self.names]
+        parts = [p for p in parts if p is not None]
+        where = f"means over {self.start:g}-{self.stop:g} s, {frames} frames"
+        if count == 1:
+            head = f"  {self.sim.model.objects[0].name}"
+        else:
+            head = f"  {count} worlds (mean, lowest to highest world)"
+        return [f"{head}: {', '.join(parts)} ({where})"]
+
+
+def _figure(value: float) -> str:
+    """``value`` to three significant digits, in fixed point with at most two decimals (0.00 for what is smaller)."""
+    value = float(value)
+    digits = 2 if abs(value) < 1e-2 else min(2, max(0, 2 - math.floor(math.log10(abs(value)))))
+    text = f"{value:.{digits}f}"
+    return text[1:] if text.startswith("-") and float(text) == 0.0 else text

@@ -297,13 +297,23 @@ class Simulation:
         self.inputs.frame_start(self.state.time, self.steps_per_frame * self.dt)
 
     def step(self, count: int = 1) -> None:
-        """Take ``count`` solver steps of ``dt`` (the groups one after another: a frame's steps run in threads)."""
+        """Take ``count`` solver steps of ``dt`` (each group on its own thread)."""
         self._release()
-        for group in self._groups:
+        if len(self._groups) == 1:
             for _ in range(count):
-                group.solver.step(group.state, group.control, self.dt)
-        if len(self._groups) > 1:  # the groups' states kept their own time
-            for _ in range(count):
+                self.solver.step(self.state, self.control, self.dt)
+        else:
+            for group in self._groups:  # each group's step graph captured here, never by two threads at once
+                if not group.prepared:
+                    group.solver.prepare(group.state, group.control, self.dt)
+                    group.prepared = True
+
+            def steps(group: _Group) -> None:
+                for _ in range(count):
+                    group.solver.step(group.state, group.control, self.dt)
+
+            self._in_threads(steps)
+            for _ in range(count):  # the groups' states kept their own time
                 self.state.time += self.dt
         self.steps_taken += count
 
@@ -353,16 +363,19 @@ class Simulation:
         return capture.graph
 
     def _replay(self, slot: int) -> None:
-        """Replay every group's frame graph for probe ``slot``, each group on its own thread (the first on this
-        one), and return when all are done, also when this thread is interrupted (no thread is left writing the
-        state)."""
-        graphs = [group.graphs[slot] for group in self._groups]
+        """Replay every group's frame graph for probe ``slot``, each group on its own thread."""
         if self._pool is None:
-            wp.capture_launch(graphs[0])
-            return
-        others = [self._pool.submit(wp.capture_launch, graph) for graph in graphs[1:]]
+            wp.capture_launch(self._groups[0].graphs[slot])
+        else:
+            self._in_threads(lambda group: wp.capture_launch(group.graphs[slot]))
+
+    def _in_threads(self, work: Callable[[_Group], None]) -> None:
+        """Call ``work(group)`` for every group, each on its own thread (the first on this one), and return when
+        all are done, also when this thread is interrupted (no thread is left writing the state)."""
+        first, *rest = self._groups
+        others = [self._pool.submit(work, group) for group in rest]
         try:
-            wp.capture_launch(graphs[0])
+            work(first)
         finally:
             concurrent.futures.wait(others)
         for done in others:
@@ -585,6 +598,7 @@ class _Group:
     def __init__(self, model, state: State, control: Control, solver, probe: frame_kernels.FrameProbe):
         self.model, self.state, self.control, self.solver, self.probe = model, state, control, solver, probe
         self.graphs = None  # (slot 0, slot 1) frame graphs, when the solver replays graphs
+        self.prepared = False  # the solver's one-step graph is captured (Simulation.step)
 
 
 def _nothing() -> None:

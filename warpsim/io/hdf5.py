@@ -20,6 +20,8 @@ Layout (``F`` frames, ``N`` particles, ``M`` sticks, ``T`` triangles, ``O`` obje
     /topology/particle_object    [N]        int32    object of each particle (index into attr ``objects``)
     /topology/particle_part      [N]        int32    part of each particle (index into attr ``parts``; -1 none)
     /topology/triangle_part      [T]        int32    part of each triangle (index into attr ``parts``)
+    /topology/terrain_heights    [NY, NX]   float64  the terrain's heights [m] (attrs size, origin [m]): resumes and
+                                                     conversions never read a terrain file again
     /checkpoint/slot0, slot1                         two copies of the state after a frame, for ``--resume``:
         frame [1] int64, digest [32] uint8 (sha256), and the arrays of :class:`warpsim.checkpoint.Checkpoint`
 
@@ -646,7 +648,7 @@ class Recording:
         with _reading(path):
             if d.ndim != 2 or not all(2 <= n <= MAX_SIDE for n in d.shape):
                 raise RecordingError(f"{path}: its terrain is {list(d.shape)} samples, not 2 to {MAX_SIDE} a side")
-            need, available = 8 * d.shape[0] * d.shape[1], available_memory()  # float32, and a float32 copy
+            need, available = 16 * d.shape[0] * d.shape[1], available_memory()  # float64, and a float64 copy
             if available is not None and need > 0.5 * available:
                 raise RecordingError(
                     f"{path}: its terrain of {d.shape[0]:,} x {d.shape[1]:,} samples needs {need / 1e9:.1f} GB; "

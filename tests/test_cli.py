@@ -118,3 +118,10 @@ def test_run_figures_are_the_sweep_metrics_and_spread_over_worlds(capsys):
     rows = sweeps.run_chunk(plan.chunks(3, set(), "cpu", None)[0])
     means = [row["line_angle_mean"] for row in rows]
     assert [float(a) for a in angles] == pytest.approx([np.mean(means), min(means), max(means)], abs=0.051)
+
+
+def test_bare_warpsim_shows_its_help(capsys):
+    """Issue 36: a bare `warpsim` printed an error about a missing COMMAND; it now shows what it can do."""
+    assert main([]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("usage: warpsim") and "run" in out and "sweep" in out

@@ -189,7 +189,8 @@ def test_ctrl_c_keeps_the_finished_rows_and_a_rerun_runs_only_the_rest(tmp_path,
     assert 1 <= len(kept) < 6 and not journal.exists()
     done = subprocess.run(_cli(tmp_path, "--resume"), capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
-    assert f"{len(kept)} already in" in done.stdout and f"{6 - len(kept)} cases run" in done.stdout
+    left = 6 - len(kept)
+    assert f"{len(kept)} already in" in done.stdout and f"{left} {'case' if left == 1 else 'cases'} run" in done.stdout
     _same(pd.read_parquet(tmp_path / "s.parquet"), reference)
 
 
@@ -813,7 +814,7 @@ def test_a_failed_task_is_one_line_naming_dasks_log(tmp_path, monkeypatch, capsy
         "warpsim sweep: error: a task failed: warpsim-cases-1-1 cancelled for reason: scheduler-connection-lost.; "
         f"the finished rows are kept; Dask's log: {log}\n"
     )
-    assert "failed: 1 cases run" in captured.out and "done:" not in captured.out
+    assert "failed: 1 case run" in captured.out and "done:" not in captured.out
     assert "Couldn't gather keys" in log.read_text()
     assert len(pd.read_parquet(tmp_path / "t.parquet")) == 1
 

@@ -325,7 +325,9 @@ def _names(text: str) -> list[str]:
 def _scene_arguments(parser, worlds: bool = True) -> None:
     """The options that change the scene a command simulates: time step, iterations, frame rate, device,
     ``--set`` and (``worlds``) ``--worlds``/``--vary``."""
-    parser.add_argument("--dt", type=_number("--dt"), help="time step [s] (default: scene's, 0.01)")
+    parser.add_argument(
+        "--dt", type=_number("--dt"), help="time step [s] (default: the scene's; `warpsim info SCENE` shows it)"
+    )
     parser.add_argument("--iterations", type=_iterations, help="constraint iterations per step (default 55)")
     parser.add_argument("--fps", type=_number("--fps"), help="output frames per simulated second")
     parser.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
@@ -989,11 +991,11 @@ def cmd_sweep(args) -> int:
     if not args.quiet:
         rate = outcome.ran / outcome.wall if outcome.wall > 0 else 0.0
         kept = f"{outcome.kept} already in {out}; " if outcome.kept else ""
-        where_run = f"{outcome.workers} workers" if outcome.ran else "nothing to run"
+        where_run = _count(outcome.workers, "worker") if outcome.ran else "nothing to run"
         status = "failed" if outcome.failures else "interrupted" if outcome.interrupted else "done"
         print(
-            f"{status}: {kept}{outcome.ran} cases run in {outcome.wall:.1f} s on {where_run} ({rate:.2f} cases/s); "
-            f"{len(table)} rows, {blew} blew up"
+            f"{status}: {kept}{_count(outcome.ran, 'case')} run in {outcome.wall:.1f} s on {where_run} "
+            f"({rate:.2f} cases/s); {_count(len(table), 'row')}, {blew} blew up"
         )
         print(f"  table: {out}")
     if outcome.failures:  # one line: the first failure's first line (a Dask error text runs over many)
@@ -1115,8 +1117,16 @@ def main(argv: list[str] | None = None) -> int:
         return 0
 
 
+def _count(n: int, noun: str) -> str:
+    """``n`` and ``noun``, plural unless ``n`` is 1 ("1 case", "2 cases")."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
 def _main(argv: list[str] | None) -> int:
     parser = build_parser()
+    if not (sys.argv[1:] if argv is None else argv):  # a bare `warpsim`: what it can do, not an error
+        parser.print_help()
+        return 0
     args = parser.parse_args(argv)
     from . import _warp
 

@@ -125,3 +125,20 @@ def test_bare_warpsim_shows_its_help(capsys):
     assert main([]) == 0
     out = capsys.readouterr().out
     assert out.startswith("usage: warpsim") and "run" in out and "sweep" in out
+
+
+def test_a_missing_cuda_device_is_one_line():
+    """Issue 36: `--device cuda` on a machine without a CUDA driver printed two raw Warp driver errors before the
+    clean line; now only the line (the check asks Warp whether CUDA is there before asking for the device)."""
+    import warp as wp
+
+    if wp.is_cuda_available():
+        pytest.skip("this machine has CUDA")
+    proc = subprocess.run(
+        [sys.executable, "-m", "warpsim", "run", "flag", "--device", "cuda", "--seconds", "0.1"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 2 and len(lines) == 1 and "--device cuda is not available here" in lines[0], lines

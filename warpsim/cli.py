@@ -413,10 +413,13 @@ def _world_count(text: str) -> int:
 def _check_device(name: str) -> str:
     import warp as wp
 
+    available = ", ".join(str(d) for d in wp.get_devices())
+    # without a CUDA driver, asking Warp for a cuda device prints two raw driver errors first: say it in one line
+    if name.startswith("cuda") and not wp.is_cuda_available():
+        raise UsageError(f"--device {name} is not available here (no CUDA driver); available: {available}")
     try:
         wp.get_device(name)
     except (ValueError, RuntimeError):
-        available = ", ".join(str(d) for d in wp.get_devices())
         raise UsageError(f"--device {name} is not available here; available: {available}") from None
     return name
 

@@ -95,27 +95,21 @@ def free_bodies(model) -> list[np.ndarray]:
     """The model's free bodies: each a host array of particle indices [int32] (increasing) that the sticks connect,
     of more than one particle, none nailed or immovable."""
     n = model.particle_count
-    parent = np.arange(n)
-
-    def root(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for a, b in model.stick_particles_np:
-        ra, rb = root(int(a)), root(int(b))
-        if ra != rb:
-            parent[max(ra, rb)] = min(ra, rb)
-    roots = np.array([root(i) for i in range(n)], dtype=np.int64)
+    ends = np.asarray(model.stick_particles_np, dtype=np.int64).reshape(-1, 2)
+    label = np.arange(n)
+    while True:  # each particle takes the smallest label of its stick neighbours, then its label's label
+        lowest = label.copy()
+        np.minimum.at(lowest, ends[:, 0], label[ends[:, 1]])
+        np.minimum.at(lowest, ends[:, 1], label[ends[:, 0]])
+        lowest = lowest[lowest]
+        if np.array_equal(lowest, label):
+            break
+        label = lowest
     held = (model.particle_nail.numpy() >= 0) | (model.particle_inv_mass.numpy() == 0.0)
-    bad = set(roots[held].tolist())
-    bodies = []
-    for r in np.unique(roots):
-        members = np.flatnonzero(roots == r).astype(np.int32)
-        if len(members) > 1 and int(r) not in bad:
-            bodies.append(members)
-    return bodies
+    free = ~np.isin(label, label[held])
+    order = np.argsort(label, kind="stable")  # particles grouped by body, increasing within each
+    starts = np.flatnonzero(np.diff(label[order], prepend=-1))
+    return [body.astype(np.int32) for body in np.split(order, starts[1:]) if len(body) > 1 and free[body[0]]]
 
 
 class MomentumKeeper:

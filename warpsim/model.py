@@ -48,6 +48,16 @@ class ObjectRecord:
     curves: dict[str, list[list[int]]] = field(default_factory=dict)
     paper_counts: dict[str, int] | None = None
 
+    def controlled_sticks(self) -> np.ndarray:
+        """The sticks whose rest lengths this object's controls set [int32 indices]: the solver ramps them
+        (``SolverConfig.control_rate``). None here; an object with controls says which."""
+        return np.zeros(0, dtype=np.int32)
+
+    def controlled_nails(self) -> np.ndarray:
+        """The nails this object's controls move [int32 indices into ``Control.nail_target``]: the solver ramps
+        them (``SolverConfig.nail_rate``). None here; an object with controls says which."""
+        return np.zeros(0, dtype=np.int32)
+
 
 class Model:
     """Everything static about a simulation, built once by :meth:`warpsim.ModelBuilder.finalize`.

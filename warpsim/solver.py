@@ -78,18 +78,11 @@ class _Solver:
         self.use_graph = bool(use_graph)
         self.tri_force = wp.zeros(max(model.tri_count, 1), dtype=wp.vec3, device=model.device)
         self.particle_air = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)  # drag bodies' drag
-        # the sticks whose rest lengths controls set: the pilot's arms, and the struts' ties the billow shift moves
-        sticks = [
-            np.asarray(getattr(r, name))
-            for r in model.objects
-            for name in ("control_sticks", "billow_sticks")
-            if getattr(r, name, None) is not None
-        ]
-        sticks = np.unique(np.concatenate(sticks)) if sticks else np.zeros(0)
+        sticks = np.unique(np.concatenate([np.zeros(0, np.int32), *(r.controlled_sticks() for r in model.objects)]))
         self.control_sticks = wp.array(sticks.astype(np.int32), dtype=wp.int32, device=model.device)
         """``[K]`` the sticks whose rest lengths the controls set (they ramp: :func:`ramp_rest_lengths`)."""
-        nails = [r.anchor_nail for r in model.objects if getattr(r, "anchor_nail", None) is not None]
-        self.control_nails = wp.array(np.array(nails, dtype=np.int32), dtype=wp.int32, device=model.device)
+        nails = np.unique(np.concatenate([np.zeros(0, np.int32), *(r.controlled_nails() for r in model.objects)]))
+        self.control_nails = wp.array(nails.astype(np.int32), dtype=wp.int32, device=model.device)
         """``[N]`` the nails the controls move (the kites' anchors; they ramp: :func:`ramp_nail_targets`)."""
         self._graphs: dict = {}
 

@@ -193,6 +193,11 @@ class HangGliderRecord(ObjectRecord):
     billow_side: np.ndarray | None = None
     billow_rise: np.ndarray | None = None
 
+    def controlled_sticks(self) -> np.ndarray:
+        """The pilot's arms and the struts' ties the billow shift moves."""
+        ties = self.billow_sticks if self.billow_sticks is not None else np.zeros(0, dtype=np.int32)
+        return np.concatenate([np.asarray(self.control_sticks), np.asarray(ties)]).astype(np.int32)
+
 
 def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Heightfield) -> HangGliderRecord:
     """Add the hang glider of ``cfg`` above ``terrain``; returns its record (parts, stick groups, controls)."""

@@ -134,6 +134,10 @@ class KiteRecord(ObjectRecord):
     spine: np.ndarray
     tips: tuple[int, int]
 
+    def controlled_nails(self) -> np.ndarray:
+        """The rope's anchor, which the ``anchor`` control walks."""
+        return np.array([self.anchor_nail], dtype=np.int32)
+
 
 def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> KiteRecord:
     """Add the kite of ``cfg`` and its rope; returns its record (parts, stick groups, anchor nail)."""

@@ -16,10 +16,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from warpsim.kernels.aero import STALL_SHARPNESS, AeroModel
-from warpsim.kernels.collision import CollisionMode
-from warpsim.kernels.constraints import chebyshev_weights
-from warpsim.runner import Simulation
+from warpsim.physics.kernels.aero import STALL_SHARPNESS, AeroModel
+from warpsim.physics.kernels.collision import CollisionMode
+from warpsim.physics.kernels.constraints import chebyshev_weights
+from warpsim.run.simulation import Simulation
 
 F32 = np.float32
 F64 = np.float64
@@ -41,7 +41,7 @@ def _f32(a: np.ndarray) -> np.ndarray:
 
 
 class NumpyVerlet:
-    """The step of ``sim`` (a :class:`warpsim.runner.Simulation` with the Verlet solver) in NumPy.
+    """The step of ``sim`` (a :class:`warpsim.run.simulation.Simulation` with the Verlet solver) in NumPy.
 
     ``step()`` advances its own float64 host copies ``q``, ``q_prev`` [m] by ``sim.dt`` seconds, reading the
     simulation's controls (rest lengths, nail targets, wind) as they were when it was made.
@@ -168,7 +168,8 @@ class NumpyVerlet:
         return self._sum_per_particle(t.ravel(), np.repeat(force, 3, axis=0))
 
     def _sail(self, n, area, w, q) -> np.ndarray:
-        """``sail`` air force [N] per triangle (before the 1/3 share), as :func:`warpsim.kernels.aero.sail_force`."""
+        """``sail`` air force [N] per triangle (before the 1/3 share), as
+        :func:`warpsim.physics.kernels.aero.sail_force`."""
         one = F32(1.0)
         cl_slope, induced, cd0, stall = (self.tri_sail[:, k] for k in range(4))
         span = np.zeros_like(w)
@@ -266,7 +267,7 @@ class NumpyVerlet:
 
     def keep_momentum(self, predicted: np.ndarray) -> None:
         """Give each free world back the linear and angular momentum the projection moved it by (``predicted``:
-        the positions before it), as :mod:`warpsim.kernels.momentum`, in float64."""
+        the positions before it), as :mod:`warpsim.physics.kernels.momentum`, in float64."""
         x, xp = self.q, self.q_prev
         for w in np.flatnonzero(self.world_free):
             i = self.world_particles[self.world_start[w] : self.world_start[w + 1]]

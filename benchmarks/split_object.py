@@ -18,8 +18,8 @@ import time
 
 import warp as wp
 
-from warpsim.kernels.constraints import make_projector
-from warpsim.runner import Simulation
+from warpsim.physics.kernels.constraints import make_projector
+from warpsim.run.simulation import Simulation
 
 from .suite import flag
 

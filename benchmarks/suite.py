@@ -26,8 +26,8 @@ from pathlib import Path
 import numpy as np
 import warp as wp
 
-from warpsim import descriptor
-from warpsim.runner import BlowUpError, Simulation
+from warpsim.run.simulation import BlowUpError, Simulation
+from warpsim.scene import descriptor
 
 PAPER_HANG_GLIDER_STEPS_PER_S = 100.0  # the paper's figure: 100 steps/s on a 2 GHz Pentium 4 (Section 9)
 FLAG_SIZES = (16, 32, 64, 128, 256)
@@ -356,7 +356,7 @@ SWEEP_SECONDS, SWEEP_CHUNK = 8.0, 8
 def _warm_worker() -> None:
     """Run on each Dask worker before timing: Warp started and the kite's kernels loaded (a one-time cost per
     worker process, reported as the cluster's start-up)."""
-    from warpsim import _warp
+    from warpsim.physics import _warp
 
     _warp.init()
     Simulation(scene("kite"))
@@ -374,7 +374,7 @@ def case_sweep(opts: Options) -> dict:
 
     import pandas as pd
 
-    from warpsim import sweeps
+    from warpsim.sweeps import plan as sweeps
 
     d = scene("kite")
     plan = sweeps.SweepPlan(d, sweeps.parse_axes(d, list(SWEEP_AXES)), SWEEP_SECONDS)

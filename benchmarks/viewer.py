@@ -16,9 +16,9 @@ import json
 import sys
 import time
 
-from warpsim import _warp
-from warpsim.descriptor import merge, resolve
-from warpsim.runner import Simulation
+from warpsim.physics import _warp
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import merge, resolve
 from warpsim.viewer.core import Viewer
 from warpsim.viewer.gl import PygletBackend
 

@@ -29,8 +29,8 @@ def project():
     """``project(model, state, control, iterations, scheme=None, **settings)``: one Jacobi projection of
     ``iterations`` on ``state`` in place, with a :class:`warpsim.SolverConfig` made of ``settings`` (plain Jacobi,
     ``chebyshev=0``, unless given)."""
-    from warpsim.config import SolverConfig
-    from warpsim.kernels.constraints import make_projector
+    from warpsim.physics.config import SolverConfig
+    from warpsim.physics.kernels.constraints import make_projector
 
     def run(model, state, control, iterations, scheme=None, **settings):
         config = SolverConfig(**{"chebyshev": 0.0, **settings})

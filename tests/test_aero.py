@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import warpsim as ws
-from warpsim.kernels.aero import triangle_air_force
+from warpsim.physics.kernels.aero import triangle_air_force
 
 
 def _plate(device, flip=False, aero=ws.AeroModel.PAPER, wind=(10.0, 0.0, 0.0)):

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from pxr import Usd, UsdGeom
 
-from warpsim.cli import EXIT_BLOWUP, main
-from warpsim.descriptor import defaults
+from warpsim.cli.main import EXIT_BLOWUP, main
 from warpsim.io.hdf5 import Recording
-from warpsim.runner import BlowUpError, Simulation
+from warpsim.run.simulation import BlowUpError, Simulation
+from warpsim.scene.descriptor import defaults
 
 
 def _euler_flag(**solver):

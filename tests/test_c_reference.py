@@ -9,8 +9,8 @@ import pytest
 
 from benchmarks import c_reference
 from benchmarks.__main__ import main
-from warpsim import descriptor
-from warpsim.runner import Simulation
+from warpsim.run.simulation import Simulation
+from warpsim.scene import descriptor
 
 pytestmark = pytest.mark.skipif(c_reference.compiler() is None, reason="no C compiler on the PATH")
 

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from warpsim import descriptor
-from warpsim.cli import main
-from warpsim.controls import ControlError, ControlSchedule, Gusts
-from warpsim.descriptor import DescriptorError, load_text
-from warpsim.runner import Simulation
+from warpsim.cli.main import main
+from warpsim.run.simulation import Simulation
+from warpsim.scene import descriptor
+from warpsim.scene.controls import ControlError, ControlSchedule, Gusts
+from warpsim.scene.descriptor import DescriptorError, load_text
 
 
 def test_schedule_holds_and_ramps():

@@ -10,7 +10,7 @@ import importlib
 import pytest
 import warp as wp
 
-from warpsim.kernels import MODULES, frame
+from warpsim.physics.kernels import MODULES, frame
 
 KERNEL_MODULES = tuple(module.__name__ for module in (*MODULES, frame))  # the solvers' and the runner's
 

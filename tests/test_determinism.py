@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import warpsim as ws
-from warpsim.descriptor import defaults
-from warpsim.runner import Simulation
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import defaults
 
 
 def _run(use_graph: bool, steps: int = 150):

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from warpsim.descriptor import defaults
-from warpsim.runner import Simulation
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import defaults
 
 
 def _flag(method: str, dt: float):

@@ -18,9 +18,9 @@ from benchmarks.validation.cases import glide as _glide
 from benchmarks.validation.cases import turn_rate
 from benchmarks.validation.cases import window as _window
 from benchmarks.validation.handling import bank_holder, fly_piloted
-from warpsim.descriptor import resolve
-from warpsim.kernels.aero import sail_coefficients, sail_force
-from warpsim.runner import Simulation
+from warpsim.physics.kernels.aero import sail_coefficients, sail_force
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import resolve
 
 
 @pytest.mark.parametrize("scene", ["scenes/hang_glider.toml", "scenes/hang_glider_intermediate.toml"])

@@ -4,9 +4,9 @@ that writes nothing copies no state to the host, and a frame kept by its reader 
 import numpy as np
 import pytest
 
-from warpsim import diagnostics
-from warpsim.descriptor import defaults
-from warpsim.runner import Simulation
+from warpsim.run import diagnostics
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import defaults
 
 
 def _kites(count: int = 3) -> Simulation:
@@ -125,7 +125,7 @@ def test_long_frames_step_without_a_frame_graph_and_give_the_same_bits(monkeypat
     """A frame of more steps than `MAX_FRAME_GRAPH_STEPS` (a low --fps) is not captured as one graph (at --fps 0.001
     that was 100,000 steps, twice: gigabytes and minutes of start-up); it steps through the solver's one-step graph
     and gives the same state, bit for bit, as the frame replayed as one graph."""
-    from warpsim import runner
+    from warpsim.run import simulation as runner
 
     d = defaults("kite")
     d["scene"]["fps"] = 1.0 / (60 * d["solver"]["dt"])  # 60 steps a frame

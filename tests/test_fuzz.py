@@ -16,11 +16,11 @@ from conftest import fuzz_watchdog
 from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
-from warpsim.cli import main
-from warpsim.config import SECTIONS as SHARED_SECTIONS
-from warpsim.descriptor import DescriptorError, defaults, load_text
+from warpsim.cli.main import main
 from warpsim.objects import registry
-from warpsim.runner import BlowUpError, Simulation
+from warpsim.physics.config import SECTIONS as SHARED_SECTIONS
+from warpsim.run.simulation import BlowUpError, Simulation
+from warpsim.scene.descriptor import DescriptorError, defaults, load_text
 
 KINDS = list(registry.OBJECTS)
 

@@ -17,7 +17,7 @@ from benchmarks.validation.handling import (
     point_mass_recovery,
     scene_descriptor,
 )
-from warpsim.model import AIR_DENSITY
+from warpsim.physics.model import AIR_DENSITY
 
 
 def test_jones_dive_recovery_closed_form_and_point_mass():
@@ -56,9 +56,9 @@ def test_intermediate_glider_handles_as_the_default_at_both_time_steps():
 
 
 def test_billow_shift_twists_the_low_half_up_and_is_off_in_the_paper_design():
-    from warpsim.descriptor import defaults, merge
     from warpsim.objects.hang_glider import billow_rest_lengths
-    from warpsim.runner import Simulation
+    from warpsim.run.simulation import Simulation
+    from warpsim.scene.descriptor import defaults, merge
 
     sim = Simulation(scene_descriptor("hang-glider"))
     rec = sim.model.objects[0]

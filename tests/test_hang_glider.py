@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import warp as wp
 
-from warpsim.cli import main
-from warpsim.descriptor import defaults, merge
+from warpsim.cli.main import main
 from warpsim.objects.hang_glider import control_rest_lengths, flight_state
-from warpsim.runner import Simulation
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import defaults, merge
 
 
 def _paper() -> dict:
@@ -146,7 +146,7 @@ def test_pilot_moving_alone_does_not_move_or_spin_the_glider(mass_splitting, kee
     The paper's plain per-particle average breaks both between the 65 kg pilot and the light frame (a
     spurious pitch torque that decided the glider's pitch); mass splitting, the glider's default, keeps the
     centre but not all the angular momentum; the momentum projection after each step (keep_momentum, the
-    default) keeps both whatever the average (warpsim.kernels.momentum).
+    default) keeps both whatever the average (warpsim.physics.kernels.momentum).
     Measured: paper's average alone 199 mm, 7.1 kg m^2/s; mass splitting alone 11 mm, 2.1 kg m^2/s; with the
     momentum projection 1e-10 m.
     """

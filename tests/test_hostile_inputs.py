@@ -6,9 +6,9 @@ import time
 import numpy as np
 import pytest
 
-from warpsim.cli import EXIT_USAGE, MAX_LINE, main
-from warpsim.descriptor import defaults
-from warpsim.runner import Simulation
+from warpsim.cli.main import EXIT_USAGE, MAX_LINE, main
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import defaults
 
 
 def _refused(capsys, argv, *words):

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from warpsim.cli import main
-from warpsim.descriptor import defaults
+from warpsim.cli.main import main
 from warpsim.objects.kite import line_state
-from warpsim.runner import Simulation
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import defaults
 
 
 @pytest.fixture(scope="module")

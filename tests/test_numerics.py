@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 import warpsim as ws
-from warpsim import descriptor
 from warpsim.objects.hang_glider import flight_state
-from warpsim.runner import Simulation
+from warpsim.run.simulation import Simulation
+from warpsim.scene import descriptor
 
 VACUUM = {"air": {"scale": 0.0}, "solver": {"damping": 0.0}, "terrain": {"kind": "flat", "height": -1.0e5}}
 

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from benchmarks.numpy_step import NumpyVerlet
-from warpsim import descriptor
-from warpsim.runner import Simulation
+from warpsim.run.simulation import Simulation
+from warpsim.scene import descriptor
 
 
 # Positions are float64 on both sides, the rest float32 in the kernels' order, except the per-particle sums:

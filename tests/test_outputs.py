@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 from pxr import Usd, UsdGeom
 
-from warpsim.cli import main
-from warpsim.descriptor import defaults, to_toml
+from warpsim.cli.main import main
 from warpsim.io.hdf5 import H5Recorder, Recording
 from warpsim.io.usd import UsdWriter, validate
-from warpsim.runner import Simulation
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import defaults, to_toml
 
 
 def _record(kind, tmp_path, seconds=0.5, suffix=".usda", **overrides):

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from warpsim.descriptor import defaults
 from warpsim.objects.parachute import projected_radius
-from warpsim.runner import Simulation
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import defaults
 
 
 def _drop(hoop: bool, seconds: float = 10.0, keep_momentum: bool = False):
@@ -80,8 +80,8 @@ def test_descent_does_not_depend_on_where_the_parachute_is():
     """The same drop at 400 m and near z = 0 (the ground lowered by 400 m) falls at the same speed.
 
     float32 positions at 400 m cannot hold the person's small per-iteration corrections; before the
-    solver kept each iterate as origin + offset (warpsim.kernels.constraints) they were rounded away and the descent
-    after 20 s was 6.6 m/s up there against 4.3 m/s near zero. Measured now: 5.374 and 5.387 m/s.
+    solver kept each iterate as origin + offset (warpsim.physics.kernels.constraints) they were rounded away and the
+    descent after 20 s was 6.6 m/s up there against 4.3 m/s near zero. Measured now: 5.374 and 5.387 m/s.
     """
     speeds = []
     for ground in (0.0, -400.0):

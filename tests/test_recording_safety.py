@@ -19,13 +19,13 @@ import numpy as np
 import pytest
 from pxr import Usd, UsdGeom
 
-from warpsim.cli import EXIT_INTERRUPTED, EXIT_OUTPUT, EXIT_USAGE, main
-from warpsim.descriptor import defaults, load_text, to_toml
+from warpsim.cli.main import EXIT_INTERRUPTED, EXIT_OUTPUT, EXIT_USAGE, main
 from warpsim.io import remove_stale_temporaries, temporary_path
 from warpsim.io.h5safe import writer_active
 from warpsim.io.hdf5 import H5Recorder, Recording
 from warpsim.objects import registry
-from warpsim.runner import Simulation
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import defaults, load_text, to_toml
 
 ROOT = Path(__file__).resolve().parent.parent
 CUDA_NOTE = "Warp CUDA warning"  # printed by Warp on machines without a GPU driver; not ours

@@ -5,9 +5,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from warpsim.cli import main
-from warpsim.descriptor import defaults, load_text, resolve
-from warpsim.runner import Simulation
+from warpsim.cli.main import main
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import defaults, load_text, resolve
 
 SCENES = sorted((Path(__file__).resolve().parent.parent / "scenes").glob("*.toml"))
 

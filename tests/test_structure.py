@@ -1,6 +1,6 @@
 """How the code is organised, checked: one source of defaults, and the kernels' naming convention.
 
-The configuration is written once (:mod:`warpsim.config`); the descriptor, the solvers and the Python API read
+The configuration is written once (:mod:`warpsim.physics.config`); the descriptor, the solvers and the Python API read
 it, so a TOML user and a Python user get the same numbers. Every kernel names what it writes ``*_out`` and lists
 those arguments last (``warpsim/kernels/__init__.py``), so that a launch's ``inputs``/``outputs`` split is
 visible in the signature.
@@ -15,11 +15,11 @@ import pytest
 import warp as wp
 
 import warpsim as ws
-from warpsim import config
-from warpsim.descriptor import DescriptorError, defaults, merge
-from warpsim.kernels import MODULES
 from warpsim.objects import registry
-from warpsim.runner import Simulation
+from warpsim.physics import config
+from warpsim.physics.kernels import MODULES
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import DescriptorError, defaults, merge
 
 
 @pytest.mark.parametrize("kind", list(registry.OBJECTS))
@@ -67,7 +67,7 @@ def test_descriptor_and_config_refuse_the_same_values(section, key, value):
 
 
 def test_choices_come_from_the_enums():
-    from warpsim.descriptor import choices
+    from warpsim.scene.descriptor import choices
 
     assert choices("air", "model") == tuple(m.name.lower() for m in ws.AeroModel)
     assert choices("ground", "collision") == tuple(m.name.lower() for m in ws.CollisionMode)
@@ -172,7 +172,7 @@ def test_a_design_is_a_preset_and_keys_beside_it_win(capsys):
     assert (kite["air"]["model"], kite["solver"]["dt"], kite["kite"]["tow_point"]) == ("paper", 0.01, 0.35)
     with pytest.raises(DescriptorError, match="design cannot differ between worlds"):
         merge("test", flying, {"worlds": {"count": 2, "hang_glider": {"design": ["flying", "paper"]}}})
-    from warpsim.cli import main
+    from warpsim.cli.main import main
 
     assert main(["info", "hang-glider", "--set", "hang_glider.design=paper"]) == 0
     assert "particles 49, sticks 180, triangles 64" in capsys.readouterr().out  # the paper's 49 particles

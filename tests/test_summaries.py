@@ -6,10 +6,10 @@ import subprocess
 import sys
 import time
 
-from warpsim.cli import EXIT_BLOWUP, build_parser, main
-from warpsim.descriptor import defaults, merge
+from warpsim.cli.main import EXIT_BLOWUP, build_parser, main
 from warpsim.objects import registry
-from warpsim.runner import Simulation
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import defaults, merge
 
 
 def test_start_up_is_reported_apart_from_the_stepping_rate(capsys):
@@ -41,7 +41,7 @@ def test_a_cpu_run_prints_no_warp_chatter():
     )
     assert run.returncode == 0 and run.stderr == "", run.stderr
     assert [line.split(":")[0] for line in run.stdout.splitlines()][:2] == ["built-in flag", "done"]
-    script = "from warpsim.descriptor import defaults\nfrom warpsim.runner import Simulation\n"
+    script = "from warpsim.scene.descriptor import defaults\nfrom warpsim.run.simulation import Simulation\n"
     script += "Simulation(defaults('kite')).run(0.05)\n"
     api = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, env=env)
     assert api.returncode == 0 and api.stdout == "" and api.stderr == "", api.stderr

@@ -19,11 +19,11 @@ pd = pytest.importorskip("pandas")
 pytest.importorskip("distributed")
 pytest.importorskip("pyarrow")
 
-from warpsim import descriptor as desc_mod  # noqa: E402
-from warpsim import sweeps  # noqa: E402
-from warpsim.cli import main  # noqa: E402
-from warpsim.diagnostics import object_metrics  # noqa: E402
-from warpsim.runner import Simulation  # noqa: E402
+from warpsim.cli.main import main  # noqa: E402
+from warpsim.run.diagnostics import object_metrics  # noqa: E402
+from warpsim.run.simulation import Simulation  # noqa: E402
+from warpsim.scene import descriptor as desc_mod  # noqa: E402
+from warpsim.sweeps import plan as sweeps  # noqa: E402
 
 SECONDS = 12.0  # each case; the window is its second half
 AXES = ["wind.gust_seed=1,2", "kite.tow_point=0.25,0.3,0.35"]  # 2 x 3 cases, gusty: each case its own gusts
@@ -311,7 +311,7 @@ def test_bad_sweeps_end_with_one_line(tmp_path, capsys, args, message):
 def test_local_workers_are_bounded_by_cores_and_memory(monkeypatch):
     """`--workers 1000` took more than 10 GB within a minute: the local cluster takes at most 4 workers per core and
     no more than 80 % of the available memory holds at `WORKER_BYTES` each."""
-    from warpsim import builder
+    from warpsim.physics import builder
 
     monkeypatch.setattr(sweeps, "cores", lambda: 2)
     monkeypatch.setattr(builder, "available_memory", lambda: 100 * sweeps.WORKER_BYTES)

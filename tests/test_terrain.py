@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import warpsim as ws
-from warpsim.kernels.collision import CollisionMode
+from warpsim.physics.kernels.collision import CollisionMode
 
 
 def test_bilinear_height_and_normal():

@@ -12,10 +12,10 @@ import h5py
 import numpy as np
 import pytest
 
-from warpsim import descriptor as desc_mod
-from warpsim.cli import EXIT_INTERRUPTED, main
+from warpsim.cli.main import EXIT_INTERRUPTED, main
 from warpsim.io.hdf5 import Recording
-from warpsim.runner import BlowUpError, Simulation
+from warpsim.run.simulation import BlowUpError, Simulation
+from warpsim.scene import descriptor as desc_mod
 
 ROOT = Path(__file__).resolve().parent.parent
 WORLDS = 5  # odd, and fewer than the most threads asked for below
@@ -159,7 +159,7 @@ def test_recordings_of_threads_are_those_of_one_thread(tmp_path):
 
 
 def test_sweep_chunk_rows_are_the_same_on_threads():
-    from warpsim import sweeps
+    from warpsim.sweeps import plan as sweeps
 
     desc = desc_mod.defaults("kite")
     plan = sweeps.SweepPlan(desc, sweeps.parse_axes(desc, ["wind.speed=4,6,8"]), 0.4)

@@ -21,11 +21,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from warpsim.cli import main, scene_dirs
-from warpsim.descriptor import merge, resolve, to_toml
+from warpsim.cli.main import main
 from warpsim.io.hdf5 import Recording
 from warpsim.objects.hang_glider import bank
-from warpsim.runner import Simulation
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import merge, resolve, to_toml
+from warpsim.scene.dirs import scene_dirs
 from warpsim.viewer import NullBackend, Viewer
 
 sys.path.insert(0, str(Path(__file__).parent))

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from warpsim import descriptor as desc_mod
-from warpsim.cli import main
-from warpsim.runner import Simulation
+from warpsim.cli.main import main
+from warpsim.run.simulation import Simulation
+from warpsim.scene import descriptor as desc_mod
 
 
 def _kite(worlds: dict | None = None, **wind):

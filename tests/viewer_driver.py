@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from warpsim import _warp
-from warpsim.cli import scene_dirs
-from warpsim.descriptor import resolve, to_toml
 from warpsim.objects.hang_glider import bank
-from warpsim.runner import Simulation
+from warpsim.physics import _warp
+from warpsim.run.simulation import Simulation
+from warpsim.scene.descriptor import resolve, to_toml
+from warpsim.scene.dirs import scene_dirs
 from warpsim.viewer.core import Viewer
 from warpsim.viewer.gl import PygletBackend, view_matrix
 

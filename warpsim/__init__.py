@@ -9,30 +9,30 @@ from __future__ import annotations
 
 import importlib
 
-__version__ = "0.1.0"
+from ._version import __version__
 
 # name -> module: imported on first use, so that the command line starts (and answers --help or Ctrl-C) without
 # loading Warp first
 _EXPORTS = {
-    "AIR_DENSITY": "config",
-    "GRAVITY": "config",
-    "AeroModel": "kernels.aero",
-    "AirConfig": "config",
-    "CollisionMode": "kernels.collision",
-    "Control": "model",
-    "GroundConfig": "config",
-    "Heightfield": "terrain",
-    "Model": "model",
-    "ModelBuilder": "builder",
-    "ObjectRecord": "model",
-    "Simulation": "runner",
-    "SolverConfig": "config",
-    "SolverEuler": "solver",
-    "SolverVerlet": "solver",
-    "State": "model",
-    "WindConfig": "config",
-    "make_solver": "solver",
-    "sweep": "sweeps",
+    "AIR_DENSITY": "physics.config",
+    "GRAVITY": "physics.config",
+    "AeroModel": "physics.kernels.aero",
+    "AirConfig": "physics.config",
+    "CollisionMode": "physics.kernels.collision",
+    "Control": "physics.model",
+    "GroundConfig": "physics.config",
+    "Heightfield": "physics.terrain",
+    "Model": "physics.model",
+    "ModelBuilder": "physics.builder",
+    "ObjectRecord": "physics.model",
+    "Simulation": "run.simulation",
+    "SolverConfig": "physics.config",
+    "SolverEuler": "physics.solver",
+    "SolverVerlet": "physics.solver",
+    "State": "physics.model",
+    "WindConfig": "physics.config",
+    "make_solver": "physics.solver",
+    "sweep": "sweeps.plan",
 }
 
 __all__ = [*sorted(_EXPORTS), "__version__"]

@@ -24,7 +24,7 @@ def console() -> int:
     its exit code, a late Ctrl-C is ignored, so that it cannot interrupt the interpreter's own shut-down
     ("Exception ignored ... KeyboardInterrupt")."""
     signal.signal(signal.SIGINT, exit_at_once)
-    from .cli import main
+    from .cli.main import main
 
     code = main()
     signal.signal(signal.SIGINT, signal.SIG_IGN)

@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from warpsim.kernels.aero import STALL_SHARPNESS, AeroModel
-from warpsim.kernels.collision import CollisionMode
-from warpsim.runner import Simulation
+from warpsim.physics.kernels.aero import STALL_SHARPNESS, AeroModel
+from warpsim.physics.kernels.collision import CollisionMode
+from warpsim.run.simulation import Simulation
 
 from ..numpy_step import F32, NumpyVerlet
 

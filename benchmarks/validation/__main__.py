@@ -21,8 +21,8 @@ import h5py
 import numpy as np
 import warp as wp
 
-from warpsim import descriptor
-from warpsim.runner import BlowUpError, Simulation
+from warpsim.run.simulation import BlowUpError, Simulation
+from warpsim.scene import descriptor
 
 from .cases import CASES, Row
 from .svg import loglog_panels

@@ -15,16 +15,16 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.numpy_step import NumpyVerlet
-from warpsim import descriptor
-from warpsim.builder import ModelBuilder
-from warpsim.config import AirConfig
-from warpsim.diagnostics import object_metrics
-from warpsim.kernels.aero import AeroModel
-from warpsim.model import AIR_DENSITY, GRAVITY
 from warpsim.objects.kite import anchor_elevation
-from warpsim.runner import BlowUpError, Simulation
-from warpsim.solver import SolverVerlet
-from warpsim.terrain import Heightfield
+from warpsim.physics.builder import ModelBuilder
+from warpsim.physics.config import AirConfig
+from warpsim.physics.kernels.aero import AeroModel
+from warpsim.physics.model import AIR_DENSITY, GRAVITY
+from warpsim.physics.solver import SolverVerlet
+from warpsim.physics.terrain import Heightfield
+from warpsim.run.diagnostics import object_metrics
+from warpsim.run.simulation import BlowUpError, Simulation
+from warpsim.scene import descriptor
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -260,7 +260,7 @@ def plate_drag() -> list[Row]:
                 f"plate drag ({name})",
                 f"terminal speed of a flat 1 m², 0.1 kg triangle falling face-on, aero = {name}",
                 f"{law:.4f} m/s",
-                f"the model's own law at 90°: C_N = {c_model:.3f} on ½ρv²A (warpsim.kernels.aero)",
+                f"the model's own law at 90°: C_N = {c_model:.3f} on ½ρv²A (warpsim.physics.kernels.aero)",
                 f"{speed:.4f} m/s",
                 "within 1 %",
                 abs(_rel(speed, law)) < 0.01,

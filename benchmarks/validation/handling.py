@@ -13,9 +13,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from warpsim import descriptor
-from warpsim.model import AIR_DENSITY, GRAVITY
-from warpsim.runner import Simulation
+from warpsim.physics.model import AIR_DENSITY, GRAVITY
+from warpsim.run.simulation import Simulation
+from warpsim.scene import descriptor
 
 Pilot = Callable[[dict], dict | None]
 

@@ -16,8 +16,9 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import __version__
-from ._interrupt import interruptible
+from .._interrupt import interruptible
+from .._version import __version__
+from ..scene.dirs import scene_dirs
 
 EXIT_USAGE = 2
 EXIT_BLOWUP = 3
@@ -71,17 +72,6 @@ def _iterations(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"--iterations must be a whole number >= 1, got {value}")
     return value
-
-
-def scene_dirs() -> list[Path]:
-    """Where scene files are looked up: ./scenes, then the scenes/ folder beside the package."""
-    dirs = [Path.cwd() / "scenes", Path(__file__).resolve().parent.parent / "scenes"]
-    seen, out = set(), []
-    for d in dirs:
-        if d.is_dir() and d.resolve() not in seen:
-            seen.add(d.resolve())
-            out.append(d)
-    return out
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -370,7 +360,7 @@ def _world_arguments(parser) -> None:
 def _load(args, worlds_from_vary: bool = True) -> tuple[dict, str, str]:
     """The scene of ``args`` with its ``--set``, ``--dt``, ``--iterations``, ``--fps``, ``--seconds`` and (with
     ``worlds_from_vary``) ``--worlds``/``--vary`` applied: ``(descriptor, source text, where)``."""
-    from .descriptor import merge, parse_override, parse_vary, resolve
+    from ..scene.descriptor import merge, parse_override, parse_vary, resolve
 
     descriptor, text, where = resolve(args.scene, scene_dirs())
     for item in args.set:
@@ -399,7 +389,7 @@ def _load(args, worlds_from_vary: bool = True) -> tuple[dict, str, str]:
 
 
 def _world_count(text: str) -> int:
-    from .descriptor import MAX_WORLDS
+    from ..scene.descriptor import MAX_WORLDS
 
     try:
         value = int(text)
@@ -426,7 +416,7 @@ def _check_device(name: str) -> str:
 
 def cmd_list(args) -> int:
     """Print built-in objects and scene files."""
-    from .objects import registry
+    from ..objects import registry
 
     print("built-in objects:")
     for name, spec in registry.OBJECTS.items():
@@ -444,8 +434,8 @@ def cmd_info(args) -> int:
     """Print counts, masses and settings of a scene."""
     import numpy as np
 
-    from .descriptor import to_toml
-    from .scene import build_model
+    from ..scene.build import build_model
+    from ..scene.descriptor import to_toml
 
     descriptor, _, where = _load(args)
     model = build_model(descriptor, "cpu", where)
@@ -482,7 +472,7 @@ def cmd_info(args) -> int:
 
 def _checked_output(check, value: str | None, flag: str) -> Path | None:
     """``check(value)`` for an output option given as ``flag``; a bad path becomes a usage error."""
-    from .io import OutputPathError
+    from ..io import OutputPathError
 
     if not value:
         return None
@@ -566,7 +556,7 @@ def _on_display_lost(viewer, backend, shot):
             viewer.close_recording()
             saved = ""
             if shot is not None:
-                from .io.render import save_png
+                from ..io.render import save_png
 
                 saved = f"; screenshot: {save_png(shot, backend.screenshot())}"
             kept = f"; recording: {', '.join(str(p) for p in viewer.takes)}" if viewer.takes else ""
@@ -608,7 +598,7 @@ def _signals_quit(viewer):
 
 def _same_file_check(scene: str, outputs: dict, what: str = "the scene file") -> None:
     """Refuse an output that would overwrite the scene file being run."""
-    from .io import same_file
+    from ..io import same_file
 
     if not Path(scene).is_file():
         return
@@ -620,7 +610,7 @@ def _same_file_check(scene: str, outputs: dict, what: str = "the scene file") ->
 def cmd_run(args) -> int:
     """Run a scene (or continue a recording) and print the summary: check the options, resolve the scene, open
     the outputs, run, report."""
-    from .runner import BlowUpError, RecordedControls
+    from ..run.simulation import BlowUpError, RecordedControls
 
     usd_path, h5_path = _check_run_options(args)
     device = _check_device(args.device)
@@ -653,8 +643,8 @@ def cmd_run(args) -> int:
 
 def _flight_figures(sim, seconds: float):
     """The closing figures of a run of ``seconds`` [s] from the simulation's current time: each object's
-    :data:`~warpsim.diagnostics.FIGURES` over the second half of the run (the sweeps' default window)."""
-    from .diagnostics import FlightFigures
+    :data:`~warpsim.run.diagnostics.FIGURES` over the second half of the run (the sweeps' default window)."""
+    from ..run.diagnostics import FlightFigures
 
     start = sim.state.time
     return FlightFigures(sim, start + 0.5 * seconds, start + seconds)
@@ -674,8 +664,8 @@ def _both(first, second):
 
 def _check_run_options(args) -> tuple[Path | None, Path | None]:
     """The checked ``--usd`` and ``--h5`` paths; a contradictory or bad option is a usage error."""
-    from .io import check_stage_path
-    from .io.hdf5 import check_recording_path
+    from ..io import check_stage_path
+    from ..io.hdf5 import check_recording_path
 
     given = [
         flag for flag, value in (("SCENE", args.scene), ("--resume", args.resume), ("--replay", args.replay)) if value
@@ -705,7 +695,7 @@ def _check_run_options(args) -> tuple[Path | None, Path | None]:
 def _claim_recording(outputs, args, h5_path: Path | None):
     """Take the writer's lock of the ``--h5`` or ``--resume`` recording before anything else happens (another
     run writing it is a usage error); released when ``outputs`` closes. Returns the lock or None."""
-    from .io.hdf5 import RecordingError, check_recording_path, claim
+    from ..io.hdf5 import RecordingError, check_recording_path, claim
 
     if not (h5_path or args.resume):
         return None
@@ -737,7 +727,7 @@ class _RunInputs:
 
 def _resolve_run(args) -> _RunInputs:
     """The scene of the command line, or the one a ``--resume`` recording holds with its checkpoint."""
-    from .io.hdf5 import Recording, RecordingError
+    from ..io.hdf5 import Recording, RecordingError
 
     if args.replay:
         try:
@@ -766,9 +756,9 @@ def _resolve_run(args) -> _RunInputs:
 
 
 def _start(run: _RunInputs, device: str, args):
-    """The :class:`~warpsim.runner.Simulation` of ``run`` (restored from its checkpoint), announced unless
+    """The :class:`~warpsim.run.simulation.Simulation` of ``run`` (restored from its checkpoint), announced unless
     ``--quiet``."""
-    from .runner import Simulation, available_cores
+    from ..run.simulation import Simulation, available_cores
 
     sim = Simulation(
         run.descriptor,
@@ -809,8 +799,8 @@ class _Outputs:
     stops the run at that frame, and its error is kept in ``failures``."""
 
     def __init__(self, stack, sim, run: _RunInputs, args, h5_path, usd_path, lock, stop):
-        from .descriptor import to_toml
-        from .io.hdf5 import H5Recorder, RecordingError
+        from ..io.hdf5 import H5Recorder, RecordingError
+        from ..scene.descriptor import to_toml
 
         self.stop, self.failures = stop, []
         self.recorder = self.usd = None
@@ -830,14 +820,14 @@ class _Outputs:
         except RecordingError as err:
             raise UsageError(str(err)) from None
         if usd_path:
-            from .io.usd import UsdWriter  # USD loads here, after Ctrl-C no longer raises (see _StopRequests)
+            from ..io.usd import UsdWriter  # USD loads here, after Ctrl-C no longer raises (see _StopRequests)
 
             self.usd = UsdWriter(usd_path, sim.model, sim.steps_per_frame * sim.dt)
         self.any = bool(self.recorder or self.usd)
 
     def on_frame(self, frame) -> None:
         """Write ``frame`` to every output."""
-        from .io import OutputWriteError
+        from ..io import OutputWriteError
 
         if self.recorder and not self.failures:
             try:
@@ -850,7 +840,7 @@ class _Outputs:
 
     def close(self) -> None:
         """Finish every output (safe to call twice); a failure joins ``failures``."""
-        from .io import OutputWriteError
+        from ..io import OutputWriteError
 
         for name in ("recorder", "usd"):
             output = getattr(self, name)
@@ -892,9 +882,9 @@ def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path,
 
 def cmd_convert(args) -> int:
     """Write a recording's frames as a USD stage."""
-    from .io import OutputPathError
-    from .io.hdf5 import RecordingError
-    from .io.usd import recording_to_stage
+    from ..io import OutputPathError
+    from ..io.hdf5 import RecordingError
+    from ..io.usd import recording_to_stage
 
     interruptible()  # the output's temporary is made next
     try:
@@ -907,9 +897,9 @@ def cmd_convert(args) -> int:
 
 def cmd_render(args) -> int:
     """Draw a recording as a PNG or an animated GIF."""
-    from .io import OutputPathError
-    from .io.hdf5 import RecordingError
-    from .io.render import render_recording
+    from ..io import OutputPathError
+    from ..io.hdf5 import RecordingError
+    from ..io.render import render_recording
 
     interruptible()  # the output's temporary is made next
     try:
@@ -922,8 +912,8 @@ def cmd_render(args) -> int:
 
 def cmd_sweep(args) -> int:
     """Run a sweep into a table and say what it did."""
-    from . import sweeps
-    from .io import OutputPathError, check_output_path
+    from ..io import OutputPathError, check_output_path
+    from ..sweeps import plan as sweeps
 
     try:
         sweeps.require("distributed")
@@ -1019,7 +1009,7 @@ def _check_h5_dir(text: str) -> Path:
     folder ended in a Dask traceback once the workers tried)."""
     import os
 
-    from .io import OutputPathError, check_output_path
+    from ..io import OutputPathError, check_output_path
 
     h5_dir = Path(text)
     existing = h5_dir
@@ -1047,7 +1037,7 @@ def _sweep_progress(done: int, total: int, wall: float) -> None:
 
 def cmd_plot(args) -> int:
     """Draw a sweep's metric as a PNG."""
-    from .io.plot import PlotError, plot_sweep
+    from ..sweeps.plot import PlotError, plot_sweep
 
     interruptible()  # the output's temporary is made next
     try:
@@ -1060,17 +1050,17 @@ def cmd_plot(args) -> int:
 
 def cmd_view(args) -> int:
     """Fly a scene in a window until the user quits (or --seconds); print where the outputs went."""
-    from .descriptor import to_toml
-    from .io.hdf5 import RecordingError, check_recording_path
-    from .io.render import check_picture_path
-    from .runner import Simulation, available_cores
-    from .viewer.core import Viewer
-    from .viewer.gl import PygletBackend
+    from ..io.hdf5 import RecordingError, check_recording_path
+    from ..io.render import check_picture_path
+    from ..run.simulation import Simulation, available_cores
+    from ..scene.descriptor import to_toml
+    from ..viewer.core import Viewer
+    from ..viewer.gl import PygletBackend
 
     h5_path = _checked_output(check_recording_path, args.h5, "--h5")
     shot = _checked_output(check_picture_path, args.screenshot, "--screenshot")
     if shot is not None:
-        from .io.render import require_pillow
+        from ..io.render import require_pillow
 
         try:
             require_pillow()
@@ -1079,7 +1069,7 @@ def cmd_view(args) -> int:
     device = _check_device(args.device)
     descriptor, _, where = _load(args)
     _same_file_check(args.scene, {"--h5": h5_path, "--screenshot": shot})
-    from .viewer import gl
+    from ..viewer import gl
 
     gl.check_display()  # a missing extra or display is said before the model is built
     sim = Simulation(descriptor, device=device, where=where, threads=args.threads or available_cores())
@@ -1096,7 +1086,7 @@ def cmd_view(args) -> int:
     with _signals_quit(viewer), contextlib.suppress(KeyboardInterrupt):
         viewer.run()  # closes the recording and the window, however it ends
     if shot is not None:
-        from .io.render import save_png
+        from ..io.render import save_png
 
         print(f"screenshot: {save_png(shot, backend.screenshot())}")
     del lost
@@ -1131,12 +1121,12 @@ def _main(argv: list[str] | None) -> int:
         parser.print_help()
         return 0
     args = parser.parse_args(argv)
-    from . import _warp
+    from ..physics import _warp
 
     _warp.init()  # quietly: no banner, module load lines or CUDA-driver note on a CPU machine
-    from .descriptor import DescriptorError
-    from .io import OutputWriteError
-    from .viewer.backend import ViewerUnavailableError
+    from ..io import OutputWriteError
+    from ..scene.descriptor import DescriptorError
+    from ..viewer.backend import ViewerUnavailableError
 
     commands = {
         "list": cmd_list,

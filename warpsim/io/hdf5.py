@@ -23,7 +23,7 @@ Layout (``F`` frames, ``N`` particles, ``M`` sticks, ``T`` triangles, ``O`` obje
     /topology/terrain_heights    [NY, NX]   float64  the terrain's heights [m] (attrs size, origin [m]): resumes and
                                                      conversions never read a terrain file again
     /checkpoint/slot0, slot1                         two copies of the state after a frame, for ``--resume``:
-        frame [1] int64, digest [32] uint8 (sha256), and the arrays of :class:`warpsim.checkpoint.Checkpoint`
+        frame [1] int64, digest [32] uint8 (sha256), and the arrays of :class:`warpsim.run.checkpoint.Checkpoint`
 
 Root attributes: ``format`` (``warpsim-recording``), ``format_version``, ``descriptor`` (the full scene
 descriptor as TOML), ``scene`` (where it came from), ``solver`` (JSON), ``warpsim_version``,
@@ -59,8 +59,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..checkpoint import DIGEST_BYTES, Checkpoint, pack_controls, unpack_controls
-from ..diagnostics import object_metrics
+from ..run.checkpoint import DIGEST_BYTES, Checkpoint, pack_controls, unpack_controls
+from ..run.diagnostics import object_metrics
 from . import OutputWriteError, check_output_path, reason, with_disk_state
 from .h5safe import (
     LockedError,
@@ -174,9 +174,9 @@ class H5Recorder:
         path: the ``.h5`` file to create (``resume=False``) or to continue (``resume=True``).
         model: the :class:`warpsim.Model` whose frames are recorded.
         descriptor: the scene's validated descriptor (its time step and frame rate are stored).
-        checkpoint: returns the run's :class:`warpsim.checkpoint.Checkpoint` now (e.g.
-            :meth:`warpsim.runner.Simulation.checkpoint`); asked when a frame is made durable.
-        descriptor_text: the full descriptor as TOML (see :func:`warpsim.descriptor.to_toml`).
+        checkpoint: returns the run's :class:`warpsim.run.checkpoint.Checkpoint` now (e.g.
+            :meth:`warpsim.run.simulation.Simulation.checkpoint`); asked when a frame is made durable.
+        descriptor_text: the full descriptor as TOML (see :func:`warpsim.scene.descriptor.to_toml`).
         scene: where the scene came from (a path or ``built-in NAME``), stored as an attribute.
         resume: open an existing recording and append after its checkpoint's frame.
         lock: the path's :func:`claim`, when the caller took it already (a resume reads the recording under
@@ -275,8 +275,8 @@ class H5Recorder:
     def _create(self, descriptor_text: str, scene: str) -> None:
         import warp as wp
 
-        from .. import __version__
-        from ..config import SceneConfig, from_section
+        from .._version import __version__
+        from ..physics.config import SceneConfig, from_section
 
         model, descriptor = self.model, self.descriptor
         dt = float(descriptor["solver"]["dt"])
@@ -354,7 +354,7 @@ class H5Recorder:
         self._next_slot = 0
 
     def write(self, frame) -> None:
-        """Store one :class:`warpsim.diagnostics.Frame` as row ``frame.index`` (the next row, or the last one again
+        """Store one :class:`warpsim.run.diagnostics.Frame` as row ``frame.index`` (the next row, or the last one again
         when a resumed run completes a shorter last frame).
 
         The frame is flushed, and the simulation's state saved as the checkpoint, at most every
@@ -610,7 +610,8 @@ class Recording:
 
     def controls(self, frame: int | None = None) -> dict | list[dict]:
         """The controls in force while frame ``frame`` was stepped, by name (those set by then; see
-        :meth:`warpsim.runner.Simulation.set_controls`); without ``frame``, those of every frame, in one read."""
+        :meth:`~warpsim.run.simulation.Simulation.set_controls`);
+        without ``frame``, those of every frame, in one read."""
         if frame is not None and not 0 <= frame < self.frame_count:
             raise RecordingError(f"{self.path}: no frame {frame}; the recording has frames 0..{self.frame_count - 1}")
         path = self.path
@@ -618,7 +619,7 @@ class Recording:
         with _reading(self.path):
             tables = self.file["controls"][: self.frame_count] if frame is None else self.file["controls"][frame][None]
         rows = [unpack_controls(names, ~np.isnan(table[:, 0]), table) for table in tables]
-        from ..inputs import check_value
+        from ..run.inputs import check_value
 
         for k, row in enumerate(rows):  # a replay sets them again: out-of-range values are the file's fault
             for name, value in row.items():
@@ -629,17 +630,18 @@ class Recording:
         return rows if frame is None else rows[0]
 
     def checkpoint(self) -> Checkpoint:
-        """The saved state after frame :attr:`checkpoint_frame` (see :meth:`warpsim.runner.Simulation.restore`)."""
+        """The saved state after frame :attr:`checkpoint_frame`
+        (see :meth:`~warpsim.run.simulation.Simulation.restore`)."""
         if self._checkpoint is None:
             raise RecordingError(f"{self.path}: the recording has no frame to resume from")
         return self._checkpoint
 
     def terrain(self):
-        """The recorded terrain (:class:`warpsim.terrain.Heightfield`), or None for a recording made before
+        """The recorded terrain (:class:`warpsim.physics.terrain.Heightfield`), or None for a recording made before
         terrains were stored (its ``[terrain]`` section is built then). Its size is checked against the limits of a
         terrain file and the memory available before it is read."""
-        from ..builder import available_memory
-        from ..terrain import MAX_HEIGHT, MAX_SIDE, Heightfield
+        from ..physics.builder import available_memory
+        from ..physics.terrain import MAX_HEIGHT, MAX_SIDE, Heightfield
 
         d = self.file["topology"].get("terrain_heights")
         if d is None:
@@ -667,7 +669,7 @@ class Recording:
         """The recorded scene's validated descriptor, checked against what the file holds before anything is built
         from it: one world per recorded object (a crafted descriptor of 4,096 worlds was built for minutes before
         its particle count was compared). ``where`` names it in errors (default: the file's descriptor)."""
-        from ..descriptor import load_text
+        from ..scene.descriptor import load_text
 
         descriptor = load_text(self.descriptor_text, where or f"{self.path}: descriptor")
         objects = len(self.file["topology"].attrs.get("objects", []))
@@ -680,7 +682,7 @@ class Recording:
 
     def build_model(self, device: str = "cpu"):
         """The recorded scene's :class:`warpsim.Model`, checked against the recorded particle count."""
-        from ..scene import build_model
+        from ..scene.build import build_model
 
         model = build_model(self.descriptor(), device, str(self.path), self.terrain())
         if model.particle_count != self.particle_count:

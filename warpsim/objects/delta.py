@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..builder import ModelBuilder
-from ..kernels.aero import sail_coefficients
+from ..physics.builder import ModelBuilder
+from ..physics.kernels.aero import sail_coefficients
 
 
 def body_axes(heading_deg: float, nose_up_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

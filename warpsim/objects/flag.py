@@ -6,10 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..builder import ModelBuilder, check_memory
-from ..config import POSITIVE, Bounds, Checked, number
-from ..model import ObjectRecord
-from ..terrain import Heightfield
+from ..physics.builder import ModelBuilder, check_memory
+from ..physics.config import POSITIVE, Bounds, Checked, number
+from ..physics.model import ObjectRecord
+from ..physics.terrain import Heightfield
 
 
 @dataclass(kw_only=True)

@@ -17,10 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..builder import ModelBuilder
-from ..config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
-from ..model import ObjectRecord
-from ..terrain import Heightfield
+from ..physics.builder import ModelBuilder
+from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
+from ..physics.model import ObjectRecord
+from ..physics.terrain import Heightfield
 from .delta import add_rigid_frame, body_axes, chordwise_loading, delta_sail_aero
 
 PAPER_COUNTS = {"particles": 49, "sticks": 198, "triangles": 64}

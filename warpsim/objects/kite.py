@@ -18,10 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..builder import ModelBuilder
-from ..config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
-from ..model import ObjectRecord
-from ..terrain import Heightfield
+from ..physics.builder import ModelBuilder
+from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
+from ..physics.model import ObjectRecord
+from ..physics.terrain import Heightfield
 from .delta import add_rigid_frame, add_spar_braces, body_axes, delta_sail_aero
 
 PAPER_COUNTS = {"particles": 152, "sticks": 458, "triangles": 221}

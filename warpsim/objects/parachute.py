@@ -14,10 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..builder import ModelBuilder
-from ..config import NON_NEGATIVE, POSITIVE, Bounds, Checked, number
-from ..model import ObjectRecord
-from ..terrain import Heightfield
+from ..physics.builder import ModelBuilder
+from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, number
+from ..physics.model import ObjectRecord
+from ..physics.terrain import Heightfield
 
 
 @dataclass(kw_only=True)

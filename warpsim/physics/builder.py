@@ -164,7 +164,7 @@ class ModelBuilder:
     def pretension(self, sticks, share: float) -> None:
         """Make ``sticks`` ``share`` (0 <= share < 1) shorter than they are: a cloth tensioned on its frame pulls
         to this length. Their stretch is still reported against the length as built
-        (:attr:`~warpsim.model.Model.stick_pretension`)."""
+        (:attr:`~warpsim.physics.model.Model.stick_pretension`)."""
         if not -1.0 < share < 1.0:
             raise ValueError(f"pretension must be in (-1, 1), got {share}")
         for st in sticks:
@@ -189,7 +189,7 @@ class ModelBuilder:
     def set_triangle_sail(self, tri_ids, coefficients) -> None:
         """Set the ``sail`` air model's coefficients of triangles ``tri_ids``: ``(lift slope [1/rad],
         induced-drag factor, profile drag coefficient, stall angle [rad])``, as made by
-        :func:`warpsim.kernels.aero.sail_coefficients` for the sail they belong to (default: those of a sail
+        :func:`warpsim.physics.kernels.aero.sail_coefficients` for the sail they belong to (default: those of a sail
         of aspect ratio 2)."""
         coefficients = tuple(float(c) for c in coefficients)
         if len(coefficients) != 4 or not all(np.isfinite(c) and c >= 0.0 for c in coefficients):
@@ -226,7 +226,7 @@ class ModelBuilder:
         """Set the chordwise loading factor of triangles ``tri_ids`` (dimensionless, >= 0).
 
         Used by the ``plate`` air model only: at small angles of attack a triangle's normal force is
-        multiplied by its factor, fading to 1 as the flow separates (see :mod:`warpsim.kernels.aero`).
+        multiplied by its factor, fading to 1 as the flow separates (see :mod:`warpsim.physics.kernels.aero`).
         A sail's factors should average 1 over its area so that its total force is unchanged.
         """
         tri_ids = np.atleast_1d(np.asarray(tri_ids, dtype=np.int64))

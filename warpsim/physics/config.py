@@ -4,7 +4,7 @@ Each section of a scene descriptor (``[scene]``, ``[solver]``, ``[air]``, ``[win
 ``[ground]``, and one per object) is a keyword-only dataclass here or beside its object's builder. A field's
 bounds and choices sit in its metadata (:func:`number`, :func:`choice`), so that the descriptor's defaults,
 its checks and the Python API (``SolverVerlet(model, SolverConfig(iterations=40))``) cannot drift apart:
-:mod:`warpsim.descriptor` derives its tables from these classes, and each class checks its values when made.
+:mod:`warpsim.scene.descriptor` derives its tables from these classes, and each class checks its values when made.
 """
 
 from __future__ import annotations
@@ -172,10 +172,10 @@ class SolverConfig(Checked):
         chebyshev: estimated spectral radius ``rho`` in [0, 1) of one Jacobi iteration for Chebyshev
             semi-iterative acceleration (Wang 2015); 0 = plain Jacobi, the paper. Same cost per iteration.
         mass_splitting: split each particle's mass over its sticks so that constraints conserve momentum
-            (see :mod:`warpsim.kernels.constraints`); False = the paper's plain average.
+            (see :mod:`warpsim.physics.kernels.constraints`); False = the paper's plain average.
         keep_momentum: after the projection, give each free body (the particles sticks connect, none nailed) back
             the linear and angular momentum the projection's numerical error took or gave
-            (:mod:`warpsim.kernels.momentum`); False = the paper's projection alone.
+            (:mod:`warpsim.physics.kernels.momentum`); False = the paper's projection alone.
         damping: fraction of the velocity removed per step, in [0, 1) (0 = none, the paper).
         max_stretch: blow-up limit on a stick's relative stretch ``|l - r|/r`` (0 = no limit).
         control_rate: the fastest a control stick's rest length moves to a new control's value [m/s] (the hang
@@ -209,10 +209,10 @@ class SolverConfig(Checked):
 
 @dataclass(frozen=True, kw_only=True)
 class AirConfig(Checked):
-    """``[air]``: how the air pushes on the triangles (see :mod:`warpsim.kernels.aero`).
+    """``[air]``: how the air pushes on the triangles (see :mod:`warpsim.physics.kernels.aero`).
 
     Attributes:
-        model: the air-force law, :class:`~warpsim.kernels.aero.AeroModel` (``paper``, ``plate``, ``sail``).
+        model: the air-force law, :class:`~warpsim.physics.kernels.aero.AeroModel` (``paper``, ``plate``, ``sail``).
         scale: multiplier on the air force (1 = the model as written; 0 = no air).
         density: air density [kg/m^3] (the paper's 1.294217666).
     """
@@ -224,7 +224,7 @@ class AirConfig(Checked):
 
 @dataclass(frozen=True, kw_only=True)
 class WindConfig(Checked):
-    """``[wind]``: the wind at the start, its growth with height and its gusts (see :mod:`warpsim.controls`).
+    """``[wind]``: the wind at the start, its growth with height and its gusts (see :mod:`warpsim.scene.controls`).
 
     Attributes:
         velocity: wind [m/s] at ``reference_height`` (3 numbers).
@@ -245,7 +245,7 @@ class WindConfig(Checked):
 
 @dataclass(frozen=True, kw_only=True)
 class TerrainConfig(Checked):
-    """``[terrain]``: the heightfield under everything (see :class:`warpsim.terrain.Heightfield`).
+    """``[terrain]``: the heightfield under everything (see :class:`warpsim.physics.terrain.Heightfield`).
 
     Attributes:
         kind: ``flat``, ``procedural`` (seeded hills) or ``file`` (heights from a .npy array).
@@ -266,10 +266,10 @@ class TerrainConfig(Checked):
 
 @dataclass(frozen=True, kw_only=True)
 class GroundConfig(Checked):
-    """``[ground]``: how particles meet the terrain (see :mod:`warpsim.kernels.collision`).
+    """``[ground]``: how particles meet the terrain (see :mod:`warpsim.physics.kernels.collision`).
 
     Attributes:
-        collision: :class:`~warpsim.kernels.collision.CollisionMode`: ``normal`` (push out along the terrain
+        collision: :class:`~warpsim.physics.kernels.collision.CollisionMode`: ``normal`` (push out along the terrain
             normal, with friction) or ``clamp`` (the paper's vertical clamp).
         friction: Coulomb-like friction coefficient (dimensionless, >= 0).
     """

@@ -122,7 +122,7 @@ class Model:
     """``[T]`` float32 chordwise loading factor (``plate`` and ``sail`` air models; 1 = uniform)."""
     tri_sail: wp.array
     """``[T]`` vec4 ``sail`` air model coefficients (lift slope [1/rad], induced-drag factor, profile drag
-    coefficient, stall angle [rad]; see :func:`warpsim.kernels.aero.sail_coefficients`)."""
+    coefficient, stall angle [rad]; see :func:`warpsim.physics.kernels.aero.sail_coefficients`)."""
     tri_span: wp.array
     """``[T]`` vec2i the two particles (root, tip) of the leading edge each triangle sits behind, ``(-1, -1)``
     for none (``sail`` air model: simple sweep theory)."""
@@ -194,7 +194,7 @@ class Model:
         A stick ``(a, b)`` splits its error in proportion to ``share``; particle ``a`` moves by ``scale_a``
         times the sum of its sticks' corrections. Plain averaging (the paper): ``share = w`` (inverse mass),
         ``scale = w / n`` (``n`` = summed stick weight). Mass splitting: ``share = w n``, ``scale = w``.
-        See :mod:`warpsim.kernels.constraints`.
+        See :mod:`warpsim.physics.kernels.constraints`.
         """
         w = self.particle_inv_mass.numpy().astype(np.float64)
         n = self.particle_stick_weight

@@ -50,10 +50,11 @@ class _Solver:
 
     Args:
         model: the model to simulate.
-        config: :class:`~warpsim.config.SolverConfig` (default: its defaults, those of a scene descriptor);
+        config: :class:`~warpsim.physics.config.SolverConfig` (default: its defaults, those of a scene descriptor);
             ``settings`` given by keyword replace its fields, e.g. ``SolverVerlet(model, iterations=40)``.
-        air, wind, ground: :class:`~warpsim.config.AirConfig`, :class:`~warpsim.config.WindConfig` (its shear
-            profile; the wind itself is ``Control.wind``), :class:`~warpsim.config.GroundConfig`.
+        air, wind, ground: :class:`~warpsim.physics.config.AirConfig`,
+            :class:`~warpsim.physics.config.WindConfig` (its shear
+            profile; the wind itself is ``Control.wind``), :class:`~warpsim.physics.config.GroundConfig`.
         use_graph: capture the step as a graph and replay it (default); False launches kernel by kernel.
     """
 
@@ -141,8 +142,8 @@ class SolverVerlet(_Solver):
     """The paper's solver: Verlet integration + Jacobi-averaged distance constraints + terrain collision.
 
     Uses ``iterations``, ``relaxation``, ``chebyshev``, ``mass_splitting``, ``keep_momentum`` and ``damping`` of its
-    :class:`~warpsim.config.SolverConfig` (arguments as for the shared base, see ``_Solver``), plus
-    ``constraint_scheme``: ``"fused"``, ``"scatter"`` or ``"gather"`` (:mod:`warpsim.kernels.constraints`);
+    :class:`~warpsim.physics.config.SolverConfig` (arguments as for the shared base, see ``_Solver``), plus
+    ``constraint_scheme``: ``"fused"``, ``"scatter"`` or ``"gather"`` (:mod:`warpsim.physics.kernels.constraints`);
     None = fused on the CPU, gather on CUDA.
     """
 
@@ -170,7 +171,7 @@ class SolverVerlet(_Solver):
 
 class SolverEuler(_Solver):
     """The paper's comparison: explicit Euler on a mass-spring network (every stick is a spring of
-    ``spring_stiffness`` [N/m] and ``spring_damping`` [N s/m] from its :class:`~warpsim.config.SolverConfig`;
+    ``spring_stiffness`` [N/m] and ``spring_damping`` [N s/m] from its :class:`~warpsim.physics.config.SolverConfig`;
     arguments as for :class:`SolverVerlet`, without a constraint scheme)."""
 
     modules = (aero, collision, springs)

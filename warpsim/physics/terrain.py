@@ -3,7 +3,7 @@
 The paper uses a 256x256 heightfield (Section 6.3). Heights are in metres, Z up; the grid covers
 ``[origin_x, origin_x + size_x] x [origin_y, origin_y + size_y]`` and is sampled bilinearly. Outside
 the grid the edge heights are extended. Host queries run the kernels' own lookup
-(:mod:`warpsim.kernels.collision`), so a builder, a diagnostic and a kernel see one terrain.
+(:mod:`warpsim.physics.kernels.collision`), so a builder, a diagnostic and a kernel see one terrain.
 """
 
 from __future__ import annotations
@@ -124,7 +124,7 @@ class Heightfield:
 
     # ------------------------------------------------------------------ queries
     def device_data(self, device=None):
-        """The kernels' view of this terrain (:class:`warpsim.kernels.collision.HeightfieldData`) on ``device``
+        """The kernels' view of this terrain (:class:`warpsim.physics.kernels.collision.HeightfieldData`) on ``device``
         (default Warp's ``cpu``), made once per device."""
         import warp as wp
 

@@ -13,7 +13,7 @@ import hashlib
 
 import numpy as np
 
-from .controls import UNIT_CONTROLS, VECTOR_CONTROLS
+from ..scene.controls import UNIT_CONTROLS, VECTOR_CONTROLS
 
 _MASK64 = (1 << 64) - 1
 DIGEST_BYTES = 32  # sha256

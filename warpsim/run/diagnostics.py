@@ -2,7 +2,7 @@
 
 One module for every reader of a running or recorded scene (the runner's blow-up check, the HDF5 recorder's
 diagnostics, the command line's summary), so that a metric is computed one way only. The checks every frame
-needs come from the device (:mod:`warpsim.kernels.frame`); the rest is host-side NumPy, on the frames that ask.
+needs come from the device (:mod:`warpsim.physics.kernels.frame`); the rest is host-side NumPy, on the frames that ask.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import Control, Model, State
+from ..physics.model import Control, Model, State
 
 
 class FrameSource:
@@ -40,7 +40,7 @@ class Frame:
 
     What the device reported after the frame's steps is here at once; what needs the state on the host is read on
     first use (a run that only checks its frames copies no positions). A frame reads the simulation's arrays
-    until the simulation moves on: :class:`~warpsim.runner.Simulation` copies what a frame still held by someone
+    until the simulation moves on: :class:`~warpsim.run.simulation.Simulation` copies what a frame still held by someone
     needs (:meth:`fetch`) before it steps, restores or sets controls again.
 
     Attributes:
@@ -54,7 +54,7 @@ class Frame:
         clearance: host ``[K]`` lowest height [m] above the terrain of each object's particles that can touch it
             (:class:`GroundContacts`), ``1e30`` for an object with none.
         controls: the controls in force while the frame's last steps ran, by name (what
-            :meth:`warpsim.runner.Simulation.set_controls` takes; empty when none was set).
+            :meth:`warpsim.run.simulation.Simulation.set_controls` takes; empty when none was set).
 
     Read on first use:
         positions: host ``[P, 3]`` positions [m].
@@ -270,10 +270,10 @@ class Figures:
                 self._kites[k] = (triangles, mass)
 
     def __call__(self, frame: Frame, tri_force=None) -> list[dict[str, float]]:
-        from .config import GRAVITY
-        from .objects.hang_glider import bank
-        from .objects.kite import line_elevation
-        from .objects.parachute import projected_radius
+        from ..objects.hang_glider import bank
+        from ..objects.kite import line_elevation
+        from ..objects.parachute import projected_radius
+        from ..physics.config import GRAVITY
 
         if self._kites and tri_force is not None and not isinstance(tri_force, np.ndarray):
             tri_force = tri_force.numpy()
@@ -397,7 +397,7 @@ class FlightFigures:
     (:class:`FigureWindow`), or at most ``rate`` frames per simulated second.
 
     Args:
-        sim: the :class:`~warpsim.runner.Simulation` (its model, object kind, frame interval and air forces).
+        sim: the :class:`~warpsim.run.simulation.Simulation` (its model, object kind, frame interval and air forces).
         start, stop: the window [s].
         rate: frames measured per simulated second, at most [1/s] (None: every frame, as a sweep).
     """

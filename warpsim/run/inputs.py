@@ -1,19 +1,19 @@
 """The inputs of a running scene: the controls in force, the descriptor's schedule and every world's gusts.
 
 :class:`Inputs` turns ``set(pitch=0.5)`` calls (from a script, the schedule or, later, a keyboard) into the
-:class:`~warpsim.model.Control` arrays the kernels read, through each object's ``apply_controls``
-(:mod:`warpsim.objects.registry`), and saves and restores itself in a :class:`~warpsim.checkpoint.Checkpoint`.
+:class:`~warpsim.physics.model.Control` arrays the kernels read, through each object's ``apply_controls``
+(:mod:`warpsim.objects.registry`), and saves and restores itself in a :class:`~warpsim.run.checkpoint.Checkpoint`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..objects import registry
+from ..physics.config import WindConfig
+from ..physics.model import Control, Model
+from ..scene.controls import ControlSchedule, Gusts, check_value
 from .checkpoint import pack_controls, pack_rng, unpack_controls, unpack_rng
-from .config import WindConfig
-from .controls import ControlSchedule, Gusts, check_value
-from .model import Control, Model
-from .objects import registry
 
 
 def control_names(model: Model) -> tuple[str, ...]:
@@ -25,10 +25,10 @@ class Inputs:
     """Controls, schedule and gusts of one scene, written into its ``control`` arrays.
 
     Args:
-        model: the scene's model. control: its :class:`~warpsim.model.Control` (written in place).
-        winds: the :class:`~warpsim.config.WindConfig` of every world (their velocity is set now; gusts start
+        model: the scene's model. control: its :class:`~warpsim.physics.model.Control` (written in place).
+        winds: the :class:`~warpsim.physics.config.WindConfig` of every world (their velocity is set now; gusts start
             where ``gust_intensity > 0``).
-        schedule: the descriptor's :class:`~warpsim.controls.ControlSchedule` (may be empty).
+        schedule: the descriptor's :class:`~warpsim.scene.controls.ControlSchedule` (may be empty).
     """
 
     def __init__(self, model: Model, control: Control, winds: list[WindConfig], schedule: ControlSchedule):
@@ -47,7 +47,7 @@ class Inputs:
         self.version = 0  # counts the changes to the controls, gusts and control arrays (what a save must follow)
 
     def set(self, **values) -> None:
-        """Set controls (see :meth:`warpsim.runner.Simulation.set_controls`); ``ValueError`` for a control this
+        """Set controls (see :meth:`warpsim.run.simulation.Simulation.set_controls`); ``ValueError`` for a control this
         scene does not have or a value out of range."""
         for name, value in values.items():
             if name not in self.names:
@@ -103,7 +103,7 @@ class Inputs:
             self.scheduled.update(changed)
 
     def save(self) -> dict[str, np.ndarray]:
-        """The checkpoint fields of the inputs (gusts and controls; see :class:`~warpsim.checkpoint.Checkpoint`)."""
+        """The checkpoint fields of the inputs (gusts and controls; see :class:`~warpsim.run.checkpoint.Checkpoint`)."""
         worlds = len(self.gusts)
         out = {
             "gust_active": np.zeros(worlds, dtype=np.uint8),

@@ -2,9 +2,9 @@
 
 A frame is what outputs see (``fps`` per simulated second); between frames the solver takes as many
 steps of ``dt`` as one frame lasts. The pieces live beside it: :mod:`warpsim.scene` builds the model,
-:func:`warpsim.solver.make_solver` the solver, :mod:`warpsim.inputs` turns controls, schedule and gusts into
-control arrays, :mod:`warpsim.diagnostics` says what a frame shows. After each frame the device reports a few
-numbers (worst stretch, non-finite particles, terrain clearance: :mod:`warpsim.kernels.frame`), captured in one
+:func:`warpsim.physics.solver.make_solver` the solver, :mod:`warpsim.run.inputs` turns controls, schedule and gusts into
+control arrays, :mod:`warpsim.run.diagnostics` says what a frame shows. After each frame the device reports a few
+numbers (worst stretch, non-finite particles, terrain clearance: :mod:`warpsim.physics.kernels.frame`), captured in one
 graph with the frame's steps; positions reach the host only when an output, the viewer or a check asks.
 
 With ``threads > 1`` on the CPU the worlds of a batch are cut into one group per thread (:class:`_Group`): each
@@ -27,16 +27,16 @@ from dataclasses import dataclass
 import numpy as np
 import warp as wp
 
+from ..physics.config import WindConfig, from_section
+from ..physics.kernels import frame as frame_kernels
+from ..physics.model import Control, State
+from ..physics.solver import SOLVERS, load_modules, make_solver
+from ..scene.build import build_model, settings
+from ..scene.controls import ControlError, ControlSchedule
+from ..scene.descriptor import DescriptorError, world_descriptor
 from .checkpoint import Checkpoint
-from .config import WindConfig, from_section
-from .controls import ControlError, ControlSchedule
-from .descriptor import DescriptorError, world_descriptor
 from .diagnostics import Frame, FrameSource, GroundContacts, find_blowup
 from .inputs import Inputs, control_names
-from .kernels import frame as frame_kernels
-from .model import Control, State
-from .scene import build_model, settings
-from .solver import SOLVERS, load_modules, make_solver
 
 __all__ = ["BlowUpError", "Frame", "RunSummary", "Simulation", "available_cores"]
 
@@ -155,7 +155,7 @@ class Simulation:
     """A scene ready to run: model, state, control, solver and inputs built from a validated descriptor.
 
     Args:
-        descriptor: validated descriptor (see :mod:`warpsim.descriptor`).
+        descriptor: validated descriptor (see :mod:`warpsim.scene.descriptor`).
         device: Warp device (``cpu`` default, ``cuda`` when present).
         use_graph: replay the step as a captured graph (default True).
         where: origin of the descriptor for error messages.
@@ -318,7 +318,7 @@ class Simulation:
         self.steps_taken += count
 
     def frame(self, index: int) -> Frame:
-        """The current state measured as frame ``index`` (see :class:`warpsim.diagnostics.Frame`), with the
+        """The current state measured as frame ``index`` (see :class:`warpsim.run.diagnostics.Frame`), with the
         controls in force."""
         self._measure(1 - self._good[3])  # never over the last good frame's slot
         return self._hand_out(index)
@@ -330,7 +330,7 @@ class Simulation:
             group.probe.measure(group.state, group.control, slot)
 
     def _report(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The probes' report of the whole simulation (see :meth:`warpsim.kernels.frame.FrameProbe.read`): the
+        """The probes' report of the whole simulation (see :meth:`warpsim.physics.kernels.frame.FrameProbe.read`): the
         groups' reports joined, in world and object order."""
         parts = [group.probe.read() for group in self._groups]
         return parts[0] if len(parts) == 1 else tuple(np.concatenate(part) for part in zip(*parts, strict=True))
@@ -414,7 +414,7 @@ class Simulation:
         return find_blowup(self.model, frame, self.settings.solver.max_stretch)
 
     def checkpoint(self) -> Checkpoint:
-        """Everything needed to continue this run exactly (host copies, see :class:`warpsim.checkpoint.Checkpoint`):
+        """Everything needed to continue this run exactly (host copies, see :class:`warpsim.run.checkpoint.Checkpoint`):
         state, control arrays, every world's gusts, the controls in force and the step count."""
         return Checkpoint(
             q=self.state.particle_q.numpy().copy(),

@@ -1,8 +1,8 @@
 """From a validated scene descriptor to what runs it: typed settings, the terrain and the model of every world.
 
-:func:`settings` reads a descriptor's sections into the config dataclasses of :mod:`warpsim.config`;
+:func:`settings` reads a descriptor's sections into the config dataclasses of :mod:`warpsim.physics.config`;
 :func:`build_model` builds ``worlds.count`` copies of the scene's object, each with its own ``[worlds]``
-values, into one :class:`~warpsim.model.Model`. Outputs and readers of recordings build models here too.
+values, into one :class:`~warpsim.physics.model.Model`. Outputs and readers of recordings build models here too.
 """
 
 from __future__ import annotations
@@ -10,8 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from .builder import ModelBuilder, check_memory
-from .config import (
+from ..objects import registry
+from ..physics.builder import ModelBuilder, check_memory
+from ..physics.config import (
     AirConfig,
     GroundConfig,
     SceneConfig,
@@ -20,10 +21,9 @@ from .config import (
     WindConfig,
     from_section,
 )
+from ..physics.model import Model
+from ..physics.terrain import Heightfield
 from .descriptor import DescriptorError, world_descriptor
-from .model import Model
-from .objects import registry
-from .terrain import Heightfield
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,7 @@ def settings(descriptor: dict) -> Settings:
 
 
 def make_terrain(cfg: TerrainConfig, where: str = "scene") -> Heightfield:
-    """The terrain a :class:`~warpsim.config.TerrainConfig` describes (``where`` names it in errors)."""
+    """The terrain a :class:`~warpsim.physics.config.TerrainConfig` describes (``where`` names it in errors)."""
     if cfg.kind == "flat":
         return Heightfield.flat(size=cfg.size, height=cfg.height)
     if cfg.kind == "procedural":

@@ -15,7 +15,7 @@ so a descriptor only lists what it changes. Sections and keys (``warpsim info SC
 * ``[ground]`` ``collision`` (normal | clamp), ``friction``
 * one section per object, named after it (``[flag]``, ...), with the fields of its config class.
 * ``[[controls]]`` entries: ``time`` [s], ``ramp`` (true = reach linearly), and any of the scene's
-  controls (``pitch``, ``roll``, ``anchor``, ``wind``), see :mod:`warpsim.controls`.
+  controls (``pitch``, ``roll``, ``anchor``, ``wind``), see :mod:`warpsim.scene.controls`.
 * ``[worlds]`` ``count`` (how many copies of the scene one launch steps, default 1), and per-world values
   as dotted keys holding one value per world: any key of the object's section or of ``[wind]``, plus
   ``wind.speed`` [m/s] (the magnitude of ``wind.velocity``, direction kept), e.g.
@@ -39,9 +39,9 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-from .config import SECTIONS, Bounds, as_section, field_bounds, field_choices, plain
+from ..objects import registry
+from ..physics.config import SECTIONS, Bounds, as_section, field_bounds, field_choices, plain
 from .controls import ControlError, ControlSchedule
-from .objects import registry
 
 
 class DescriptorError(ValueError):
@@ -62,7 +62,7 @@ def choices(section: str, key: str) -> tuple[str, ...] | None:
 
 
 def bounds(section: str, key: str) -> Bounds | None:
-    """The :class:`~warpsim.config.Bounds` of ``section.key`` (from its config class), or None."""
+    """The :class:`~warpsim.physics.config.Bounds` of ``section.key`` (from its config class), or None."""
     cls = section_class(section)
     return field_bounds(cls, key) if cls is not None else None
 
@@ -71,7 +71,7 @@ BASE_DEFAULTS: dict[str, dict[str, Any]] = {
     **{name: as_section(cls()) for name, cls in SECTIONS.items()},
     "worlds": {"count": 1},
 }
-"""Every shared section's defaults, as :mod:`warpsim.config` gives them."""
+"""Every shared section's defaults, as :mod:`warpsim.physics.config` gives them."""
 
 MAX_WORLDS = 65536
 FLOAT_LIMIT = 1e30  # [any unit] the simulation is float32 (max 3.4e38): larger numbers are refused outright

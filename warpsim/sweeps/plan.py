@@ -1,12 +1,12 @@
 """Sweeps: every combination of a few settings of one scene, run over every core and over machines with Dask.
 
 A *case* is one combination of the swept values (the cartesian product of the axes, first axis slowest). Cases
-are cut into *chunks*; a chunk runs as one :class:`~warpsim.runner.Simulation` whose worlds are its cases (the
+are cut into *chunks*; a chunk runs as one :class:`~warpsim.run.simulation.Simulation` whose worlds are its cases (the
 batched worlds of ``--worlds``, one launch for all), and each chunk is one Dask task. The cluster is a
 ``LocalCluster`` of single-threaded worker processes, one per core, unless a running scheduler is given.
 
 Every case gives one row: its swept values and its metrics (:data:`METRICS`, from the same
-:class:`warpsim.diagnostics.Figures` the viewer's heads-up display reads). Worlds never touch each other
+:class:`warpsim.run.diagnostics.Figures` the viewer's heads-up display reads). Worlds never touch each other
 and each world's gusts are seeded by its own ``wind.gust_seed``, so a case's row is bit for bit the same
 whatever the chunk size, the number of workers or the order they finish in. A case that blows up stops being
 measured at that frame and is a row saying when and why; the other cases of its chunk go on.
@@ -33,8 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .descriptor import VARIABLE_SECTIONS, DescriptorError, check_axis, merge, parse_vary, to_toml
-from .diagnostics import FIGURES, FigureWindow, figure_names
+from ..run.diagnostics import FIGURES, FigureWindow, figure_names
+from ..scene.descriptor import VARIABLE_SECTIONS, DescriptorError, check_axis, merge, parse_vary, to_toml
 
 __all__ = ["METRICS", "Axis", "ChunkTask", "SweepError", "SweepPlan", "metrics_of", "run_chunk", "sweep"]
 
@@ -122,7 +122,7 @@ class Axis:
 def parse_axes(descriptor: dict, items: Sequence[str] | dict, where: str = "--vary") -> list[Axis]:
     """The sweep's axes: the descriptor's ``[sweep]`` table, then ``items`` (``--vary`` texts
     ``KEY=START:STOP:COUNT`` or ``KEY=V1,V2,...``, or a dict ``{"section.key": values or "START:STOP:COUNT"}``),
-    which replace a ``[sweep]`` axis of the same key. Raises :class:`~warpsim.descriptor.DescriptorError`."""
+    which replace a ``[sweep]`` axis of the same key. Raises :class:`~warpsim.scene.descriptor.DescriptorError`."""
     axes: dict[str, Axis] = {}
     for section, keys in descriptor.get("sweep", {}).items():
         for key, values in keys.items():
@@ -173,7 +173,7 @@ class ChunkTask:
         cases: plan indices of the cases, in world order. columns: their swept values, by axis name.
         seconds: simulated time [s]. window: ``(start, stop)`` [s] the window metrics cover.
         metrics: metric columns to report. device: Warp device. h5: recording to write, or None.
-        threads: threads stepping the chunk's worlds (:class:`~warpsim.runner.Simulation`).
+        threads: threads stepping the chunk's worlds (:class:`~warpsim.run.simulation.Simulation`).
     """
 
     descriptor: dict
@@ -327,7 +327,7 @@ def _terrain_digest(descriptor: dict) -> str | None:
 
 
 def _object_section(kind: str) -> str:
-    from .objects import registry
+    from ..objects import registry
 
     return registry.section(kind)
 
@@ -353,11 +353,11 @@ def run_chunk(task: ChunkTask) -> list[dict]:
     A chunk that cannot be built (a case whose values make an unsound object) is run case by case, so only the
     faulty case is a row saying so; a case that blows up stops being measured at that frame.
     """
-    from . import _warp
+    from ..physics import _warp
 
     _warp.init()
-    from .diagnostics import Figures, GroundContacts, world_blowups
-    from .runner import Simulation
+    from ..run.diagnostics import Figures, GroundContacts, world_blowups
+    from ..run.simulation import Simulation
 
     try:
         sim = Simulation(task.descriptor, device=task.device, where="sweep case", threads=task.threads)
@@ -418,7 +418,7 @@ def _chunk_recorder(task: ChunkTask, sim):
     """The chunk's recording (``--h5-dir``), written afresh (a retried task starts it again), or None."""
     if not task.h5:
         return None
-    from .io.hdf5 import H5Recorder
+    from ..io.hdf5 import H5Recorder
 
     path = Path(task.h5)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -576,7 +576,7 @@ class _Results:
     def _append(self, item: dict) -> None:
         """Write ``item`` as the journal's next line, synced; a failed write (disk full) raises
         :class:`~warpsim.io.OutputWriteError` saying what is kept."""
-        from .io import OutputWriteError, reason, with_disk_state
+        from ..io import OutputWriteError, reason, with_disk_state
 
         try:
             self._write_line(item)
@@ -634,7 +634,7 @@ class _Results:
     def finish(self):
         """Write the output (atomically: a temporary file renamed over it) and drop the journal; returns the
         DataFrame."""
-        from .io import OutputWriteError
+        from ..io import OutputWriteError
 
         table = self.frame()
         if self.journal is not None:
@@ -653,7 +653,7 @@ class _Results:
 
     def _write_output(self, table) -> None:
         """Write ``table`` (and a CSV's definition beside it), each whole or not at all."""
-        from .io import replacing
+        from ..io import replacing
 
         meta = json.dumps(self.plan.definition())
         if self.format == "parquet":
@@ -797,7 +797,7 @@ def _dask_log(path: Path | None):
 def _check_recordings_free(tasks: Sequence[ChunkTask]) -> None:
     """Raise :class:`SweepError` when a run is writing one of the recordings the tasks will write (``--h5-dir``):
     a sweep once deleted a live run's recording and wrote its chunk in its place."""
-    from .io.h5safe import writer_active
+    from ..io.h5safe import writer_active
 
     for task in tasks:
         if task.h5 and writer_active(task.h5):
@@ -808,10 +808,10 @@ def _warm_kernels(tasks: Sequence[ChunkTask], device: str) -> None:
     """Compile (or load) the kernels once here, before the workers start, so that they all read Warp's cache
     instead of compiling the same modules side by side: one world of each kind of chunk (a chunk kind differs
     in solver, air, terrain or ground settings)."""
-    from . import _warp
+    from ..physics import _warp
 
     _warp.init()
-    from .runner import Simulation
+    from ..run.simulation import Simulation
 
     seen = set()
     for task in tasks:
@@ -889,7 +889,7 @@ def _owning(out: Path | None):
     if out is None:
         yield
         return
-    from .io import OutputLock, OutputLockedError, reason
+    from ..io import OutputLock, OutputLockedError, reason
 
     try:
         lock = OutputLock(out)
@@ -907,7 +907,7 @@ def _run_owned(
     plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress, log, threads=None
 ) -> SweepOutcome:
     """:func:`run_sweep` once ``out`` is this sweep's own."""
-    from .io import OutputWriteError
+    from ..io import OutputWriteError
 
     failed_write = None
     results = _Results(out, plan, restart)
@@ -967,7 +967,7 @@ def cores() -> int:
 def max_local_workers() -> int:
     """Most worker processes a local cluster may start here: :data:`WORKERS_PER_CORE` per core, and no more than
     80 % of the available memory holds at :data:`WORKER_BYTES` each (at least 1)."""
-    from .builder import available_memory
+    from ..physics.builder import available_memory
 
     limit = WORKERS_PER_CORE * cores()
     available = available_memory()
@@ -1141,13 +1141,14 @@ def sweep(
         workers, scheduler, chunk, device, h5_dir, restart: see :func:`run_sweep`.
 
     Example: ``warpsim.sweep("kite", {"kite.tow_point": "0.2:0.5:4", "wind.speed": [4, 8, 12]}, seconds=20)``.
-    Raises :class:`SweepError` or :class:`~warpsim.descriptor.DescriptorError` for a sweep that cannot run, and
+    Raises :class:`SweepError` or :class:`~warpsim.scene.descriptor.DescriptorError` for a sweep that cannot run, and
     ``KeyboardInterrupt`` after keeping the finished rows when interrupted.
     """
     if isinstance(scene, str):
-        from .descriptor import resolve
+        from ..scene.descriptor import resolve
+        from ..scene.dirs import scene_dirs
 
-        descriptor = resolve(scene, _scene_dirs())[0]
+        descriptor = resolve(scene, scene_dirs())[0]
     else:
         descriptor = scene
     plan = SweepPlan(descriptor, parse_axes(descriptor, axes), seconds, window, metrics)
@@ -1157,9 +1158,3 @@ def sweep(
     if outcome.failures:
         raise outcome.failures[0]
     return outcome.table
-
-
-def _scene_dirs() -> list[Path]:
-    from .cli import scene_dirs
-
-    return scene_dirs()

@@ -38,7 +38,7 @@ def read_table(path) -> object:
             _require("pyarrow")
             return pd.read_parquet(path)
         if path.suffix.lower() == ".csv":
-            from ..sweeps import read_csv
+            from .plan import read_csv
 
             return read_csv(path)
     except (OSError, ValueError) as err:
@@ -85,8 +85,8 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
     """Draw ``metric`` of the sweep table ``path`` against swept key ``x`` (one line per combination of the
     other swept keys) or, with ``y``, as a heat map over ``x`` and ``y``; write ``out`` (a PNG). ``where``:
     ``KEY=VALUE`` texts keeping only those cases. Returns the path written; raises :class:`PlotError`."""
-    from ..sweeps import METRICS
-    from . import OutputPathError, check_output_path
+    from ..io import OutputPathError, check_output_path
+    from .plan import METRICS
 
     try:
         out = check_output_path(out, (".png",), "PNG")
@@ -157,7 +157,7 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
             title += "\n" + ", ".join(chosen)
         axes.set_title(title, fontsize=10)
         figure.tight_layout()
-        from . import replacing
+        from ..io import replacing
 
         with replacing(out, "plot") as file:  # whole or not at all: a full disk leaves the old picture as it was
             figure.savefig(file, format="png")

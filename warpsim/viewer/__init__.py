@@ -1,7 +1,7 @@
 """The live viewer: ``warpsim view SCENE`` flies a scene in a window at wall-clock pace, by keyboard.
 
 :class:`~warpsim.viewer.core.Viewer` holds everything that is not drawing: the simulation, the keyboard's
-controls (through :meth:`warpsim.runner.Simulation.set_controls`, the path schedules take), pacing, the
+controls (through :meth:`warpsim.run.simulation.Simulation.set_controls`, the path schedules take), pacing, the
 camera, the heads-up text, restarts, blow-ups and the ``--h5`` recording. It talks to a backend with a small
 interface (:class:`~warpsim.viewer.backend.Backend`): :class:`~warpsim.viewer.backend.NullBackend` draws
 nothing (tests, headless machines) and :class:`~warpsim.viewer.gl.PygletBackend` opens an OpenGL 3.3 window

@@ -1,8 +1,8 @@
 """The viewer's logic, apart from any window: pacing, keyboard controls, camera, heads-up text, restarts.
 
 One :meth:`Viewer.tick` reads the window's events, steps as many frames as wall time asks (each through
-:meth:`warpsim.runner.Simulation.advance`, the keyboard's controls set at the frame start through
-:meth:`~warpsim.runner.Simulation.set_controls`), records them, and draws one picture. Controls change only
+:meth:`warpsim.run.simulation.Simulation.advance`, the keyboard's controls set at the frame start through
+:meth:`~warpsim.run.simulation.Simulation.set_controls`), records them, and draws one picture. Controls change only
 at frame starts and depend only on which keys were held there, so a recording of what was flown replays
 bit for bit (``warpsim run --replay``).
 """
@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..diagnostics import Figures, Frame
 from ..io.style import COLOURS
-from ..runner import BlowUpError, Simulation
+from ..run.diagnostics import Figures, Frame
+from ..run.simulation import BlowUpError, Simulation
 from .backend import Backend, DrawList, View
 
 KEYS = (
@@ -86,7 +86,7 @@ def _towards(value: float, target: float, step: float) -> float:
 
 
 class Viewer:
-    """Fly a :class:`~warpsim.runner.Simulation` in a window.
+    """Fly a :class:`~warpsim.run.simulation.Simulation` in a window.
 
     Args:
         sim: the scene, at its start. backend: the window (:class:`~warpsim.viewer.backend.Backend`).
@@ -98,7 +98,7 @@ class Viewer:
 
     Attributes:
         paused, camera (one of :data:`CAMERAS`), axes (the keyboard's pitch and roll, each in [-1, 1]),
-        frame (the last :class:`~warpsim.diagnostics.Frame`), error (the last blow-up or output message),
+        frame (the last :class:`~warpsim.run.diagnostics.Frame`), error (the last blow-up or output message),
         behind (wall time ran ahead of what the machine could simulate in the last second),
         step_time and draw_time (wall seconds spent stepping and drawing), pictures (drawn so far).
     """
@@ -486,7 +486,7 @@ class Viewer:
 
 
 def object_lines(model, figures: list[dict], frame: Frame) -> list[str]:
-    """One heads-up line per object of ``model`` from its ``figures`` (:class:`warpsim.diagnostics.Figures`):
+    """One heads-up line per object of ``model`` from its ``figures`` (:class:`warpsim.run.diagnostics.Figures`):
     altitude and airspeed, and per kind its own (glider: sink rate, glide ratio, bank; kite: line angle and
     pull; parachute: descent speed and radius), and the worst stretch of ``frame``."""
     lines = []

@@ -1,0 +1,115 @@
+"""The package's layers: every import (at module level or inside a function) goes down a layer or stays inside its
+own package, and no chain of imports closes a loop.
+
+Layers, lowest first: ``_version``/``_interrupt`` (no warpsim imports), ``physics``, ``objects``, ``scene``, ``run``,
+``io``, then ``viewer`` and ``sweeps`` (side by side: neither imports the other), ``cli``, and the package itself
+(``warpsim/__init__.py``, ``__main__``). See docs/architecture.md.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parent.parent / "warpsim"
+
+LAYERS = {
+    "_version": 0,
+    "_interrupt": 0,
+    "physics": 1,
+    "objects": 2,
+    "scene": 3,
+    "run": 4,
+    "io": 5,
+    "viewer": 6,
+    "sweeps": 6,
+    "cli": 7,
+    "__main__": 8,
+    "": 8,  # warpsim/__init__.py
+}
+
+
+def _modules() -> dict[str, Path]:
+    """Every module of the package by dotted name (a package by its own name)."""
+    out = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts.pop()
+        out[".".join(parts)] = path
+    return out
+
+
+def _imports(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
+    """The warpsim modules that module ``name`` imports, anywhere in its text."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names if a.name.split(".")[0] == "warpsim")
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            if target.split(".")[0] != "warpsim":
+                continue
+            for alias in node.names:  # `from . import x` imports the module x where there is one
+                sub = f"{target}.{alias.name}"
+                found.add(sub if sub in modules else target)
+    while True:  # an import of a.b.c that is no module (a name inside one) is an import of that module
+        fixed = {m if m in modules else m.rpartition(".")[0] for m in found}
+        if fixed == found:
+            return found - {name}
+        found = fixed
+
+
+def _layer(module: str) -> tuple[str, int]:
+    top = module.split(".")[1] if "." in module else ""
+    assert top in LAYERS, f"{module}: no layer for warpsim/{top}; add it to LAYERS and to docs/architecture.md"
+    return top, LAYERS[top]
+
+
+def _graph() -> dict[str, set[str]]:
+    modules = _modules()
+    return {name: _imports(name, path, modules) for name, path in modules.items()}
+
+
+def test_every_import_goes_down_a_layer():
+    wrong = []
+    for module, imported in _graph().items():
+        top, rank = _layer(module)
+        for other in sorted(imported):
+            other_top, other_rank = _layer(other)
+            if other_top != top and other_rank >= rank:
+                wrong.append(f"{module} imports {other} (layer {other_rank} >= {rank})")
+    assert not wrong, "imports that go up or across a layer:\n" + "\n".join(wrong)
+
+
+def test_no_import_loops():
+    graph = _graph()
+    loops, state = [], {}
+
+    def visit(module, path):
+        state[module] = "open"
+        for other in sorted(graph.get(module, ())):
+            if state.get(other) == "open":
+                loops.append(" -> ".join([*path[path.index(other) :], other]))
+            elif other not in state:
+                visit(other, [*path, other])
+        state[module] = "done"
+
+    for module in sorted(graph):
+        if module not in state:
+            visit(module, [module])
+    assert not loops, "import loops:\n" + "\n".join(loops)
+
+
+def test_the_walk_sees_imports():
+    """The walk finds the imports it must judge (a walk that found none would pass every module)."""
+    graph = _graph()
+    assert "warpsim.physics.model" in graph["warpsim.physics.solver"]
+    assert "warpsim.run.simulation" in graph["warpsim.viewer.core"]  # an import inside the module's text
+    assert _layer("warpsim.cli.main") == ("cli", 7)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from pxr import Usd, UsdGeom
 
-from warpsim.cli.main import EXIT_BLOWUP, main
+from warpsim.cli import EXIT_BLOWUP, main
 from warpsim.io.hdf5 import Recording
 from warpsim.run.simulation import BlowUpError, Simulation
 from warpsim.scene.descriptor import defaults

@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from warpsim.cli.main import main
+from warpsim.cli import main
 
 
 def test_list(capsys):
@@ -108,8 +108,8 @@ def test_run_ends_with_each_objects_flight_figures(capsys):
 def test_run_figures_are_the_sweep_metrics_and_spread_over_worlds(capsys):
     """With --worlds N the line gives the mean over the worlds and the lowest and highest world; each world's figure
     is the sweep's metric of the same case and window, to the digits printed."""
+    from warpsim import sweeps
     from warpsim.scene import descriptor
-    from warpsim.sweeps import plan as sweeps
 
     line = _figures_line(capsys, "kite", "--worlds", "3", "--vary", "wind.speed=4:8", "--seconds", "10")
     assert line.startswith("  3 worlds")

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from warpsim.cli.main import main
+from warpsim.cli import main
 from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
 from warpsim.scene.controls import ControlError, ControlSchedule, Gusts

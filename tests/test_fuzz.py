@@ -16,7 +16,7 @@ from conftest import fuzz_watchdog
 from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
-from warpsim.cli.main import main
+from warpsim.cli import main
 from warpsim.objects import registry
 from warpsim.physics.config import SECTIONS as SHARED_SECTIONS
 from warpsim.run.simulation import BlowUpError, Simulation

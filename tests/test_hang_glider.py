@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import warp as wp
 
-from warpsim.cli.main import main
+from warpsim.cli import main
 from warpsim.objects.hang_glider import control_rest_lengths, flight_state
 from warpsim.run.simulation import Simulation
 from warpsim.scene.descriptor import defaults, merge

@@ -6,7 +6,7 @@ import time
 import numpy as np
 import pytest
 
-from warpsim.cli.main import EXIT_USAGE, MAX_LINE, main
+from warpsim.cli import EXIT_USAGE, MAX_LINE, main
 from warpsim.run.simulation import Simulation
 from warpsim.scene.descriptor import defaults
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from warpsim.cli.main import main
+from warpsim.cli import main
 from warpsim.objects.kite import line_state
 from warpsim.run.simulation import Simulation
 from warpsim.scene.descriptor import defaults

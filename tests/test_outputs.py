@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from pxr import Usd, UsdGeom
 
-from warpsim.cli.main import main
+from warpsim.cli import main
 from warpsim.io.hdf5 import H5Recorder, Recording
 from warpsim.io.usd import UsdWriter, validate
 from warpsim.run.simulation import Simulation

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from pxr import Usd, UsdGeom
 
-from warpsim.cli.main import EXIT_INTERRUPTED, EXIT_OUTPUT, EXIT_USAGE, main
+from warpsim.cli import EXIT_INTERRUPTED, EXIT_OUTPUT, EXIT_USAGE, main
 from warpsim.io import remove_stale_temporaries, temporary_path
 from warpsim.io.h5safe import writer_active
 from warpsim.io.hdf5 import H5Recorder, Recording

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from warpsim.cli.main import main
+from warpsim.cli import main
 from warpsim.io.render import Camera
 from warpsim.io.usd import COLOURS
 

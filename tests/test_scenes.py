@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from warpsim.cli.main import main
+from warpsim.cli import main
 from warpsim.run.simulation import Simulation
 from warpsim.scene.descriptor import defaults, load_text, resolve
 

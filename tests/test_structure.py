@@ -172,7 +172,7 @@ def test_a_design_is_a_preset_and_keys_beside_it_win(capsys):
     assert (kite["air"]["model"], kite["solver"]["dt"], kite["kite"]["tow_point"]) == ("paper", 0.01, 0.35)
     with pytest.raises(DescriptorError, match="design cannot differ between worlds"):
         merge("test", flying, {"worlds": {"count": 2, "hang_glider": {"design": ["flying", "paper"]}}})
-    from warpsim.cli.main import main
+    from warpsim.cli import main
 
     assert main(["info", "hang-glider", "--set", "hang_glider.design=paper"]) == 0
     assert "particles 49, sticks 180, triangles 64" in capsys.readouterr().out  # the paper's 49 particles

@@ -6,7 +6,7 @@ import subprocess
 import sys
 import time
 
-from warpsim.cli.main import EXIT_BLOWUP, build_parser, main
+from warpsim.cli import EXIT_BLOWUP, build_parser, main
 from warpsim.objects import registry
 from warpsim.run.simulation import Simulation
 from warpsim.scene.descriptor import defaults, merge

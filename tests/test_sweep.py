@@ -19,11 +19,13 @@ pd = pytest.importorskip("pandas")
 pytest.importorskip("distributed")
 pytest.importorskip("pyarrow")
 
-from warpsim.cli.main import main  # noqa: E402
+from warpsim import sweeps  # noqa: E402
+from warpsim.cli import main  # noqa: E402
 from warpsim.run.diagnostics import object_metrics  # noqa: E402
 from warpsim.run.simulation import Simulation  # noqa: E402
 from warpsim.scene import descriptor as desc_mod  # noqa: E402
-from warpsim.sweeps import plan as sweeps  # noqa: E402
+from warpsim.sweeps import chunk as sweep_chunk  # noqa: E402
+from warpsim.sweeps import cluster as sweep_cluster  # noqa: E402
 
 SECONDS = 12.0  # each case; the window is its second half
 AXES = ["wind.gust_seed=1,2", "kite.tow_point=0.25,0.3,0.35"]  # 2 x 3 cases, gusty: each case its own gusts
@@ -313,7 +315,7 @@ def test_local_workers_are_bounded_by_cores_and_memory(monkeypatch):
     no more than 80 % of the available memory holds at `WORKER_BYTES` each."""
     from warpsim.physics import builder
 
-    monkeypatch.setattr(sweeps, "cores", lambda: 2)
+    monkeypatch.setattr(sweep_cluster, "cores", lambda: 2)
     monkeypatch.setattr(builder, "available_memory", lambda: 100 * sweeps.WORKER_BYTES)
     assert sweeps.max_local_workers() == 8
     monkeypatch.setattr(builder, "available_memory", lambda: 5 * sweeps.WORKER_BYTES)
@@ -435,9 +437,9 @@ def test_sweep_and_plot_command_lines_never_traceback(tmp_path, monkeypatch):
     from hypothesis import HealthCheck, example, given, settings
     from hypothesis import strategies as st
 
-    monkeypatch.setattr(sweeps, "_run_tasks", _in_process)
-    monkeypatch.setattr(sweeps, "_local_cluster", lambda count, log=None: (None, None))
-    monkeypatch.setattr(sweeps, "_connect", lambda scheduler, workers: (None, False, workers or 1))
+    monkeypatch.setattr(sweep_cluster, "run_tasks", _in_process)
+    monkeypatch.setattr(sweep_cluster, "local_cluster", lambda count, log=None: (None, None))
+    monkeypatch.setattr(sweep_cluster, "connect", lambda scheduler, workers: (None, False, workers or 1))
     (tmp_path / "bad.toml").write_text("[scene]\nobject = 'kite'\n[kite]\nrope_length = -3\n")
     (tmp_path / "kites.toml").write_text("[scene]\nobject = 'kite'\n[sweep]\nwind.speed = [4, 6]\n")
     pd.DataFrame({"wind.speed": [4.0, 6.0], "altitude_mean": [1.0, 2.0], "blew_up": [False, True]}).to_parquet(
@@ -517,9 +519,9 @@ def _here(monkeypatch) -> list:
             ran.extend(task.cases)
             results.add(sweeps.run_chunk(task))
 
-    monkeypatch.setattr(sweeps, "_run_tasks", in_process)
-    monkeypatch.setattr(sweeps, "_local_cluster", lambda count, log=None: (None, None))
-    monkeypatch.setattr(sweeps, "_warm_kernels", lambda tasks, device: None)
+    monkeypatch.setattr(sweep_cluster, "run_tasks", in_process)
+    monkeypatch.setattr(sweep_cluster, "local_cluster", lambda count, log=None: (None, None))
+    monkeypatch.setattr(sweep_chunk, "warm_kernels", lambda tasks, device: None)
     return ran
 
 
@@ -746,7 +748,7 @@ def test_the_local_cluster_cannot_be_joined_by_another_process():
     from dask.distributed import Client
     from distributed.security import Security
 
-    client, cluster = sweeps._local_cluster(1)
+    client, cluster = sweep_cluster.local_cluster(1)
     try:
         address = cluster.scheduler_address
         assert address.startswith("tls://127.0.0.1:")
@@ -761,7 +763,7 @@ def test_the_local_cluster_cannot_be_joined_by_another_process():
                 intruder.close()
             assert not isinstance(caught.value, AssertionError)
     finally:
-        sweeps._close(client, cluster)
+        sweep_cluster.close(client, cluster)
 
 
 def test_sigterm_stops_a_sweep_like_ctrl_c(tmp_path):
@@ -794,11 +796,11 @@ def test_a_failed_task_is_one_line_naming_dasks_log(tmp_path, monkeypatch, capsy
         try:
             raise RuntimeError("warpsim-cases-1-1 cancelled for reason: scheduler-connection-lost.\nmore\nlines")
         except RuntimeError as err:
-            raise sweeps._TaskFailedError() from err
+            raise sweep_cluster.TaskFailedError() from err
 
-    monkeypatch.setattr(sweeps, "_run_tasks", fail)
-    monkeypatch.setattr(sweeps, "_local_cluster", lambda count, log=None: (None, None))
-    monkeypatch.setattr(sweeps, "_warm_kernels", lambda tasks, device: None)
+    monkeypatch.setattr(sweep_cluster, "run_tasks", fail)
+    monkeypatch.setattr(sweep_cluster, "local_cluster", lambda count, log=None: (None, None))
+    monkeypatch.setattr(sweep_chunk, "warm_kernels", lambda tasks, device: None)
     client = logging.getLogger("distributed.client")
     saved = client.handlers[:], client.propagate, client.disabled
     client.addHandler(logging.StreamHandler(sys.stderr))  # as Dask's own configuration gives it one
@@ -806,7 +808,7 @@ def test_a_failed_task_is_one_line_naming_dasks_log(tmp_path, monkeypatch, capsy
         assert main(_quick(tmp_path / "t.parquet", "--chunk", "1")) == 1
     finally:
         client.handlers, client.propagate, client.disabled = saved
-        for logger in sweeps._dask_loggers():  # the command turned them off for the rest of its process
+        for logger in sweep_cluster.dask_loggers():  # the command turned them off for the rest of its process
             logger.disabled = False
     captured = capsys.readouterr()
     log = tmp_path / "t.parquet.dask.log"

@@ -1,6 +1,7 @@
 """Worlds stepped by threads: any number of threads gives the frames of one thread, bit for bit, and blow-ups,
 checkpoints, recordings, sweep chunks and Ctrl-C behave as with one thread."""
 
+import dataclasses
 import os
 import signal
 import subprocess
@@ -12,7 +13,7 @@ import h5py
 import numpy as np
 import pytest
 
-from warpsim.cli.main import EXIT_INTERRUPTED, main
+from warpsim.cli import EXIT_INTERRUPTED, main
 from warpsim.io.hdf5 import Recording
 from warpsim.run.simulation import BlowUpError, Simulation
 from warpsim.scene import descriptor as desc_mod
@@ -159,13 +160,13 @@ def test_recordings_of_threads_are_those_of_one_thread(tmp_path):
 
 
 def test_sweep_chunk_rows_are_the_same_on_threads():
-    from warpsim.sweeps import plan as sweeps
+    from warpsim import sweeps
 
     desc = desc_mod.defaults("kite")
     plan = sweeps.SweepPlan(desc, sweeps.parse_axes(desc, ["wind.speed=4,6,8"]), 0.4)
     (task,) = plan.chunks(8)
     one = sweeps.run_chunk(task)
-    two = sweeps.run_chunk(sweeps.replace(task, threads=2))
+    two = sweeps.run_chunk(dataclasses.replace(task, threads=2))
     assert len(one) == 3
     for a, b in zip(one, two, strict=True):
         assert a.keys() == b.keys()

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from warpsim.cli.main import main
+from warpsim.cli import main
 from warpsim.io.hdf5 import Recording
 from warpsim.objects.hang_glider import bank
 from warpsim.run.simulation import Simulation

@@ -32,7 +32,7 @@ _EXPORTS = {
     "State": "physics.model",
     "WindConfig": "physics.config",
     "make_solver": "physics.solver",
-    "sweep": "sweeps.plan",
+    "sweep": "sweeps",
 }
 
 __all__ = [*sorted(_EXPORTS), "__version__"]

@@ -38,7 +38,7 @@ def read_table(path) -> object:
             _require("pyarrow")
             return pd.read_parquet(path)
         if path.suffix.lower() == ".csv":
-            from .plan import read_csv
+            from .table import read_csv
 
             return read_csv(path)
     except (OSError, ValueError) as err:
@@ -86,7 +86,7 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
     other swept keys) or, with ``y``, as a heat map over ``x`` and ``y``; write ``out`` (a PNG). ``where``:
     ``KEY=VALUE`` texts keeping only those cases. Returns the path written; raises :class:`PlotError`."""
     from ..io import OutputPathError, check_output_path
-    from .plan import METRICS
+    from .metrics import METRICS
 
     try:
         out = check_output_path(out, (".png",), "PNG")

@@ -1,0 +1,30 @@
+"""``warpsim list``: the built-in objects and the scene files found."""
+
+from __future__ import annotations
+
+from ..scene.dirs import scene_dirs
+
+
+def command(args) -> int:
+    """Print built-in objects and scene files."""
+    from ..objects import registry
+
+    print("built-in objects:")
+    for name, spec in registry.OBJECTS.items():
+        print(f"  {name:<12} {spec.summary}")
+    for directory in scene_dirs():
+        files = sorted(directory.glob("*.toml"))
+        if files:
+            print(f"scenes in {directory}:")
+            for f in files:
+                print(f"  {f.stem:<22} {f}")
+    return 0
+
+
+def add_parser(sub) -> None:
+    """Add the ``list`` command to the subparsers ``sub``."""
+    sub.add_parser(
+        "list",
+        help="built-in objects and the scene files found",
+        description="List built-in objects and the scene files found in ./scenes and the project's scenes/ folder.",
+    )

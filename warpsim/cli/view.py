@@ -1,0 +1,153 @@
+"""``warpsim view``: fly a scene in a live window."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+
+from .._interrupt import interruptible
+from .common import (
+    EXIT_BLOWUP,
+    EXIT_INTERRUPTED,
+    UsageError,
+    add_scene_options,
+    check_device,
+    checked_output,
+    load_scene,
+    number_type,
+    same_file_check,
+    size_type,
+)
+
+
+def _on_display_lost(viewer, backend, shot):
+    """Install an Xlib I/O error handler for when the X server goes away under the viewer (Xlib's own printed two
+    lines and exited 1 with the recording open and no screenshot): close the recording with every frame flown, save
+    the screenshot, say so in one line and exit 130. Returns the handler (keep it referenced), or None without
+    Xlib."""
+    import os
+
+    try:
+        from pyglet.libs.x11 import xlib
+    except Exception:  # noqa: BLE001 - not X11 (or no pyglet): nothing to watch
+        return None
+
+    def lost(display):
+        try:
+            viewer.close_recording()
+            saved = ""
+            if shot is not None:
+                from ..io.render import save_png
+
+                saved = f"; screenshot: {save_png(shot, backend.screenshot())}"
+            kept = f"; recording: {', '.join(str(p) for p in viewer.takes)}" if viewer.takes else ""
+            sys.stderr.write(
+                f"warpsim view: error: the display went away (its X server ended) at t = {viewer.sim.state.time:.2f} s"
+                f"{kept}{saved}\n"
+            )
+            sys.stderr.flush()
+        finally:
+            os._exit(EXIT_INTERRUPTED)  # Xlib exits the process once this returns; nothing more can be drawn
+        return 0
+
+    handler = xlib.XIOErrorHandler(lost)
+    xlib.XSetIOErrorHandler(handler)
+    return handler
+
+
+@contextlib.contextmanager
+def _signals_quit(viewer):
+    """Inside the block SIGINT and SIGTERM ask ``viewer`` to quit (its ``quit`` flag, read between frames), as Esc
+    does. Off the main thread, signals are left alone."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handle(signum, frame):
+        viewer.quit = True
+
+    previous = {sig: signal.signal(sig, handle) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def command(args) -> int:
+    """Fly a scene in a window until the user quits (or --seconds); print where the outputs went."""
+    from ..io.hdf5 import RecordingError, check_recording_path
+    from ..io.render import check_picture_path
+    from ..run.simulation import Simulation, available_cores
+    from ..scene.descriptor import to_toml
+    from ..viewer.core import Viewer
+    from ..viewer.gl import PygletBackend
+
+    h5_path = checked_output(check_recording_path, args.h5, "--h5")
+    shot = checked_output(check_picture_path, args.screenshot, "--screenshot")
+    if shot is not None:
+        from ..io.render import require_pillow
+
+        try:
+            require_pillow()
+        except RuntimeError as err:
+            raise UsageError(f"--screenshot: {err}") from None
+    device = check_device(args.device)
+    descriptor, _, where = load_scene(args)
+    same_file_check(args.scene, {"--h5": h5_path, "--screenshot": shot})
+    from ..viewer import gl
+
+    gl.check_display()  # a missing extra or display is said before the model is built
+    sim = Simulation(descriptor, device=device, where=where, threads=args.threads or available_cores())
+    backend = PygletBackend(args.size, keep_pictures=shot is not None)
+    interruptible()  # the recording opens next
+    try:
+        viewer = Viewer(sim, backend, f"warpsim: {where}", h5_path, to_toml(descriptor), where, seconds=args.seconds)
+    except RecordingError as err:
+        raise UsageError(f"--h5 {err}") from None
+    lost = _on_display_lost(viewer, backend, shot)  # kept referenced: Xlib holds only a C pointer to it
+    # Ctrl-C in the terminal, or SIGTERM, quits like Esc, between two frames: the recording closed with every frame
+    # flown (an interrupt raised between a step and its write once cost the frames since the last checkpoint), the
+    # screenshot saved
+    with _signals_quit(viewer), contextlib.suppress(KeyboardInterrupt):
+        viewer.run()  # closes the recording and the window, however it ends
+    if shot is not None:
+        from ..io.render import save_png
+
+        print(f"screenshot: {save_png(shot, backend.screenshot())}")
+    del lost
+    print(f"simulated {sim.state.time:.2f} s; drew {viewer.pictures} pictures")
+    for path in viewer.takes:
+        print(f"recording: {path}")
+    return EXIT_BLOWUP if viewer.blew_up else 0
+
+
+def add_parser(sub) -> None:
+    """Add the ``view`` command to the subparsers ``sub``."""
+    view = sub.add_parser(
+        "view",
+        help="fly a scene in a live 3-D window (keyboard control, real time)",
+        description="Open a window and fly the scene at wall-clock pace: arrows steer the hang glider (held keys "
+        "ramp pitch/roll to +-1, release ramps back), W/A/S/D walk the kite's anchor, +/- and [/] change the wind, "
+        "Space pauses, '.' steps one frame, R restarts, C cycles the camera, H shows every key, Esc quits. "
+        "Needs the viewer extra (pip install -e '.[viewer]') and a display (on a remote machine: ssh -X, or "
+        "xvfb-run with --screenshot).",
+    )
+    view.add_argument("scene", metavar="SCENE")
+    add_scene_options(view)
+    view.add_argument(
+        "--h5",
+        metavar="OUT.h5",
+        help="record what is flown, with the controls as applied (replay: warpsim run --replay OUT.h5); after a "
+        "restart the next take goes to OUT.take2.h5, ...",
+    )
+    view.add_argument(
+        "--seconds", type=number_type("--seconds"), help="close after this much simulated time (default: when you quit)"
+    )
+    view.add_argument("--screenshot", metavar="OUT.png", help="save the last picture drawn as a PNG when closing")
+    view.add_argument(
+        "--size", type=size_type, default=(1280, 720), metavar="WxH", help="window size (default 1280x720)"
+    )

@@ -1,0 +1,140 @@
+"""One sweep task: a chunk of cases run as the batched worlds of one simulation, a row per case (what a Dask worker
+calls), and the kernels compiled once before the workers start."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ..scene.descriptor import DescriptorError, to_toml
+from .metrics import SweepError
+from .plan import ChunkTask
+
+
+def _failed_rows(task: ChunkTask, reason: str) -> list[dict]:
+    rows = []
+    for columns in task.columns:
+        row = {name: math.nan for name in task.metrics}
+        row.update(columns, blew_up=True, blowup_time=0.0, blowup_reason=reason)
+        if "window_frames" in row:
+            row["window_frames"] = 0
+        rows.append(row)
+    return rows
+
+
+def run_chunk(task: ChunkTask) -> list[dict]:
+    """Run one chunk and return one row per case (swept values and metrics, see :data:`METRICS`), in the
+    order of ``task.cases``. What a Dask worker calls; also callable directly, in this process.
+
+    A chunk that cannot be built (a case whose values make an unsound object) is run case by case, so only the
+    faulty case is a row saying so; a case that blows up stops being measured at that frame.
+    """
+    from ..physics import _warp
+
+    _warp.init()
+    from ..run.diagnostics import Figures, FigureWindow, GroundContacts, figure_names, world_blowups
+    from ..run.simulation import Simulation
+
+    try:
+        sim = Simulation(task.descriptor, device=task.device, where="sweep case", threads=task.threads)
+    except DescriptorError as err:
+        if len(task.cases) == 1:
+            return _failed_rows(task, f"not built: {err}")
+        return [row for k in range(len(task.cases)) for row in run_chunk(task.single(k))]
+    model = sim.model
+    count = model.world_count
+    figures = list(figure_names(sim.descriptor["scene"]["object"]))
+    acc = FigureWindow(count, figures)
+    contacts = GroundContacts(model)
+    max_stretch = sim.settings.solver.max_stretch
+    measure_figures = Figures(model)
+    live = np.ones(count, dtype=bool)
+    blew = [(math.nan, "")] * count
+    recorder = _chunk_recorder(task, sim)
+    total = int(round(task.seconds / sim.dt))
+    spf = sim.steps_per_frame
+    start, stop = task.window
+    eps = 0.25 * sim.dt  # frame times are sums of dt: compare with a margin
+    index = 0
+    try:
+        frame = sim.frame(0)
+        while True:
+            problems = world_blowups(model, frame, max_stretch)
+            for w, reason in problems.items():
+                if live[w]:
+                    live[w] = False
+                    blew[w] = (frame.time, f"{reason} (at t = {frame.time:.4f} s)")
+            # each world's worst stretch as the device measured it (what a run's summary reports)
+            acc.worst = np.where(live, np.maximum(acc.worst, frame.world_stretch), acc.worst)
+            found = measure_figures(frame, sim.solver.tri_force)
+            values = np.array([[f[name] for f in found] for name in figures], dtype=np.float64)
+            in_window = start - eps <= frame.time <= stop + eps
+            acc.add(values, live, in_window, contacts.touching(frame), frame.time)
+            if recorder is not None:
+                recorder.write(frame)
+            if sim.steps_taken >= total or not live.any():
+                break
+            sim.apply_schedule()
+            sim.step(min(spf, total - sim.steps_taken))
+            index += 1
+            frame = sim.frame(index)
+    finally:
+        if recorder is not None:
+            recorder.close()
+    rows = []
+    for k, columns in enumerate(task.columns):
+        row = {**columns, **acc.row(k)}
+        row["blew_up"] = not bool(live[k])
+        row["blowup_time"], row["blowup_reason"] = blew[k]
+        rows.append({name: row[name] for name in (*columns, *task.metrics)})
+    return rows
+
+
+def _chunk_recorder(task: ChunkTask, sim):
+    """The chunk's recording (``--h5-dir``), written afresh (a retried task starts it again), or None."""
+    if not task.h5:
+        return None
+    from ..io.hdf5 import H5Recorder
+
+    path = Path(task.h5)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    # the recorder takes the file's writer lock before it truncates it: a run writing it is never overwritten
+    return H5Recorder(path, sim.model, sim.descriptor, sim.checkpoint, to_toml(sim.descriptor), "warpsim sweep")
+
+
+def check_recordings_free(tasks: Sequence[ChunkTask]) -> None:
+    """Raise :class:`SweepError` when a run is writing one of the recordings the tasks will write (``--h5-dir``):
+    a sweep once deleted a live run's recording and wrote its chunk in its place."""
+    from ..io.h5safe import writer_active
+
+    for task in tasks:
+        if task.h5 and writer_active(task.h5):
+            raise SweepError(f"--h5-dir: {task.h5} is being written by another warpsim run; wait for it to end")
+
+
+def warm_kernels(tasks: Sequence[ChunkTask], device: str) -> None:
+    """Compile (or load) the kernels once here, before the workers start, so that they all read Warp's cache
+    instead of compiling the same modules side by side: one world of each kind of chunk (a chunk kind differs
+    in solver, air, terrain or ground settings)."""
+    from ..physics import _warp
+
+    _warp.init()
+    from ..run.simulation import Simulation
+
+    seen = set()
+    for task in tasks:
+        key = json.dumps({k: v for k, v in task.descriptor.items() if k in _SHARED})
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            Simulation(task.single(0).descriptor, device=device)
+        except DescriptorError:  # a case that cannot be built: its row will say so
+            pass
+
+
+_SHARED = ("solver", "air", "terrain", "ground")

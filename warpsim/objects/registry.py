@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from . import hang_glider, kite, parachute
+from . import figures, hang_glider, kite, parachute
 from .flag import FlagConfig, build_flag
 
 
@@ -20,13 +20,19 @@ class ObjectSpec:
         build: ``build(builder, config, terrain) -> ObjectRecord``.
         scene_defaults: overrides of other sections that suit this object (e.g. its wind, its dt).
         summary: one line for ``warpsim list``.
-        controls: names of the object's controls (see :mod:`warpsim.controls`; every scene also has ``wind``).
+        controls: names of the object's controls (see :mod:`warpsim.scene.controls`; every scene also has ``wind``).
         apply_controls: ``apply_controls(record, targets, values)`` writes what the controls in force
             (``values``: every control set so far but ``wind``) change into ``targets`` (host copies of
             ``stick_rest`` and ``nail_target``, and the ``terrain``).
         presets: for an object with a ``design`` key, the values each design gives to keys of any section
             (``{design: {section: {key: value}}}``). The default design's preset is part of the defaults;
             setting ``design`` in a scene or with ``--set`` applies its preset first, then the scene's own keys.
+        figures: the object's own figures besides those of every object (altitude, airspeed, sink):
+            ``{name: (unit, meaning)}``, in the order tables show them (see :mod:`.figures`).
+        measure_figures: ``measure_figures(model, record) -> measure``, where ``measure(view)`` gives those
+            figures of a frame (a :class:`~.figures.FigureView`) by name; None for an object with none.
+        figures_need_air_force: True when ``measure`` reads the view's ``tri_force`` (it is copied to the host
+            only then).
     """
 
     config: type
@@ -36,6 +42,9 @@ class ObjectSpec:
     controls: tuple[str, ...] = ()
     apply_controls: Callable | None = None
     presets: dict = field(default_factory=dict)
+    figures: dict[str, tuple[str, str]] = field(default_factory=dict)
+    measure_figures: Callable | None = None
+    figures_need_air_force: bool = False
 
 
 OBJECTS: dict[str, ObjectSpec] = {
@@ -59,6 +68,8 @@ OBJECTS: dict[str, ObjectSpec] = {
         controls=("pitch", "roll"),
         apply_controls=hang_glider.apply_controls,
         presets=hang_glider.PRESETS,
+        figures=figures.GLIDER_FIGURES,
+        measure_figures=figures.glider_figures,
     ),
     "kite": ObjectSpec(
         config=kite.KiteConfig,
@@ -70,12 +81,17 @@ OBJECTS: dict[str, ObjectSpec] = {
         controls=("anchor",),
         apply_controls=kite.apply_controls,
         presets=kite.PRESETS,
+        figures=figures.KITE_FIGURES,
+        measure_figures=figures.kite_figures,
+        figures_need_air_force=True,
     ),
     "parachute": ObjectSpec(
         config=parachute.ParachuteConfig,
         build=parachute.build_parachute,
         scene_defaults={"wind": {"velocity": [0.0, 0.0, 0.0]}},
         summary="round canopy of rings, lines, heavy person; hoop = true keeps it open (paper Section 8)",
+        figures=figures.PARACHUTE_FIGURES,
+        measure_figures=figures.parachute_figures,
     ),
 }
 

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..objects import registry
+from ..objects.figures import FigureView
 from ..physics.model import Control, Model, State
 
 
@@ -228,21 +230,28 @@ def object_metrics(model: Model, frame: Frame) -> ObjectMetrics:
     return ObjectMetrics(centre, altitude, velocity, airspeed)
 
 
-FIGURES: dict[str, tuple[str, tuple[str, ...] | None, str]] = {
-    "altitude": ("m", None, "height of the object's mass centre above the terrain under it"),
-    "airspeed": ("m/s", None, "speed of the mass centre relative to its world's wind"),
-    "sink": ("m/s", None, "descent speed of the mass centre (positive downwards)"),
-    "glide": (
-        "-",
-        ("hang-glider",),
-        "glide ratio: horizontal airspeed / sink of the mass centre (NaN unless it sinks faster than 0.05 m/s)",
-    ),
-    "bank": ("deg", ("hang-glider",), "bank of the sail, tip to tip against the horizontal, + = right tip lower"),
-    "line_angle": ("deg", ("kite",), "elevation of the line above the horizontal, from the anchor to the tow point"),
-    "line_pull": ("N", ("kite",), "|air force on the kite + its weight|, the steady line tension"),
-    "radius": ("m", ("parachute",), "mean horizontal distance of the canopy's rim from its centre"),
+COMMON_FIGURES = {
+    "altitude": ("m", "height of the object's mass centre above the terrain under it"),
+    "airspeed": ("m/s", "speed of the mass centre relative to its world's wind"),
+    "sink": ("m/s", "descent speed of the mass centre (positive downwards)"),
 }
-"""The figures :class:`Figures` gives: name -> (unit, the object kinds that have it (None: all), meaning)."""
+"""The figures every object has: name -> (unit, meaning)."""
+
+
+def _figure_table() -> dict[str, tuple[str, tuple[str, ...] | None, str]]:
+    table: dict[str, tuple[str, tuple[str, ...] | None, str]] = {
+        name: (unit, None, meaning) for name, (unit, meaning) in COMMON_FIGURES.items()
+    }
+    for kind, spec in registry.OBJECTS.items():
+        for name, (unit, meaning) in spec.figures.items():
+            kinds = table[name][1] + (kind,) if name in table else (kind,)
+            table[name] = (unit, kinds, meaning)
+    return table
+
+
+FIGURES = _figure_table()
+"""The figures :class:`Figures` gives: name -> (unit, the object kinds that have it (None: all), meaning); the
+objects' own come from their ``ObjectSpec`` (:mod:`warpsim.objects.registry`)."""
 
 
 def figure_names(kind: str) -> tuple[str, ...]:
@@ -252,50 +261,38 @@ def figure_names(kind: str) -> tuple[str, ...]:
 
 class Figures:
     """What a pilot or an observer reads off each object of a frame (:data:`FIGURES`). The heads-up display and
-    the sweeps read their figures here, so each is computed one way; what does not change between frames (a
-    kite's triangles and mass) is found once, here.
+    the sweeps read their figures here, so each is computed one way; each object's own figures are measured by
+    its kind's ``ObjectSpec.measure_figures``, made once per object here.
 
     Call it with a frame and the solver's ``tri_force`` (device or host ``[T, 3]`` air force per triangle
-    vertex [N], copied to the host only when a kite needs it for ``line_pull``; NaN without it): one dict per
-    object, in model order, of the figures its kind has, as floats in their units.
+    vertex [N], copied to the host only when an object's figures need it, as a kite's ``line_pull``; NaN without
+    it): one dict per object, in model order, of the figures its kind has, as floats in their units.
     """
 
     def __init__(self, model: Model):
         self.model = model
-        self._kites: dict[int, tuple[np.ndarray, float]] = {}  # object -> (its triangles, their mass [kg])
-        for k, record in enumerate(model.objects):
-            if record.kind == "kite":
-                triangles = np.concatenate([np.asarray(t) for t in record.tri_parts.values()]).astype(np.int64)
-                mass = float(model.particle_free_mass[np.unique(model.tri_indices_np[triangles])].sum())
-                self._kites[k] = (triangles, mass)
+        specs = [registry.OBJECTS[record.kind] for record in model.objects]
+        self._measures = [
+            spec.measure_figures(model, record) if spec.measure_figures is not None else None
+            for spec, record in zip(specs, model.objects, strict=True)
+        ]
+        self._air_force = any(spec.figures_need_air_force for spec in specs)
 
     def __call__(self, frame: Frame, tri_force=None) -> list[dict[str, float]]:
-        from ..objects.hang_glider import bank
-        from ..objects.kite import line_elevation
-        from ..objects.parachute import projected_radius
-        from ..physics.config import GRAVITY
-
-        if self._kites and tri_force is not None and not isinstance(tri_force, np.ndarray):
+        if self._air_force and tri_force is not None and not isinstance(tri_force, np.ndarray):
             tri_force = tri_force.numpy()
         metrics = object_metrics(self.model, frame)
         out = []
         for k, record in enumerate(self.model.objects):
             v = metrics.velocity[k]
-            sink = float(-v[2])
-            values = {"altitude": float(metrics.altitude[k]), "airspeed": float(metrics.airspeed[k]), "sink": sink}
-            if record.kind == "hang-glider":
-                horizontal = float(np.linalg.norm((v - frame.wind[record.world])[:2]))
-                values["glide"] = horizontal / sink if sink > 0.05 else float("nan")
-                values["bank"] = bank(record, frame.positions)
-            elif record.kind == "kite":
-                values["line_angle"] = line_elevation(record, frame.positions)
-                values["line_pull"] = float("nan")
-                if tri_force is not None:
-                    triangles, mass = self._kites[k]
-                    air = 3.0 * tri_force[triangles].sum(axis=0)  # tri_force is each vertex's third
-                    values["line_pull"] = float(np.linalg.norm(air - np.array([0.0, 0.0, GRAVITY * mass])))
-            elif record.kind == "parachute":
-                values["radius"] = projected_radius(record, frame.positions)
+            values = {
+                "altitude": float(metrics.altitude[k]),
+                "airspeed": float(metrics.airspeed[k]),
+                "sink": float(-v[2]),
+            }
+            measure = self._measures[k]
+            if measure is not None:
+                values.update(measure(FigureView(frame.positions, v, frame.wind[record.world], tri_force)))
             out.append(values)
         return out
 

@@ -243,62 +243,60 @@ def _progress(sim):
 
 
 class _Outputs:
-    """The recording and the stage of a run, opened now and closed (always) by :meth:`close`; a write that fails
-    stops the run at that frame, and its error is kept in ``failures``."""
+    """The outputs of a run (its recording, then its stage; each an :class:`~warpsim.io.protocol.Output`), opened
+    now and closed (always) by :meth:`close`; a write that fails stops the run at that frame, and its error is kept
+    in ``failures``."""
 
     def __init__(self, stack, sim, run: _RunInputs, args, h5_path, usd_path, lock, stop):
-        from ..io.hdf5 import H5Recorder, RecordingError
+        from ..io.outputs import open_recording, open_stage
         from ..scene.descriptor import to_toml
 
         self.stop, self.failures = stop, []
-        self.recorder = self.usd = None
+        self.outputs: list = []
+        self._failed: set[int] = set()
         stack.callback(self.close)
-        try:
-            if args.resume or h5_path:
-                self.recorder = H5Recorder(
+        if args.resume or h5_path:  # a RecordingError is exit 2 (main._exit_code)
+            self.outputs.append(
+                open_recording(
                     args.resume or h5_path,
-                    sim.model,
-                    run.descriptor,
-                    sim.checkpoint,
+                    sim,
                     "" if args.resume else to_toml(run.descriptor),
                     "" if args.resume else run.where,
+                    descriptor=run.descriptor,
                     resume=bool(args.resume),
                     lock=lock,
                 )
-        except RecordingError as err:
-            raise UsageError(str(err)) from None
-        if usd_path:
-            from ..io.usd import UsdWriter  # USD loads here, after Ctrl-C no longer raises (see _StopRequests)
-
-            self.usd = UsdWriter(usd_path, sim.model, sim.steps_per_frame * sim.dt)
-        self.any = bool(self.recorder or self.usd)
+            )
+        if usd_path:  # USD loads here, after Ctrl-C no longer raises (see _StopRequests)
+            self.outputs.append(open_stage(usd_path, sim))
+        self.any = bool(self.outputs)
 
     def on_frame(self, frame) -> None:
-        """Write ``frame`` to every output."""
+        """Write ``frame`` to every output that has not failed."""
         from ..io import OutputWriteError
+        from ..io.protocol import write_frame
 
-        if self.recorder and not self.failures:
+        for k, output in enumerate(self.outputs):
+            if k in self._failed:
+                continue
             try:
-                self.recorder.write(frame)
+                write_frame(output, frame)
             except OutputWriteError as err:  # stop at this frame; the outputs keep what they have
+                self._failed.add(k)
                 self.failures.append(err)
                 self.stop.requested = True
-        if self.usd:
-            self.usd.write(frame.time, frame.positions)
 
     def close(self) -> None:
         """Finish every output (safe to call twice); a failure joins ``failures``."""
         from ..io import OutputWriteError
 
-        for name in ("recorder", "usd"):
-            output = getattr(self, name)
-            setattr(self, name, None)
-            if output is not None:
-                try:
-                    output.close()
-                except OutputWriteError as err:
-                    if err not in self.failures:
-                        self.failures.append(err)
+        outputs, self.outputs = self.outputs, []
+        for output in outputs:
+            try:
+                output.close()
+            except OutputWriteError as err:
+                if err not in self.failures:
+                    self.failures.append(err)
 
 
 def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path, figures=None) -> int:

@@ -73,6 +73,7 @@ from .h5safe import (
     status_flags,
     writer_active,
 )
+from .protocol import FrameOutput
 
 EXTENSIONS = (".h5", ".hdf5")
 FORMAT = "warpsim-recording"
@@ -167,7 +168,7 @@ def _names(model) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndar
     return objects, parts, particle_part, triangle_part, particle_object
 
 
-class H5Recorder:
+class H5Recorder(FrameOutput):
     """Append the frames of a run to an HDF5 recording.
 
     Args:
@@ -387,6 +388,10 @@ class H5Recorder:
             if now - self._last_sync >= self.sync_interval:
                 self._save_checkpoint()
                 self._last_sync = now
+
+    def log_state(self, frame) -> None:
+        """The :class:`~warpsim.io.protocol.Output` step: :meth:`write` the frame."""
+        self.write(frame)
 
     @contextlib.contextmanager
     def _guard(self):

@@ -38,6 +38,7 @@ from . import (
     create_temporary,
     with_disk_state,
 )
+from .protocol import FrameOutput
 from .style import COLOURS, CURVE_WIDTH, SPHERE_PARTS
 
 
@@ -59,7 +60,7 @@ def _prim_name(text: str) -> str:
     return name if name and not name[0].isdigit() else f"_{name}"
 
 
-class UsdWriter:
+class UsdWriter(FrameOutput):
     """Write the frames of a run as an animated USD stage.
 
     Args:
@@ -170,6 +171,10 @@ class UsdWriter:
             op.Set(Gf.Vec3d(*map(float, positions[p])), t)
         self.first = index if self.first is None else min(self.first, index)
         self.last = index if self.last is None else max(self.last, index)
+
+    def log_state(self, frame) -> None:
+        """The :class:`~warpsim.io.protocol.Output` step: :meth:`write` the frame's time and positions."""
+        self.write(frame.time, frame.positions)
 
     def close(self) -> Path | None:
         """Export the stage atomically to :attr:`path`; returns it (None when no frame was written).

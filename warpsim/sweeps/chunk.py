@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.protocol import write_frame
 from ..scene.descriptor import DescriptorError, to_toml
 from .metrics import SweepError
 from .plan import ChunkTask
@@ -75,7 +76,7 @@ def run_chunk(task: ChunkTask) -> list[dict]:
             in_window = start - eps <= frame.time <= stop + eps
             acc.add(values, live, in_window, contacts.touching(frame), frame.time)
             if recorder is not None:
-                recorder.write(frame)
+                write_frame(recorder, frame)
             if sim.steps_taken >= total or not live.any():
                 break
             sim.apply_schedule()
@@ -98,12 +99,12 @@ def _chunk_recorder(task: ChunkTask, sim):
     """The chunk's recording (``--h5-dir``), written afresh (a retried task starts it again), or None."""
     if not task.h5:
         return None
-    from ..io.hdf5 import H5Recorder
+    from ..io.outputs import open_recording
 
     path = Path(task.h5)
     path.parent.mkdir(parents=True, exist_ok=True)
     # the recorder takes the file's writer lock before it truncates it: a run writing it is never overwritten
-    return H5Recorder(path, sim.model, sim.descriptor, sim.checkpoint, to_toml(sim.descriptor), "warpsim sweep")
+    return open_recording(path, sim, to_toml(sim.descriptor), "warpsim sweep")
 
 
 def check_recordings_free(tasks: Sequence[ChunkTask]) -> None:

@@ -169,12 +169,11 @@ class Viewer:
 
     # ------------------------------------------------------------------ recording
     def _open_recorder(self, path: Path) -> None:
-        from ..io.hdf5 import H5Recorder
+        from ..io.outputs import open_recording
+        from ..io.protocol import write_frame
 
-        self.recorder = H5Recorder(
-            path, self.model, self.sim.descriptor, self.sim.checkpoint, self._descriptor_text, self._scene
-        )
-        self.recorder.write(self.frame)
+        self.recorder = open_recording(path, self.sim, self._descriptor_text, self._scene)
+        write_frame(self.recorder, self.frame)
         self.takes.append(path)
         self.say(f"recording to {path}")
 
@@ -182,9 +181,10 @@ class Viewer:
         if self.recorder is None:
             return
         from ..io import OutputWriteError
+        from ..io.protocol import write_frame
 
         try:
-            self.recorder.write(frame)
+            write_frame(self.recorder, frame)
         except OutputWriteError as err:
             self.recorder = None
             self._fail(str(err))

@@ -7,7 +7,7 @@ import pytest
 from pxr import Usd, UsdGeom
 
 from warpsim.cli import EXIT_BLOWUP, main
-from warpsim.io.hdf5 import Recording
+from warpsim.io.recording import Recording
 from warpsim.run.simulation import BlowUpError, Simulation
 from warpsim.scene.descriptor import defaults
 

@@ -81,7 +81,7 @@ def test_separate_processes_record_the_same_frames(tmp_path):
     with h5py.File(paths[0], "r") as a, h5py.File(paths[1], "r") as b:
         assert a["positions"].shape[0] == 44  # 1.5 s in frames of 35 ms (7 kite steps of 5 ms), and frame 0
         np.testing.assert_array_equal(a["positions"][:], b["positions"][:])
-    from warpsim.io.hdf5 import Recording
+    from warpsim.io.recording import Recording
 
     with Recording(paths[0]) as a, Recording(paths[1]) as b:  # the newest checkpoints (slots follow wall time)
         np.testing.assert_array_equal(a.checkpoint().q_prev, b.checkpoint().q_prev)

@@ -438,7 +438,7 @@ def test_the_watchdog_stops_a_legitimately_endless_example():
         assert dog.fired and code == 130, (code, err.getvalue())
         assert "Traceback" not in err.getvalue()
         assert 1.0 < time.perf_counter() - started < 15.0
-        from warpsim.io.hdf5 import Recording
+        from warpsim.io.recording import Recording
 
         with Recording(rec) as recording:
             assert recording.frame_count > 1  # it was running, and keeps what it ran

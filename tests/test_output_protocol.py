@@ -4,9 +4,9 @@ the recording, the stage and the picture each take the frames of a run through w
 import numpy as np
 import pytest
 
-from warpsim.io.hdf5 import Recording
 from warpsim.io.outputs import open_picture, open_recording, open_stage
 from warpsim.io.protocol import Output, write_frame
+from warpsim.io.recording import Recording
 from warpsim.run.simulation import Simulation
 from warpsim.scene.descriptor import defaults
 

@@ -12,7 +12,8 @@ import pytest
 from pxr import Usd, UsdGeom
 
 from warpsim.cli import main
-from warpsim.io.hdf5 import H5Recorder, Recording
+from warpsim.io.hdf5 import H5Recorder
+from warpsim.io.recording import Recording
 from warpsim.io.usd import UsdWriter, validate
 from warpsim.run.simulation import Simulation
 from warpsim.scene.descriptor import defaults, to_toml

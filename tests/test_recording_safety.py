@@ -22,7 +22,8 @@ from pxr import Usd, UsdGeom
 from warpsim.cli import EXIT_INTERRUPTED, EXIT_OUTPUT, EXIT_USAGE, main
 from warpsim.io import remove_stale_temporaries, temporary_path
 from warpsim.io.h5safe import writer_active
-from warpsim.io.hdf5 import H5Recorder, Recording
+from warpsim.io.hdf5 import H5Recorder
+from warpsim.io.recording import Recording
 from warpsim.objects import registry
 from warpsim.run.simulation import Simulation
 from warpsim.scene.descriptor import defaults, load_text, to_toml

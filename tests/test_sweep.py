@@ -211,7 +211,7 @@ def test_a_case_that_blows_up_is_a_row_and_leaves_its_chunk_mates_alone():
 
 
 def test_csv_table_and_h5_per_chunk(cluster, tmp_path, reference):
-    from warpsim.io.hdf5 import Recording
+    from warpsim.io.recording import Recording
 
     out = tmp_path / "s.csv"
     table = sweeps.sweep(_scene(), AXES, seconds=SECONDS, out=out, scheduler=cluster, chunk=4, h5_dir=tmp_path / "rec")
@@ -685,7 +685,7 @@ def test_h5_dir_never_touches_a_recording_a_run_is_writing(tmp_path, monkeypatch
         err = capsys.readouterr().err
         assert message in err and err.count("\n") == 1, err
     assert main(_quick(tmp_path / "t.parquet", "--chunk", "3", "--h5-dir", str(rec_dir), "--quiet")) == 0
-    from warpsim.io.hdf5 import Recording
+    from warpsim.io.recording import Recording
 
     with Recording(live) as recording:  # no run holds it any more: the sweep's chunk is written there
         assert recording.frame_count > 1

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from warpsim.cli import EXIT_INTERRUPTED, main
-from warpsim.io.hdf5 import Recording
+from warpsim.io.recording import Recording
 from warpsim.run.simulation import BlowUpError, Simulation
 from warpsim.scene import descriptor as desc_mod
 

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from warpsim.cli import main
-from warpsim.io.hdf5 import Recording
+from warpsim.io.recording import Recording
 from warpsim.objects.hang_glider import bank
 from warpsim.run.simulation import Simulation
 from warpsim.scene.descriptor import merge, resolve, to_toml

@@ -58,7 +58,8 @@ class _StopRequests:
 def command(args) -> int:
     """Run a scene (or continue a recording) and print the summary: check the options, resolve the scene, open
     the outputs, run, report."""
-    from ..run.simulation import BlowUpError, RecordedControls
+    from ..run.replay import RecordedControls
+    from ..run.simulation import BlowUpError
 
     usd_path, h5_path = _check_run_options(args)
     device = check_device(args.device)
@@ -91,8 +92,8 @@ def command(args) -> int:
 
 def _flight_figures(sim, seconds: float):
     """The closing figures of a run of ``seconds`` [s] from the simulation's current time: each object's
-    :data:`~warpsim.run.diagnostics.FIGURES` over the second half of the run (the sweeps' default window)."""
-    from ..run.diagnostics import FlightFigures
+    :data:`~warpsim.run.figures.FIGURES` over the second half of the run (the sweeps' default window)."""
+    from ..run.figures import FlightFigures
 
     start = sim.state.time
     return FlightFigures(sim, start + 0.5 * seconds, start + seconds)
@@ -175,7 +176,8 @@ class _RunInputs:
 
 def _resolve_run(args) -> _RunInputs:
     """The scene of the command line, or the one a ``--resume`` recording holds with its checkpoint."""
-    from ..io.hdf5 import Recording, RecordingError
+    from ..io.hdf5 import RecordingError
+    from ..io.recording import Recording
 
     if args.replay:
         try:

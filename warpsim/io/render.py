@@ -218,7 +218,8 @@ def render_recording(
     or the whole run to an animated .gif (every k-th frame so that at most ``max_frames`` are drawn, played
     at the simulated speed). Returns the path written.
     """
-    from .hdf5 import Recording, RecordingError
+    from .hdf5 import RecordingError
+    from .recording import Recording
 
     output = check_picture_path(output)
     require_pillow()

@@ -271,7 +271,8 @@ def _stderr_captured():
 def recording_to_stage(recording_path, output) -> Path:
     """Write the frames of the HDF5 recording at ``recording_path`` as the stage ``output`` (same layout and
     time codes as a direct export); returns its path. Raises ``RecordingError`` for a recording without frames."""
-    from .hdf5 import Recording, RecordingError
+    from .hdf5 import RecordingError
+    from .recording import Recording
 
     check_stage_path(output)
     with Recording(recording_path) as recording:

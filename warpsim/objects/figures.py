@@ -1,6 +1,6 @@
 """Each object kind's own figures (what a pilot or an observer reads off it besides its altitude, airspeed and sink):
 their units and meanings, and how they are measured from a frame. :mod:`.registry` hands them to
-:class:`warpsim.run.diagnostics.Figures`, so that a new object's figures are added here and in its ``ObjectSpec``,
+:class:`warpsim.run.figures.Figures`, so that a new object's figures are added here and in its ``ObjectSpec``,
 not in the diagnostics."""
 
 from __future__ import annotations

@@ -8,14 +8,10 @@ needs come from the device (:mod:`warpsim.physics.kernels.frame`); the rest is h
 from __future__ import annotations
 
 import functools
-import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..objects import registry
-from ..objects.figures import FigureView
 from ..physics.model import Control, Model, State
 
 
@@ -230,73 +226,6 @@ def object_metrics(model: Model, frame: Frame) -> ObjectMetrics:
     return ObjectMetrics(centre, altitude, velocity, airspeed)
 
 
-COMMON_FIGURES = {
-    "altitude": ("m", "height of the object's mass centre above the terrain under it"),
-    "airspeed": ("m/s", "speed of the mass centre relative to its world's wind"),
-    "sink": ("m/s", "descent speed of the mass centre (positive downwards)"),
-}
-"""The figures every object has: name -> (unit, meaning)."""
-
-
-def _figure_table() -> dict[str, tuple[str, tuple[str, ...] | None, str]]:
-    table: dict[str, tuple[str, tuple[str, ...] | None, str]] = {
-        name: (unit, None, meaning) for name, (unit, meaning) in COMMON_FIGURES.items()
-    }
-    for kind, spec in registry.OBJECTS.items():
-        for name, (unit, meaning) in spec.figures.items():
-            kinds = table[name][1] + (kind,) if name in table else (kind,)
-            table[name] = (unit, kinds, meaning)
-    return table
-
-
-FIGURES = _figure_table()
-"""The figures :class:`Figures` gives: name -> (unit, the object kinds that have it (None: all), meaning); the
-objects' own come from their ``ObjectSpec`` (:mod:`warpsim.objects.registry`)."""
-
-
-def figure_names(kind: str) -> tuple[str, ...]:
-    """The :data:`FIGURES` an object of ``kind`` has, in table order."""
-    return tuple(name for name, (_, kinds, _) in FIGURES.items() if kinds is None or kind in kinds)
-
-
-class Figures:
-    """What a pilot or an observer reads off each object of a frame (:data:`FIGURES`). The heads-up display and
-    the sweeps read their figures here, so each is computed one way; each object's own figures are measured by
-    its kind's ``ObjectSpec.measure_figures``, made once per object here.
-
-    Call it with a frame and the solver's ``tri_force`` (device or host ``[T, 3]`` air force per triangle
-    vertex [N], copied to the host only when an object's figures need it, as a kite's ``line_pull``; NaN without
-    it): one dict per object, in model order, of the figures its kind has, as floats in their units.
-    """
-
-    def __init__(self, model: Model):
-        self.model = model
-        specs = [registry.OBJECTS[record.kind] for record in model.objects]
-        self._measures = [
-            spec.measure_figures(model, record) if spec.measure_figures is not None else None
-            for spec, record in zip(specs, model.objects, strict=True)
-        ]
-        self._air_force = any(spec.figures_need_air_force for spec in specs)
-
-    def __call__(self, frame: Frame, tri_force=None) -> list[dict[str, float]]:
-        if self._air_force and tri_force is not None and not isinstance(tri_force, np.ndarray):
-            tri_force = tri_force.numpy()
-        metrics = object_metrics(self.model, frame)
-        out = []
-        for k, record in enumerate(self.model.objects):
-            v = metrics.velocity[k]
-            values = {
-                "altitude": float(metrics.altitude[k]),
-                "airspeed": float(metrics.airspeed[k]),
-                "sink": float(-v[2]),
-            }
-            measure = self._measures[k]
-            if measure is not None:
-                values.update(measure(FigureView(frame.positions, v, frame.wind[record.world], tri_force)))
-            out.append(values)
-        return out
-
-
 class GroundContacts:
     """The first time each object touches the terrain, for the run summary.
 
@@ -339,122 +268,3 @@ class GroundContacts:
     def by_time(self) -> tuple[tuple[str, float], ...]:
         """``(object name, time [s])`` of each first contact, earliest first."""
         return tuple(sorted(self.first.items(), key=lambda item: item[1]))
-
-
-class FigureWindow:
-    """Window means, minima and maxima of each world's figures (:data:`FIGURES`, in their units), the share of
-    frames airborne, the first ground contact [s] and the worst stretch, for ``count`` worlds (float64, frame
-    order: the same sums for a case whatever chunk it runs in). A sweep's metrics and ``warpsim run``'s closing
-    figures are both these."""
-
-    def __init__(self, count: int, figures: Sequence[str]):
-        self.figures = list(figures)
-        self.sum = np.zeros((len(figures), count))
-        self.n = np.zeros((len(figures), count))
-        self.low = np.full((len(figures), count), np.inf)
-        self.high = np.full((len(figures), count), -np.inf)
-        self.frames = np.zeros(count, dtype=np.int64)
-        self.airborne = np.zeros(count, dtype=np.int64)
-        self.ground_time = np.full(count, np.nan)
-        self.worst = np.zeros(count)
-
-    def add(self, values: np.ndarray, live: np.ndarray, in_window: bool, touching: np.ndarray, t: float) -> None:
-        """Add one frame: ``values`` ``[F, count]`` figures, for the ``live`` worlds."""
-        first = live & touching & np.isnan(self.ground_time)
-        self.ground_time[first] = t
-        if not in_window:
-            return
-        self.frames[live] += 1
-        self.airborne[live & ~touching] += 1
-        ok = np.isfinite(values) & live[None, :]
-        self.sum += np.where(ok, values, 0.0)
-        self.n += ok
-        self.low = np.where(ok, np.minimum(self.low, values), self.low)
-        self.high = np.where(ok, np.maximum(self.high, values), self.high)
-
-    def row(self, k: int) -> dict:
-        """The metrics of world ``k``."""
-        out: dict = {}
-        for f, name in enumerate(self.figures):
-            n = self.n[f, k]
-            out[f"{name}_mean"] = self.sum[f, k] / n if n else math.nan
-            out[f"{name}_min"] = self.low[f, k] if n else math.nan
-            out[f"{name}_max"] = self.high[f, k] if n else math.nan
-        frames = int(self.frames[k])
-        out["airborne"] = self.airborne[k] / frames if frames else math.nan
-        out["ground_time"] = float(self.ground_time[k])
-        out["worst_stretch"] = float(self.worst[k])
-        out["window_frames"] = frames
-        return {key: float(v) if isinstance(v, np.floating) else v for key, v in out.items()}
-
-
-class FlightFigures:
-    """A run's closing figures: each world's :data:`FIGURES` over the window ``[start, stop]`` [s] of simulated
-    time, from the frames a run hands out (call it with each :class:`Frame`), every frame as a sweep measures it
-    (:class:`FigureWindow`), or at most ``rate`` frames per simulated second.
-
-    Args:
-        sim: the :class:`~warpsim.run.simulation.Simulation` (its model, object kind, frame interval and air forces).
-        start, stop: the window [s].
-        rate: frames measured per simulated second, at most [1/s] (None: every frame, as a sweep).
-    """
-
-    def __init__(self, sim, start: float, stop: float, rate: float | None = None):
-        self.sim, self.start, self.stop = sim, float(start), float(stop)
-        self.kind = sim.descriptor["scene"]["object"]
-        self.names = list(figure_names(self.kind))
-        interval = sim.steps_per_frame * sim.dt
-        self.every = 1 if rate is None else max(1, int(round(1.0 / (rate * interval))))
-        self.window = FigureWindow(sim.model.world_count, self.names)
-        self.measure = Figures(sim.model)
-        self.contacts = GroundContacts(sim.model)
-        self.live = np.ones(sim.model.world_count, dtype=bool)
-        self._seen = 0
-
-    def __call__(self, frame: Frame) -> None:
-        eps = 0.25 * self.sim.dt  # frame times are sums of dt
-        if not self.start - eps <= frame.time <= self.stop + eps:
-            return
-        self._seen += 1
-        if (self._seen - 1) % self.every:
-            return
-        found = self.measure(frame, self.sim.solver.tri_force)
-        values = np.array([[f[name] for f in found] for name in self.names], dtype=np.float64)
-        self.window.add(values, self.live, True, self.contacts.touching(frame), frame.time)
-
-    def lines(self) -> list[str]:
-        """The figures as summary lines: per object with one world; over the worlds (mean, lowest, highest of the
-        worlds' window means) with several. Empty when no frame fell in the window."""
-        frames = int(self.window.frames.max()) if self.window.frames.size else 0
-        if frames == 0:
-            return []
-        count = self.window.frames.size
-        rows = [self.window.row(k) for k in range(count)]
-
-        def shown(name: str, values: list[float]) -> str | None:
-            values = [v for v in values if np.isfinite(v)]
-            if not values:
-                return None
-            unit = FIGURES[name][0]
-            unit = "" if unit == "-" else f" {unit}"
-            text = f"{name.replace('_', ' ')} {_figure(np.mean(values))}{unit}"
-            if count > 1:
-                text += f" ({_figure(min(values))} to {_figure(max(values))})"
-            return text
-
-        parts = [shown(name, [r[f"{name}_mean"] for r in rows]) for name in self.names]
-        parts = [p for p in parts if p is not None]
-        where = f"means over {self.start:g}-{self.stop:g} s, {frames} frames"
-        if count == 1:
-            head = f"  {self.sim.model.objects[0].name}"
-        else:
-            head = f"  {count} worlds (mean, lowest to highest world)"
-        return [f"{head}: {', '.join(parts)} ({where})"]
-
-
-def _figure(value: float) -> str:
-    """``value`` to three significant digits, in fixed point with at most two decimals (0.00 for what is smaller)."""
-    value = float(value)
-    digits = 2 if abs(value) < 1e-2 else min(2, max(0, 2 - math.floor(math.log10(abs(value)))))
-    text = f"{value:.{digits}f}"
-    return text[1:] if text.startswith("-") and float(text) == 0.0 else text

@@ -6,7 +6,7 @@ batched worlds of ``--worlds``, one launch for all), and each chunk is one Dask 
 ``LocalCluster`` of single-threaded worker processes, one per core, unless a running scheduler is given.
 
 Every case gives one row: its swept values and its metrics (:data:`METRICS`, from the same
-:class:`warpsim.run.diagnostics.Figures` the viewer's heads-up display reads). Worlds never touch each other
+:class:`warpsim.run.figures.Figures` the viewer's heads-up display reads). Worlds never touch each other
 and each world's gusts are seeded by its own ``wind.gust_seed``, so a case's row is bit for bit the same
 whatever the chunk size, the number of workers or the order they finish in. A case that blows up stops being
 measured at that frame and is a row saying when and why; the other cases of its chunk go on.

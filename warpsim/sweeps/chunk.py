@@ -37,7 +37,8 @@ def run_chunk(task: ChunkTask) -> list[dict]:
     from ..physics import _warp
 
     _warp.init()
-    from ..run.diagnostics import Figures, FigureWindow, GroundContacts, figure_names, world_blowups
+    from ..run.diagnostics import GroundContacts, world_blowups
+    from ..run.figures import Figures, FigureWindow, figure_names
     from ..run.simulation import Simulation
 
     try:

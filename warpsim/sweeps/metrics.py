@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from ..run.diagnostics import FIGURES
+from ..run.figures import FIGURES
 
 EXTRA_HINT = "pip install -e '.[sweep]'"
 

@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from ..io.style import COLOURS
-from ..run.diagnostics import Figures, Frame
+from ..run.diagnostics import Frame
+from ..run.figures import Figures
 from ..run.simulation import BlowUpError, Simulation
 from .backend import Backend, DrawList, View
 
@@ -486,7 +487,7 @@ class Viewer:
 
 
 def object_lines(model, figures: list[dict], frame: Frame) -> list[str]:
-    """One heads-up line per object of ``model`` from its ``figures`` (:class:`warpsim.run.diagnostics.Figures`):
+    """One heads-up line per object of ``model`` from its ``figures`` (:class:`warpsim.run.figures.Figures`):
     altitude and airspeed, and per kind its own (glider: sink rate, glide ratio, bank; kite: line angle and
     pull; parachute: descent speed and radius), and the worst stretch of ``frame``."""
     lines = []

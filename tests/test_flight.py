@@ -66,6 +66,7 @@ def test_weight_shift_turns_that_way_and_the_pilot_levels_it(roll):
     assert abs(history[-1]["bank_deg"]) < 5.0, history[-1]["bank_deg"]
 
 
+@pytest.mark.slow
 def test_sail_kite_rides_the_gusts():
     # measured: airborne in every frame of 120 s (lowest sail particle 0.5 m above the terrain or more)
     sim = Simulation(resolve("scenes/kite_gusty.toml")[0])

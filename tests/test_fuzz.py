@@ -12,6 +12,7 @@ import os
 import tempfile
 from pathlib import Path
 
+import pytest
 from conftest import fuzz_watchdog
 from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
@@ -238,6 +239,7 @@ def _fixture_files(directory: Path) -> None:
 
 @FUZZ
 @given(argv=command_lines())
+@pytest.mark.slow
 def test_command_line_never_tracebacks_and_leaves_nothing_on_error(argv):
     with tempfile.TemporaryDirectory() as tmp:
         directory = Path(tmp)

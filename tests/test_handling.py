@@ -41,6 +41,7 @@ def test_the_bar_slews_and_the_pilot_stops_the_flight():
     assert rolls[-1] == 1.0 and np.all(np.diff(rolls) <= 0.1 + 1e-12)
 
 
+@pytest.mark.slow
 def test_intermediate_glider_handles_as_the_default_at_both_time_steps():
     """Issue 34, the intermediate glider (15 m^2, 30 + 80 kg): glide >= 8 at 9-13 m/s, 30 deg in 1-4 s, reversal
     3-4 s, 20-40 deg 20 s after centring, turn radii within 15 % of V^2 / (g tan bank), phugoid damping, stall,

@@ -95,6 +95,7 @@ def _reference_positions(seconds: float, tmp_path: Path, scene="kite") -> np.nda
 # 1. a second writer --------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_second_writer_and_resume_are_refused_and_the_first_recording_survives(tmp_path):
     rec = tmp_path / "two.h5"
     first = _start("run", "kite", "--seconds", "3600", "--quiet", "--h5", rec)
@@ -124,6 +125,7 @@ def test_second_writer_and_resume_are_refused_and_the_first_recording_survives(t
 
 
 @pytest.mark.parametrize("seed", [1, 2])
+@pytest.mark.slow
 def test_killed_run_reads_converts_and_resumes_bit_for_bit(seed, tmp_path):
     rng = random.Random(seed)
     rec, usd = tmp_path / "k.h5", tmp_path / "k.usdc"
@@ -299,6 +301,7 @@ def small_disk(tmp_path):
     yield mount, limit, "File too large"
 
 
+@pytest.mark.slow
 def test_full_disk_recording_stops_with_one_line_and_stays_resumable(small_disk, tmp_path):
     directory, preexec, cause = small_disk
     rec = directory / "k.h5"
@@ -319,6 +322,7 @@ def test_full_disk_recording_stops_with_one_line_and_stays_resumable(small_disk,
 
 
 @pytest.mark.parametrize("suffix", [".usdz", ".usda", ".usdc"])
+@pytest.mark.slow
 def test_full_disk_stage_is_not_written_under_its_name(suffix, small_disk):
     directory, preexec, cause = small_disk
     if preexec is None:
@@ -334,6 +338,7 @@ def test_full_disk_stage_is_not_written_under_its_name(suffix, small_disk):
 # 5. checkpoints of many gusty worlds --------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_256_gusty_worlds_record_and_resume_bit_for_bit(tmp_path):
     scene = str(ROOT / "scenes" / "kite_gusty.toml")
     whole, cut = tmp_path / "whole.h5", tmp_path / "cut.h5"
@@ -437,6 +442,7 @@ def test_scene_file_named_like_an_output_is_refused(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("gap", [0.0, 0.015])
+@pytest.mark.slow
 def test_second_signal_during_the_export_still_writes_the_stage(gap, tmp_path):
     rec, usd = tmp_path / "k.h5", tmp_path / "k.usda"
     proc = _start("run", "kite", "--seconds", "3600", "--quiet", "--h5", rec, "--usd", usd)
@@ -603,6 +609,7 @@ def test_the_terrain_is_part_of_the_recording_and_found_beside_its_scene(tmp_pat
     assert main(["run", "--replay", str(cut), "--seconds", "0.1", "--quiet"]) == 0
 
 
+@pytest.mark.slow
 def test_ctrl_c_during_start_up_under_load_is_one_line_every_time(tmp_path):
     """`test_ctrl_c_during_start_up_is_one_line[0.3]` once printed "Exception ignored ... KeyboardInterrupt" under
     load: the interrupt landed in an import or a finaliser. With two busy processes loading the cores, runs are

@@ -19,6 +19,8 @@ pd = pytest.importorskip("pandas")
 pytest.importorskip("distributed")
 pytest.importorskip("pyarrow")
 
+pytestmark = pytest.mark.dask  # the [sweep] extra: Dask clusters, pandas tables
+
 from warpsim import sweeps  # noqa: E402
 from warpsim.cli import main  # noqa: E402
 from warpsim.run.diagnostics import object_metrics  # noqa: E402
@@ -119,6 +121,7 @@ def test_each_case_measures_what_a_single_run_of_it_shows(reference):
     assert not reference["blew_up"].any()
 
 
+@pytest.mark.slow
 def test_same_rows_bit_for_bit_with_1_or_2_workers_and_chunks_of_1_or_6(cluster, reference, tmp_path):
     plan = _plan()
     two = sweeps.run_sweep(plan, scheduler=cluster, chunk=1)
@@ -131,6 +134,7 @@ def test_same_rows_bit_for_bit_with_1_or_2_workers_and_chunks_of_1_or_6(cluster,
     _same(pd.read_parquet(out), reference)
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_sweep_is_replaced_and_the_rows_are_the_same(cluster, reference):
     pids = cluster.run(os.getpid)
     killed = []
@@ -171,6 +175,7 @@ def _cli(tmp_path, *extra, workers: int = 2) -> list[str]:
     ]
 
 
+@pytest.mark.slow
 def test_ctrl_c_keeps_the_finished_rows_and_a_rerun_runs_only_the_rest(tmp_path, reference):
     journal = tmp_path / "s.parquet.partial"
     # one worker runs the six chunks one after another (~0.25 s each on 2 cores), so that Ctrl-C after the first
@@ -210,6 +215,7 @@ def test_a_case_that_blows_up_is_a_row_and_leaves_its_chunk_mates_alone():
     assert alone[1]["blowup_reason"] == storm["blowup_reason"]  # numbered within its world
 
 
+@pytest.mark.slow
 def test_csv_table_and_h5_per_chunk(cluster, tmp_path, reference):
     from warpsim.io.recording import Recording
 
@@ -231,6 +237,7 @@ def test_csv_table_and_h5_per_chunk(cluster, tmp_path, reference):
     _same(again.table, reference)
 
 
+@pytest.mark.slow
 def test_a_grown_sweep_keeps_its_rows_and_another_sweep_is_refused(cluster, tmp_path, reference):
     out = tmp_path / "s.parquet"
     small = sweeps.SweepPlan(_scene(), sweeps.parse_axes(_scene(), ["wind.gust_seed=1", AXES[1]]), SECONDS)
@@ -766,6 +773,7 @@ def test_the_local_cluster_cannot_be_joined_by_another_process():
         sweep_cluster.close(client, cluster)
 
 
+@pytest.mark.slow
 def test_sigterm_stops_a_sweep_like_ctrl_c(tmp_path):
     """SIGTERM to `warpsim sweep` killed it by the signal (143), leaving only the journal and a 'leaked semaphore'
     warning; it now stops like Ctrl-C: workers stopped, the finished rows written to the table, exit 130."""

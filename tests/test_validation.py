@@ -36,6 +36,7 @@ def test_pendulum_period_and_the_damping_of_projection():
         assert 0.2 < swing < 0.95  # the method damps (stated in the README), and by this much at dt 0.01 s
 
 
+@pytest.mark.slow
 def test_mass_splitting_restores_the_force_balance():
     """The kite's rope angle matches its force balance only when the constraint corrections conserve momentum (its
     rope is nailed: the momentum projection leaves it alone); the free parachute's momentum is kept after every
@@ -54,6 +55,7 @@ def test_paper_glider_rows_report_the_model_limit():
     assert len(rows) == 4 and all(r.model_limit for r in rows.values())
 
 
+@pytest.mark.slow
 def test_flying_glider_rows_at_both_time_steps():
     """Issue 34: the flying design against real flex wings and closed forms, each band at dt 0.01/55 and 0.005/110
     (glide, trim, roll from level and reversal, bank after centring, turn radii, phugoid damping, stall recovery):
@@ -76,6 +78,7 @@ def test_elliptic_integral():
     assert cases.complete_elliptic_k(math.sin(math.radians(30))) == pytest.approx(1.685750354812596, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_long_run_bounded_flat_and_readable_while_written():
     rows, info = long_run(seconds=240.0, fps=4.0, poll=0.3)
     assert info["exit_code"] == 0, info["stderr"]
@@ -96,6 +99,7 @@ def test_table_and_plot(tmp_path):
     assert text.startswith("<svg") and text.count("<circle") == 2
 
 
+@pytest.mark.slow
 def test_glider_converges_as_dt_halves_and_iterations_double():
     """Issue 33: the hands-off glide and trim speed at the defaults lie within 4 % of the finest run (dt 0.0025,
     220 iterations), each refinement closer (measured +3.3 % and +3.4 %)."""

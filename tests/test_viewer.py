@@ -359,6 +359,7 @@ def glider_flight(display, tmp_path_factory):
     return _drive(display, "glider", out), out
 
 
+@pytest.mark.display
 def test_window_first_picture_shows_the_sail_where_the_glider_is(glider_flight):
     from PIL import Image
 
@@ -376,6 +377,7 @@ def test_window_first_picture_shows_the_sail_where_the_glider_is(glider_flight):
     assert (sky[..., 2] > sky[..., 0]).all()  # a blue sky above
 
 
+@pytest.mark.display
 def test_window_held_right_arrow_banks_right_within_two_seconds(glider_flight):
     result, _ = glider_flight
     held = np.array(result["held"])  # time [s], roll, bank [deg]
@@ -385,6 +387,7 @@ def test_window_held_right_arrow_banks_right_within_two_seconds(glider_flight):
     assert 0.0 < result["roll_after_release"] < 1.0  # ramping back after the key was released
 
 
+@pytest.mark.display
 def test_window_space_pauses_period_steps_r_restarts_escape_closes(glider_flight):
     result, _ = glider_flight
     before, after, paused = result["paused"]
@@ -395,6 +398,7 @@ def test_window_space_pauses_period_steps_r_restarts_escape_closes(glider_flight
     assert result["closed"]
 
 
+@pytest.mark.display
 def test_window_flight_replays_headless_bit_for_bit(glider_flight, tmp_path):
     _, out = glider_flight
     again = tmp_path / "again.h5"
@@ -405,6 +409,7 @@ def test_window_flight_replays_headless_bit_for_bit(glider_flight, tmp_path):
         assert max(flown.controls(k).get("roll", 0.0) for k in range(flown.frame_count)) == 1.0
 
 
+@pytest.mark.display
 def test_window_w_walks_the_kite_anchor(display, tmp_path):
     result = _drive(display, "kite", tmp_path)
     start, end, kite = (np.array(result[k]) for k in ("anchor_start", "anchor_end", "kite"))
@@ -412,6 +417,7 @@ def test_window_w_walks_the_kite_anchor(display, tmp_path):
     assert (end - start) @ towards > 1.5  # about 2 m in about 1 s of walking
 
 
+@pytest.mark.display
 def test_view_command_on_the_virtual_screen_saves_a_screenshot_and_recording(display, tmp_path):
     result = _cli(
         ["view", "parachute", "--seconds", "1", "--size", "640x360", "--screenshot", "s.png", "--h5", "f.h5"],
@@ -427,6 +433,7 @@ def test_view_command_on_the_virtual_screen_saves_a_screenshot_and_recording(dis
         assert recording.time[-1] == pytest.approx(1.0, abs=0.04)
 
 
+@pytest.mark.display
 def test_sigterm_closes_the_viewer_like_ctrl_c(tmp_path):
     """SIGTERM to `warpsim view --h5 --screenshot` died by the signal (143) with the recording left open (plain h5py
     refused it), up to 0.5 s of frames lost and no screenshot. It now quits as Ctrl-C and Esc do."""
@@ -484,6 +491,7 @@ def _our_xvfb(screen: str) -> int:
     raise AssertionError(f"no Xvfb child with screen {screen}")
 
 
+@pytest.mark.display
 def test_the_display_going_away_keeps_the_recording_and_screenshot(tmp_path):
     """When the X server died under `warpsim view`, Xlib printed two lines and exited 1 with the recording left open
     and no screenshot. Now the recording is closed with every frame, the screenshot saved, one line, exit 130."""

@@ -1,4 +1,4 @@
-"""The ``warpsim`` command: list, info, run, view, sweep, plot, convert, render (one module each in this package).
+"""The ``warpsim`` command: list, info, run, view, sweep, plot, convert, render, schema (one module each here).
 
 Every error a user can cause ends with one line ``warpsim <command>: error: ...`` and exit code 2; a run that
 blows up (NaN/Inf, or a stick past ``solver.max_stretch``) ends with exit code 3 and keeps its outputs up to the
@@ -16,7 +16,7 @@ import sys
 from .._version import __version__
 from .common import EXIT_INTERRUPTED, EXIT_OUTPUT, EXIT_USAGE, Parser, UsageError, one_line
 
-COMMANDS = ("list", "info", "run", "view", "sweep", "plot", "convert", "render")
+COMMANDS = ("list", "info", "run", "view", "sweep", "plot", "convert", "render", "schema")
 """The commands, in the order ``--help`` lists them; each is the module of that name in this package, with
 ``add_parser(sub)`` and ``command(args) -> exit code``."""
 

@@ -21,6 +21,7 @@ import itertools
 import time
 import weakref
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 import warp as wp
@@ -48,6 +49,26 @@ MAX_FRAME_GRAPH_STEPS = (4 << 20) // FRAME_GRAPH_BYTES_PER_STEP
 """Most steps a frame may have and still be captured as one graph (256: 4 MB and about 0.15 s per graph). A
 longer frame (``fps`` below about 0.4 at ``dt`` = 0.01 s) replays the solver's one-step graph once per step,
 which computes the same bits; without this bound ``--fps 0.001`` captured 100,000 steps twice, gigabytes."""
+
+
+@dataclass(frozen=True)
+class GoodFrame:
+    """The last frame that passed its checks, where the state goes back to after a blow-up.
+
+    Attributes:
+        index: the frame's index. time: its simulated time [s]. steps: solver steps taken up to it.
+        slot: the probe slot (0 or 1) that keeps its positions; a new frame is measured into the other one.
+    """
+
+    index: int
+    time: float
+    steps: int
+    slot: int
+
+    @property
+    def free_slot(self) -> int:
+        """The probe slot a new frame is measured into: never this frame's own."""
+        return 1 - self.slot
 
 
 class Simulation:
@@ -103,9 +124,7 @@ class Simulation:
             weakref.finalize(self, self._pool.shutdown, wait=False)
         self._source = FrameSource(self.model, self.state, self.control, self.dt)
         self._out = _nothing  # the last frame handed out (a weak reference), copied before the state moves on
-        # the last good frame: index, time [s], steps, and the probe slot its positions are kept in (a frame is
-        # measured into the other slot: 1 - self._good[3])
-        self._good = (0, 0.0, 0, 0)
+        self._good = GoodFrame(0, 0.0, 0, 0)  # the last frame that passed its checks
         self._saved_version, self._saved = -1, None  # inputs and control arrays of the last good frame
         first = self.frame(0)
         problem = self.blowup(first)
@@ -219,7 +238,7 @@ class Simulation:
     def frame(self, index: int) -> Frame:
         """The current state measured as frame ``index`` (see :class:`warpsim.run.diagnostics.Frame`), with the
         controls in force."""
-        self._measure(1 - self._good[3])  # never over the last good frame's slot
+        self._measure(self._good.free_slot)  # never over the last good frame's slot
         return self._hand_out(index)
 
     def _measure(self, slot: int) -> None:
@@ -284,7 +303,7 @@ class Simulation:
         """Take ``count`` steps (one frame or what is left of it) and have the probe report and keep the state in
         the slot that is not the last good frame's."""
         self._release()
-        slot = 1 - self._good[3]
+        slot = self._good.free_slot
         if count == self.steps_per_frame and self._groups[0].graphs is not None:
             self._replay(slot)
             for _ in range(count):  # the same sum of dt as the solver keeps step by step
@@ -300,7 +319,7 @@ class Simulation:
     def _keep_good(self, frame: Frame) -> None:
         """Make ``frame``, the last one measured and just checked, the last good frame, with the controls in force
         now."""
-        self._good = (frame.index, frame.time, frame.steps, 1 - self._good[3])
+        self._good = GoodFrame(frame.index, frame.time, frame.steps, self._good.free_slot)
         if self._saved_version != self.inputs.version:  # the controls changed since the last good frame
             self._saved_version = self.inputs.version
             c = self.control
@@ -384,7 +403,7 @@ class Simulation:
         if problem:
             bad_step = self.steps_taken
             self._go_back()
-            raise BlowUpError(bad_step, frame.time, *problem, *self._good[:2], None)
+            raise BlowUpError(bad_step, frame.time, *problem, self._good.index, self._good.time, None)
         self.contacts.note(frame)
         self._keep_good(frame)
         return frame
@@ -394,7 +413,7 @@ class Simulation:
         :meth:`start_frames` check every frame they return, and the probe keeps its positions)."""
         self._release()
         inputs, stick_rest_target, nail_target_goal, wind = self._saved
-        _, time, steps, slot = self._good
+        time, steps, slot = self._good.time, self._good.steps, self._good.slot
         # the rest lengths and nail targets ramp every step: each group's probe keeps them with the positions
         kept = [group.probe.kept(slot) for group in self._groups]
         q, q_prev, stick_rest = (np.concatenate(arrays) for arrays in list(zip(*kept, strict=True))[:3])
@@ -461,7 +480,7 @@ class Simulation:
                 try:
                     frame = self.advance(total_steps - steps, before)
                 except BlowUpError as err:
-                    steps -= before_steps - self._good[2]  # the run's count up to the good frame
+                    steps -= before_steps - self._good.steps  # the run's count up to the good frame
                     err.summary = self._summary(steps, worst, pace, blew_up=True)
                     raise
                 steps += self.steps_taken - before_steps

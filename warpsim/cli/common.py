@@ -143,7 +143,8 @@ def add_world_options(parser) -> None:
 def load_scene(args, worlds_from_vary: bool = True) -> tuple[dict, str, str]:
     """The scene of ``args`` with its ``--set``, ``--dt``, ``--iterations``, ``--fps``, ``--seconds`` and (with
     ``worlds_from_vary``) ``--worlds``/``--vary`` applied: ``(descriptor, source text, where)``."""
-    from ..scene.descriptor import merge, parse_override, parse_vary, resolve
+    from ..scene.descriptor import merge, resolve
+    from ..scene.values import parse_override, parse_vary
 
     descriptor, text, where = resolve(args.scene, scene_dirs())
     for item in args.set:

@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..scene.descriptor import VARIABLE_SECTIONS, DescriptorError, check_axis, merge, parse_vary, to_toml
+from ..scene.descriptor import VARIABLE_SECTIONS, DescriptorError, check_axis, merge, to_toml
+from ..scene.values import parse_vary
 from .metrics import SweepError, metrics_of
 
 MAX_CASES = 1_000_000

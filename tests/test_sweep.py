@@ -320,17 +320,17 @@ def test_bad_sweeps_end_with_one_line(tmp_path, capsys, args, message):
 def test_local_workers_are_bounded_by_cores_and_memory(monkeypatch):
     """`--workers 1000` took more than 10 GB within a minute: the local cluster takes at most 4 workers per core and
     no more than 80 % of the available memory holds at `WORKER_BYTES` each."""
-    from warpsim.physics import builder
+    from warpsim.physics import memory
 
     monkeypatch.setattr(sweep_cluster, "cores", lambda: 2)
-    monkeypatch.setattr(builder, "available_memory", lambda: 100 * sweeps.WORKER_BYTES)
+    monkeypatch.setattr(memory, "available_memory", lambda: 100 * sweeps.WORKER_BYTES)
     assert sweeps.max_local_workers() == 8
-    monkeypatch.setattr(builder, "available_memory", lambda: 5 * sweeps.WORKER_BYTES)
+    monkeypatch.setattr(memory, "available_memory", lambda: 5 * sweeps.WORKER_BYTES)
     assert sweeps.max_local_workers() == 4  # 80 % of 5 workers' worth
     sweeps.check_workers(4)
     with pytest.raises(sweeps.SweepError, match="--workers 5 is more than this machine can run \\(4"):
         sweeps.check_workers(5)
-    monkeypatch.setattr(builder, "available_memory", lambda: 0)
+    monkeypatch.setattr(memory, "available_memory", lambda: 0)
     assert sweeps.max_local_workers() == 1  # one worker is always allowed
 
 

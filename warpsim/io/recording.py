@@ -179,7 +179,7 @@ class Recording:
         """The recorded terrain (:class:`warpsim.physics.terrain.Heightfield`), or None for a recording made before
         terrains were stored (its ``[terrain]`` section is built then). Its size is checked against the limits of a
         terrain file and the memory available before it is read."""
-        from ..physics.builder import available_memory
+        from ..physics.memory import available_memory
         from ..physics.terrain import MAX_HEIGHT, MAX_SIDE, Heightfield
 
         d = self.file["topology"].get("terrain_heights")

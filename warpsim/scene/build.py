@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..objects import registry
-from ..physics.builder import ModelBuilder, check_memory
+from ..physics.builder import ModelBuilder
 from ..physics.config import (
     AirConfig,
     GroundConfig,
@@ -21,6 +21,7 @@ from ..physics.config import (
     WindConfig,
     from_section,
 )
+from ..physics.memory import check_memory
 from ..physics.model import Model
 from ..physics.terrain import Heightfield
 from .descriptor import DescriptorError, world_descriptor

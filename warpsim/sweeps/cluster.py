@@ -124,7 +124,7 @@ def cores() -> int:
 def max_local_workers() -> int:
     """Most worker processes a local cluster may start here: :data:`WORKERS_PER_CORE` per core, and no more than
     80 % of the available memory holds at :data:`WORKER_BYTES` each (at least 1)."""
-    from ..physics.builder import available_memory
+    from ..physics.memory import available_memory
 
     limit = WORKERS_PER_CORE * cores()
     available = available_memory()

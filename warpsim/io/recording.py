@@ -11,8 +11,7 @@ import numpy as np
 
 from ..run.checkpoint import Checkpoint, unpack_controls
 from . import reason
-from .h5safe import LockedError, WriterLock, clear_status_flags, open_for_reading, status_flags, writer_active
-from .hdf5 import (
+from .h5format import (
     _ATTRIBUTES,
     _FRAME_DATASETS,
     _TOPOLOGY,
@@ -23,6 +22,7 @@ from .hdf5 import (
     _newest_checkpoint,
     _reading,
 )
+from .h5safe import LockedError, WriterLock, clear_status_flags, open_for_reading, status_flags, writer_active
 
 
 class Recording:

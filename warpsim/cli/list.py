@@ -26,5 +26,5 @@ def add_parser(sub) -> None:
     sub.add_parser(
         "list",
         help="built-in objects and the scene files found",
-        description="List built-in objects and the scene files found in ./scenes and the project's scenes/ folder.",
+        description="List built-in objects and the scene files found in ./scenes and those shipped with warpsim.",
     )

@@ -228,7 +228,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument(
         "--scheduler",
         metavar="tcp://HOST:PORT",
-        help="run on this running Dask scheduler's workers instead of a local cluster (see README: Sweeps)",
+        help="run on this running Dask scheduler's workers instead of a local cluster (see docs/sweeps.md)",
     )
     sweep.add_argument(
         "--chunk", type=_world_count, metavar="N", help="cases per task (default: about 4 tasks per worker, <= 64)"
@@ -472,7 +472,7 @@ def cmd_info(args) -> int:
         if paper:
             print(
                 f"  the paper's model: particles {paper['particles']}, sticks {paper['sticks']}, "
-                f"triangles {paper['triangles']} (see README: counts)"
+                f"triangles {paper['triangles']} (see docs/objects.md)"
             )
     print(f"  terrain: {model.terrain}")
     print("settings:")
@@ -885,7 +885,7 @@ def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path,
             if run.descriptor["solver"]["method"] == "euler"
             else "try a smaller --dt or more --iterations"
         )
-        sys.stderr.write(f"warpsim run: error: {one_line(str(blowup))}\n  ({hint}; see README: Blow-ups)\n")
+        sys.stderr.write(f"warpsim run: error: {one_line(str(blowup))}\n  ({hint}; see docs/outputs.md: Blow-ups)\n")
         return EXIT_BLOWUP
     return EXIT_INTERRUPTED if summary.interrupted else 0
 

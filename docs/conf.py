@@ -38,6 +38,8 @@ autodoc_typehints = "description"
 autodoc_default_options = {"members": True, "undoc-members": False, "show-inheritance": False}
 napoleon_google_docstring = True
 napoleon_numpy_docstring = False
+# a class docstring's "Attributes:" become fields of the class, not a second description of each dataclass field
+napoleon_use_ivar = True
 
 suppress_warnings: list[str] = []
 if not (HERE / "architecture.md").exists():

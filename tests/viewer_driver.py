@@ -59,9 +59,9 @@ class Clock:
 
 
 def projected(viewer, point: np.ndarray) -> list[float]:
-    """Pixel (column, row from the top) of a world point in the viewer's current view."""
+    """Pixel (column, row from the top) of a world point in the viewer's current view (below the heads-up panel)."""
     w, h = SIZE
-    clip = view_matrix(viewer.view(), w, h) @ np.append(point, 1.0)
+    clip = view_matrix(viewer.view(), w, h, viewer.backend.hud_fraction) @ np.append(point, 1.0)
     x, y = clip[:2] / clip[3]
     return [float((x + 1) / 2 * w), float((1 - y) / 2 * h)]
 

@@ -272,7 +272,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="draw a recording as a picture (.png, one frame) or an animation (.gif)",
         description="Draw a recording with a small built-in renderer (needs Pillow: pip install -e '.[render]'): "
         "OUT.png shows one frame (default the last), OUT.gif the whole run at simulated speed. The camera looks "
-        "from the side and a little above and follows the objects.",
+        "from the side and a little above, under the sky, at the distance that frames the objects, and follows them.",
     )
     render.add_argument("recording", metavar="REC.h5")
     render.add_argument("output", metavar="OUT.png|OUT.gif")
@@ -287,8 +287,8 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument(
         "--elevation",
         type=_number("--elevation", "an angle in degrees from -90 to 90", -90.0, 90.0, closed=True),
-        default=20.0,
-        help="view height above the horizon [deg], -90..90 (default 20)",
+        default=12.0,
+        help="view height above the horizon [deg], -90..90 (default 12)",
     )
     return parser
 

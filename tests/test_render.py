@@ -65,7 +65,8 @@ def test_bad_render_paths(recording, tmp_path, capsys):
 
 def test_camera_projects_right_up_and_depth():
     cam = Camera(azimuth=-90.0, elevation=0.0, distance=10.0, fov=90.0, size=(100, 100))  # looking along +y
-    xy, ahead = cam.project(np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [0.0, 0.0, 0.0]]), np.zeros(3))
+    points = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [0.0, 0.0, 0.0]])
+    xy, ahead = cam.project(points, np.zeros(3))
     # focal length 50 pixels (90 degrees over 100 pixels); the target 10 m ahead
     np.testing.assert_allclose(xy[0], [55.0, 50.0], atol=1e-9)  # +x is to the right
     np.testing.assert_allclose(xy[1], [50.0, 45.0], atol=1e-9)  # +z is up (image y down)

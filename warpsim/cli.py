@@ -150,6 +150,11 @@ def build_parser() -> argparse.ArgumentParser:
         "an interrupted run keeps every completed frame",
     )
     run.add_argument(
+        "--table",
+        metavar="OUT.parquet|OUT.csv",
+        help="write the closing figures, one row per world (the sweep's columns; warpsim.io.table)",
+    )
+    run.add_argument(
         "--resume",
         metavar="REC.h5",
         help="continue a recording from its last frame, appending to it (scene and settings come from it)",
@@ -623,6 +628,10 @@ def cmd_run(args) -> int:
     from .runner import BlowUpError, RecordedControls
 
     usd_path, h5_path = _check_run_options(args)
+    from .io import OutputWriteError
+    from .io.table import check_table_path, write_world_table
+
+    table = _checked_output(check_table_path, args.table, "--table")
     device = _check_device(args.device)
     with contextlib.ExitStack() as outputs:
         lock = _claim_recording(outputs, args, h5_path)
@@ -631,7 +640,7 @@ def cmd_run(args) -> int:
         stop = _StopRequests()
         outputs.callback(stop.restore)
         writer = _Outputs(outputs, sim, run, args, h5_path, usd_path, lock, stop)
-        figures = None if args.quiet else _flight_figures(sim, run.seconds)
+        figures = None if args.quiet and not table else _flight_figures(sim, run.seconds)
         on_frame = writer.on_frame if writer.any else None
         if figures is not None:
             on_frame = _both(figures, on_frame)
@@ -648,7 +657,12 @@ def cmd_run(args) -> int:
         except BlowUpError as err:
             blowup, summary = err, err.summary
         writer.close()
-    return _report(args, run, summary, blowup, writer.failures, h5_path, usd_path, figures)
+    if table is not None:
+        try:
+            write_world_table(table, figures, sim.descriptor)
+        except OutputWriteError as err:
+            writer.failures.append(err)
+    return _report(args, run, summary, blowup, writer.failures, h5_path, usd_path, figures, table)
 
 
 def _flight_figures(sim, seconds: float):
@@ -863,7 +877,7 @@ class _Outputs:
                         self.failures.append(err)
 
 
-def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path, figures=None) -> int:
+def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path, figures=None, table=None) -> int:
     """Print the summary, the flight figures, the outputs and any error line; return the exit code."""
     if not args.quiet and sys.stderr.isatty():
         sys.stderr.write("\r" + " " * 70 + "\r")
@@ -871,7 +885,7 @@ def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path,
         print(summary.text())
         for line in figures.lines() if figures is not None else ():
             print(line)
-        for label, path in (("recording", args.resume or h5_path), ("USD stage", usd_path)):
+        for label, path in (("recording", args.resume or h5_path), ("USD stage", usd_path), ("table", table)):
             if path and not any(str(path) in str(err) for err in failures):
                 print(f"  {label}: {path}")
     for err in failures:

@@ -246,16 +246,23 @@ def build_parser() -> argparse.ArgumentParser:
 
     plot = sub.add_parser(
         "plot",
-        help="draw a metric of a sweep's table as a line or a heat map (PNG)",
+        help="draw a metric of a sweep's table as a line or a heat map, or a recording's against time (PNG)",
         description="Draw a sweep's metric against one swept key (a line per combination of the other keys) or "
         "two (a heat map; the other keys fixed with --where). Blown-up cases are left out and counted in the "
-        "title. Needs matplotlib (the sweep extra).",
+        "title. A recording (REC.h5): its objects' figures against simulated time, one panel per --metric. "
+        "Needs matplotlib (the sweep extra).",
     )
-    plot.add_argument("table", metavar="SWEEP.parquet|SWEEP.csv")
+    plot.add_argument("table", metavar="SWEEP.parquet|SWEEP.csv|REC.h5")
     plot.add_argument("output", metavar="OUT.png")
-    plot.add_argument("--x", required=True, metavar="KEY", help="swept key on the horizontal axis")
+    plot.add_argument("--x", metavar="KEY", help="swept key on the horizontal axis (a sweep's table: required)")
     plot.add_argument("--y", metavar="KEY", help="second swept key: draw a heat map")
-    plot.add_argument("--metric", required=True, metavar="M", help="the metric to draw, e.g. line_angle_mean")
+    plot.add_argument(
+        "--metric",
+        required=True,
+        metavar="M",
+        help="the metric to draw, e.g. line_angle_mean; of a recording, against time, one or more: "
+        "altitude,airspeed,sink (warpsim.io.plot.recording_metrics)",
+    )
     plot.add_argument(
         "--where",
         action="append",
@@ -1061,11 +1068,19 @@ def _sweep_progress(done: int, total: int, wall: float) -> None:
 
 def cmd_plot(args) -> int:
     """Draw a sweep's metric as a PNG."""
-    from .io.plot import PlotError, plot_sweep
+    from .io.plot import PlotError, plot_recording, plot_sweep
 
+    recording = args.table.lower().endswith(".h5")
+    if recording and (args.x or args.y or args.where):
+        raise UsageError("a recording is drawn against time: --x, --y and --where are for a sweep's table")
+    if not recording and not args.x:
+        raise UsageError("--x KEY: the swept key on the horizontal axis of a sweep's table")
     interruptible()  # the output's temporary is made next
     try:
-        path = plot_sweep(args.table, args.output, args.x, args.metric, args.y, args.where)
+        if recording:
+            path = plot_recording(args.table, args.output, args.metric.split(","))
+        else:
+            path = plot_sweep(args.table, args.output, args.x, args.metric, args.y, args.where)
     except PlotError as err:
         raise UsageError(str(err)) from None
     print(f"{args.table} -> {path}")

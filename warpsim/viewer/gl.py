@@ -163,12 +163,15 @@ def _perspective(fov: float, aspect: float, near: float, far: float) -> np.ndarr
 
 def view_matrix(view: View, width: int, height: int, below: float = 0.0) -> np.ndarray:
     """The 4x4 matrix from world coordinates [m] to clip space of ``view`` in a ``width`` x ``height`` picture;
-    ``below``: the fraction of the height a panel covers at the top (the heads-up text): the view's target is
-    put in the middle of the rest (the picture slides down by half of it; the field of view stays)."""
+    ``below``: the fraction of the height a panel covers at the top (the heads-up text): what the field of view
+    holds is drawn in the rest, below the panel, shrunk by ``1 - below`` about the bottom middle (the panel's
+    strip and the sides show what lies beyond it)."""
     eye, target = np.asarray(view.eye, float), np.asarray(view.target, float)
     near = max(0.05, float(np.linalg.norm(target - eye)) / 500)  # depth precision where the object is
     projection = _perspective(view.fov, width / max(height, 1), near, 20000.0)
-    projection[1, 2] += below  # clip y gains below * z_eye, clip w is -z_eye: normalised y moves down by below
+    # normalised x and y scaled by 1 - below, then y moved down by below: [-1, 1] -> [-1, 1 - 2 below]
+    projection[:2] *= 1.0 - below
+    projection[1] -= below * projection[3]
     return projection @ _look_at(eye, target)
 
 
@@ -429,6 +432,9 @@ class PygletBackend(Backend):
         gl.glClear(gl.GL_COLOR_BUFFER_BIT | gl.GL_DEPTH_BUFFER_BIT)
         program = self._program
         program.use()
+        self._hud.text = "\n".join(hud)  # laid out first: the view goes below the panel it needs
+        self._panel.height = self._hud.content_height + 16
+        self.hud_fraction = (self._panel.height + 4) / max(height, 1)
         matrix = view_matrix(view, width, height, self.hud_fraction)
         eye = np.asarray(view.eye, dtype=np.float64)
         far = np.linalg.inv(matrix) @ np.hstack([self._sky_corners, np.ones((4, 1))]).T  # the corners' rays
@@ -472,13 +478,10 @@ class PygletBackend(Backend):
             gl.glLineWidth(1.0)
         program.stop()
         gl.glDisable(gl.GL_DEPTH_TEST)
-        self._hud.text = "\n".join(hud)
         self._panel.x, self._panel.width = 4, min(self._hud.content_width + 20, width - 8)
-        self._panel.height = self._hud.content_height + 16
         self._panel.y = height - 4 - self._panel.height
         self._panel.draw()
         self._hud.draw()
-        self.hud_fraction = (self._panel.height + 4) / max(height, 1)
         if overlay:
             self._overlay.text = "\n".join(overlay)
             h = self._overlay.content_height + 30

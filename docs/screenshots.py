@@ -4,7 +4,7 @@
 
 Each opens ``warpsim view``'s window (PygletBackend) on its own Xvfb, flies the scene hands off for the seconds
 given on a clock of one frame interval per tick (so what is shown does not depend on the machine's speed), sets
-the camera (and the orbit's angles) and saves the last picture as docs/viewer_NAME.png.
+the camera (and the orbit's angles and distance) and saves the last picture as docs/viewer_NAME.png.
 """
 
 from __future__ import annotations
@@ -17,12 +17,18 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 
 SHOTS = {
-    # name: (scene, seconds, camera, orbit angles (azimuth, elevation) [deg] or None, extra descriptor settings)
-    "hang_glider": ("hang-glider", 3.0, "orbit", (-125.0, -5.0), {}),
+    # name: (scene, seconds, camera, orbit (azimuth [deg], elevation [deg], distance factor) or None, settings)
+    "hang_glider": ("hang-glider", 3.0, "orbit", (-125.0, -5.0, 0.8), {}),
     "kite": ("kite", 8.0, "ground", None, {}),
     "flag": ("flag", 3.0, "orbit", None, {}),
     "parachute": ("parachute", 3.0, "orbit", None, {}),
-    "worlds": ("kite", 8.0, "orbit", (-150.0, 8.0), {"worlds": {"count": 4, "wind": {"speed": [4.0, 6.0, 8.0, 10.0]}}}),
+    "worlds": (
+        "kite",
+        8.0,
+        "orbit",
+        (-150.0, 8.0, 0.7),
+        {"worlds": {"count": 4, "wind": {"speed": [4.0, 6.0, 8.0, 10.0]}}},
+    ),
 }
 SIZE = (1280, 720)
 
@@ -46,7 +52,8 @@ def shoot(name: str) -> Path:
     viewer = Viewer(Simulation(descriptor), backend, f"warpsim: {where}", None, to_toml(descriptor), where)
     viewer.camera = camera
     if angles is not None:
-        viewer.orbit["azimuth"], viewer.orbit["elevation"] = angles
+        viewer.orbit["azimuth"], viewer.orbit["elevation"], zoom = angles
+        viewer.orbit["distance"] *= zoom
     now = 0.0
     viewer.tick(now)
     for _ in range(int(round(seconds / viewer.frame_interval))):

@@ -4,7 +4,8 @@
 
 Each opens ``warpsim view``'s window (PygletBackend) on its own Xvfb, flies the scene hands off for the seconds
 given on a clock of one frame interval per tick (so what is shown does not depend on the machine's speed), sets
-the camera (and the orbit's angles and distance) and saves the last picture as docs/viewer_NAME.png.
+the camera (and the orbit's angles and distance) and saves the last picture as docs/viewer_NAME.png ("turn":
+the glider under full right weight shift from 1.5 to 3 s, then hands off, at 5 s, chase camera, as docs/viewer.png).
 """
 
 from __future__ import annotations
@@ -22,6 +23,20 @@ SHOTS = {
     "kite": ("kite", 8.0, "ground", None, {}),
     "flag": ("flag", 3.0, "orbit", None, {}),
     "parachute": ("parachute", 3.0, "orbit", None, {}),
+    "turn": (
+        "hang-glider",
+        5.0,
+        "chase",
+        None,
+        {
+            "controls": [
+                {"time": 1.0, "roll": 0.0},
+                {"time": 1.5, "roll": 1.0, "ramp": True},
+                {"time": 3.0, "roll": 1.0},
+                {"time": 3.5, "roll": 0.0, "ramp": True},
+            ]
+        },
+    ),
     "worlds": (
         "kite",
         8.0,
@@ -30,6 +45,7 @@ SHOTS = {
         {"worlds": {"count": 4, "wind": {"speed": [4.0, 6.0, 8.0, 10.0]}}},
     ),
 }
+OUTPUT = {"turn": "viewer.png"}  # the others: viewer_NAME.png
 SIZE = (1280, 720)
 
 
@@ -59,7 +75,7 @@ def shoot(name: str) -> Path:
     for _ in range(int(round(seconds / viewer.frame_interval))):
         now += viewer.frame_interval
         viewer.tick(now)
-    out = save_png(HERE / f"viewer_{name}.png", backend.screenshot())
+    out = save_png(HERE / OUTPUT.get(name, f"viewer_{name}.png"), backend.screenshot())
     viewer.close()
     return out
 

@@ -106,7 +106,7 @@ def test_kite_line_drawn_from_the_anchor_to_the_kite(kite_recording, tmp_path):
     from warpsim.io.render import Camera, Scene
 
     with Recording(kite_recording) as rec:
-        scene = Scene(rec.build_model())
+        scene = Scene(rec.build_model(), wide=True)  # the line down to the anchor in the picture
         q = scene.place(rec.positions(rec.frame_count - 1))
     camera = scene.fit([q], Camera(size=(320, 180)))
     a = np.asarray(scene.draw(q, camera).convert("RGB")).astype(int)
@@ -116,6 +116,19 @@ def test_kite_line_drawn_from_the_anchor_to_the_kite(kite_recording, tmp_path):
     middles = (xy[1:] + xy[:-1]) / 2  # halfway along each segment
     hits = [dark[int(y) - 1 : int(y) + 2, int(x) - 1 : int(x) + 2].any() for x, y in middles[1:-1]]
     assert len(hits) >= 5 and all(hits), hits  # a line at least 2 pixels wide all along, however far the kite is
+
+
+def test_default_camera_frames_the_kite_not_its_whole_line(kite_recording, tmp_path):
+    """The kite (1.2 m) fills the picture by default (its 30 m line runs out of it); --wide frames the line too."""
+    sail = np.array(COLOURS["sail"]) * 255
+    spans = {}
+    for flags in ((), ("--wide",)):
+        out = tmp_path / f"kite{len(flags)}.png"
+        assert main(["render", str(kite_recording), str(out), "--size", "320x180", *flags]) == 0
+        a = np.asarray(Image.open(out).convert("RGB")).astype(int)
+        _, cols = np.nonzero((np.abs(a - sail).max(axis=2) < 80) & (a[..., 0] < 70))  # the sky is blue but paler
+        spans[flags] = np.ptp(cols) if len(cols) else 0
+    assert spans[()] > 0.4 * 320 and spans[("--wide",)] < 0.15 * 320
 
 
 def test_flag_pole_and_glider_frame_are_drawn(tmp_path_factory, tmp_path):

@@ -302,6 +302,9 @@ def build_parser() -> argparse.ArgumentParser:
         default=12.0,
         help="view height above the horizon [deg], -90..90 (default 12)",
     )
+    render.add_argument(
+        "--wide", action="store_true", help="frame the ropes and lines too (a kite's line down to its anchor)"
+    )
     return parser
 
 
@@ -934,7 +937,9 @@ def cmd_render(args) -> int:
 
     interruptible()  # the output's temporary is made next
     try:
-        path = render_recording(args.recording, args.output, args.frame, args.size, args.azimuth, args.elevation)
+        path = render_recording(
+            args.recording, args.output, args.frame, args.size, args.azimuth, args.elevation, wide=args.wide
+        )
     except (RecordingError, OutputPathError, RuntimeError) as err:
         raise UsageError(str(err)) from None
     print(f"{args.recording} -> {path}")

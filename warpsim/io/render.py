@@ -7,9 +7,9 @@ haze with distance (grid lines every 10 m or more, so that motion over it shows)
 straight down. Triangles are filled with their part's colour (the USD stage's) and shaded by a light from above,
 drawn back to front (painter's algorithm); ropes and lines as polylines at least 2 pixels wide (a kite's line shows
 at any distance), the tubes and bodies of :mod:`warpsim.io.shapes` (a glider's keel and control frame, the pilot,
-a flag's pole) as thick lines and discs. Virtual particles are not drawn. The camera follows the objects' centre;
-its distance is fixed over the frames drawn, so sizes compare between frames. The batch's worlds are drawn side
-by side (:func:`warpsim.io.shapes.world_offsets`).
+a flag's pole) as thick lines and discs. Virtual particles are not drawn. The camera follows the objects' centre
+(with ``wide``, of everything drawn, ropes and lines too); its distance is fixed over the frames drawn, so sizes
+compare between frames. The batch's worlds are drawn side by side (:func:`warpsim.io.shapes.world_offsets`).
 
 Files are written to a temporary name beside the target and renamed over it: complete or absent.
 """
@@ -98,9 +98,14 @@ class Camera:
 
 
 class Scene:
-    """What to draw of a model: its triangles by part, curves, discs, tubes and the points they are drawn from."""
+    """What to draw of a model: its triangles by part, curves, discs, tubes and the points they are drawn from.
 
-    def __init__(self, model):
+    ``focus``: the objects' points (cloth, bodies, tubes); ``drawn``: those and the ropes and lines. The camera
+    frames ``framed``: the focus (a kite fills the picture, its line runs down out of it), or with ``wide`` every
+    drawn point (a kite's line down to its anchor).
+    """
+
+    def __init__(self, model, wide: bool = False):
         self.model = model
         self.shapes = shapes_for(model)
         self.triangles: list[tuple[np.ndarray, tuple]] = []  # (tri vertex ids [t,3], rgb)
@@ -128,6 +133,11 @@ class Scene:
         drawn += [self.shapes.tube_indices().ravel(), np.array([p for p, _, _ in self.shapes.balls], dtype=np.int64)]
         every = np.concatenate(drawn) if drawn else np.zeros(0, np.int64)
         self.drawn = np.unique(every) if len(every) else np.arange(model.particle_count)
+        bodies = [t.ravel() for t, _ in self.triangles] + [np.array([p for p, _, _ in self.discs], dtype=np.int64)]
+        bodies.append(self.shapes.tube_indices().ravel())
+        bodies = np.concatenate(bodies)
+        self.focus = np.unique(bodies) if len(bodies) else self.drawn  # the objects, not their ropes' ground ends
+        self.framed = self.drawn if wide else self.focus  # what the camera frames and centres on
 
     def place(self, q: np.ndarray) -> np.ndarray:
         """Positions ``q`` ``[P, 3]`` [m] as drawn: each world moved to its place (the first ``q`` placed fixes
@@ -140,21 +150,21 @@ class Scene:
         return self.shapes.points(q)
 
     def fit(self, frames: list[np.ndarray], camera: Camera, margin: float = 0.12) -> Camera:
-        """``camera`` at the distance that frames the drawn points of every placed frame (each centred)."""
+        """``camera`` at the distance that frames the :attr:`framed` points of every placed frame (each centred)."""
         right, up, back = camera.axes()
         w, h = camera.size
         ty = np.tan(np.radians(camera.fov) / 2) * (1 - 2 * margin)
         tx = ty * w / h
         distance = 1.0
         for q in frames:
-            rel = q[self.drawn] - self.centre(q)
+            rel = q[self.framed] - self.centre(q)
             need = np.maximum(np.abs(rel @ right) / tx, np.abs(rel @ up) / ty) + rel @ back
             distance = max(distance, float(need.max()))
         return Camera(camera.azimuth, camera.elevation, distance, camera.fov, camera.size)
 
     def centre(self, q: np.ndarray) -> np.ndarray:
-        """Centre of the drawn points' bounding box [m] (``q``: placed positions)."""
-        p = q[self.drawn]
+        """Centre of the :attr:`framed` points' bounding box [m] (``q``: placed positions)."""
+        p = q[self.framed]
         return (p.min(axis=0) + p.max(axis=0)) / 2
 
     def _background(self, camera: Camera, eye: np.ndarray, image_mod):
@@ -332,12 +342,14 @@ def render_recording(
     azimuth: float = -60.0,
     elevation: float = 12.0,
     max_frames: int = 400,
+    wide: bool = False,
 ) -> Path:
     """Draw a recording: one frame (``frame``, default the last; negative counts from the end) to a .png,
     or the whole run to an animated .gif. A GIF draws every k-th frame, k the fewest frames that are at least
     :data:`GIF_FRAME` apart in simulated time (GIF players do not keep up with shorter ones) and that keep to
     ``max_frames``; each is shown for the simulated time between two drawn frames (rounded to GIF's 10 ms),
-    so the GIF plays at simulated speed. ``azimuth`` and ``elevation`` [deg]: where the camera looks from.
+    so the GIF plays at simulated speed. ``azimuth`` and ``elevation`` [deg]: where the camera looks from; ``wide``:
+    frame the ropes and lines too (:class:`Scene`).
     Returns the path written.
     """
     from .hdf5 import Recording, RecordingError
@@ -349,7 +361,7 @@ def render_recording(
         if count == 0:
             raise RecordingError(f"{recording_path}: the recording has no frames")
         descriptor = recording.descriptor()
-        scene = Scene(recording.build_model())
+        scene = Scene(recording.build_model(), wide)
         name = descriptor["scene"]["object"]
         if output.suffix.lower() == ".png":
             k = count - 1 if frame is None else frame

@@ -67,9 +67,6 @@ def draw_list(model, terrain_samples: int = 129) -> DrawList:
     s = ((gz - low) / (high - low) if high > low else np.zeros_like(gz)).reshape(-1, 1)
     grass, rock = np.asarray(COLOURS["terrain"]), np.array([0.55, 0.50, 0.42])
     colours = (grass * (1 - s) + rock * s).astype(np.float32)
-    bodies = [np.asarray(t).ravel() for t, _ in scene.triangles] + [np.array([p]) for p, _, _ in scene.discs]
-    bodies += [np.array([a, b]) for a, b, _, _ in scene.tubes]
-    focus = np.unique(np.concatenate(bodies)) if bodies else scene.drawn
     return DrawList(
         meshes=scene.triangles,
         curves=scene.curves,
@@ -80,7 +77,7 @@ def draw_list(model, terrain_samples: int = 129) -> DrawList:
         terrain_triangles=triangles,
         terrain_colours=colours,
         drawn=scene.drawn,
-        focus=focus,
+        focus=scene.focus,
     )
 
 

@@ -150,6 +150,11 @@ def build_parser() -> argparse.ArgumentParser:
         "an interrupted run keeps every completed frame",
     )
     run.add_argument(
+        "--table",
+        metavar="OUT.parquet|OUT.csv",
+        help="write the closing figures, one row per world (the sweep's columns; warpsim.io.table)",
+    )
+    run.add_argument(
         "--resume",
         metavar="REC.h5",
         help="continue a recording from its last frame, appending to it (scene and settings come from it)",
@@ -241,16 +246,23 @@ def build_parser() -> argparse.ArgumentParser:
 
     plot = sub.add_parser(
         "plot",
-        help="draw a metric of a sweep's table as a line or a heat map (PNG)",
+        help="draw a metric of a sweep's table as a line or a heat map, or a recording's against time (PNG)",
         description="Draw a sweep's metric against one swept key (a line per combination of the other keys) or "
         "two (a heat map; the other keys fixed with --where). Blown-up cases are left out and counted in the "
-        "title. Needs matplotlib (the sweep extra).",
+        "title. A recording (REC.h5): its objects' figures against simulated time, one panel per --metric. "
+        "Needs matplotlib (the sweep extra).",
     )
-    plot.add_argument("table", metavar="SWEEP.parquet|SWEEP.csv")
+    plot.add_argument("table", metavar="SWEEP.parquet|SWEEP.csv|REC.h5")
     plot.add_argument("output", metavar="OUT.png")
-    plot.add_argument("--x", required=True, metavar="KEY", help="swept key on the horizontal axis")
+    plot.add_argument("--x", metavar="KEY", help="swept key on the horizontal axis (a sweep's table: required)")
     plot.add_argument("--y", metavar="KEY", help="second swept key: draw a heat map")
-    plot.add_argument("--metric", required=True, metavar="M", help="the metric to draw, e.g. line_angle_mean")
+    plot.add_argument(
+        "--metric",
+        required=True,
+        metavar="M",
+        help="the metric to draw, e.g. line_angle_mean; of a recording, against time, one or more: "
+        "altitude,airspeed,sink (warpsim.io.plot.recording_metrics)",
+    )
     plot.add_argument(
         "--where",
         action="append",
@@ -272,7 +284,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="draw a recording as a picture (.png, one frame) or an animation (.gif)",
         description="Draw a recording with a small built-in renderer (needs Pillow: pip install -e '.[render]'): "
         "OUT.png shows one frame (default the last), OUT.gif the whole run at simulated speed. The camera looks "
-        "from the side and a little above and follows the objects.",
+        "from the side and a little above, under the sky, at the distance that frames the objects, and follows them.",
     )
     render.add_argument("recording", metavar="REC.h5")
     render.add_argument("output", metavar="OUT.png|OUT.gif")
@@ -287,8 +299,11 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument(
         "--elevation",
         type=_number("--elevation", "an angle in degrees from -90 to 90", -90.0, 90.0, closed=True),
-        default=20.0,
-        help="view height above the horizon [deg], -90..90 (default 20)",
+        default=12.0,
+        help="view height above the horizon [deg], -90..90 (default 12)",
+    )
+    render.add_argument(
+        "--wide", action="store_true", help="frame the ropes and lines too (a kite's line down to its anchor)"
     )
     return parser
 
@@ -623,6 +638,10 @@ def cmd_run(args) -> int:
     from .runner import BlowUpError, RecordedControls
 
     usd_path, h5_path = _check_run_options(args)
+    from .io import OutputWriteError
+    from .io.table import check_table_path, write_world_table
+
+    table = _checked_output(check_table_path, args.table, "--table")
     device = _check_device(args.device)
     with contextlib.ExitStack() as outputs:
         lock = _claim_recording(outputs, args, h5_path)
@@ -631,7 +650,7 @@ def cmd_run(args) -> int:
         stop = _StopRequests()
         outputs.callback(stop.restore)
         writer = _Outputs(outputs, sim, run, args, h5_path, usd_path, lock, stop)
-        figures = None if args.quiet else _flight_figures(sim, run.seconds)
+        figures = None if args.quiet and not table else _flight_figures(sim, run.seconds)
         on_frame = writer.on_frame if writer.any else None
         if figures is not None:
             on_frame = _both(figures, on_frame)
@@ -648,7 +667,12 @@ def cmd_run(args) -> int:
         except BlowUpError as err:
             blowup, summary = err, err.summary
         writer.close()
-    return _report(args, run, summary, blowup, writer.failures, h5_path, usd_path, figures)
+    if table is not None:
+        try:
+            write_world_table(table, figures, sim.descriptor)
+        except OutputWriteError as err:
+            writer.failures.append(err)
+    return _report(args, run, summary, blowup, writer.failures, h5_path, usd_path, figures, table)
 
 
 def _flight_figures(sim, seconds: float):
@@ -863,7 +887,7 @@ class _Outputs:
                         self.failures.append(err)
 
 
-def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path, figures=None) -> int:
+def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path, figures=None, table=None) -> int:
     """Print the summary, the flight figures, the outputs and any error line; return the exit code."""
     if not args.quiet and sys.stderr.isatty():
         sys.stderr.write("\r" + " " * 70 + "\r")
@@ -871,7 +895,7 @@ def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path,
         print(summary.text())
         for line in figures.lines() if figures is not None else ():
             print(line)
-        for label, path in (("recording", args.resume or h5_path), ("USD stage", usd_path)):
+        for label, path in (("recording", args.resume or h5_path), ("USD stage", usd_path), ("table", table)):
             if path and not any(str(path) in str(err) for err in failures):
                 print(f"  {label}: {path}")
     for err in failures:
@@ -913,7 +937,9 @@ def cmd_render(args) -> int:
 
     interruptible()  # the output's temporary is made next
     try:
-        path = render_recording(args.recording, args.output, args.frame, args.size, args.azimuth, args.elevation)
+        path = render_recording(
+            args.recording, args.output, args.frame, args.size, args.azimuth, args.elevation, wide=args.wide
+        )
     except (RecordingError, OutputPathError, RuntimeError) as err:
         raise UsageError(str(err)) from None
     print(f"{args.recording} -> {path}")
@@ -1047,11 +1073,19 @@ def _sweep_progress(done: int, total: int, wall: float) -> None:
 
 def cmd_plot(args) -> int:
     """Draw a sweep's metric as a PNG."""
-    from .io.plot import PlotError, plot_sweep
+    from .io.plot import PlotError, plot_recording, plot_sweep
 
+    recording = args.table.lower().endswith(".h5")
+    if recording and (args.x or args.y or args.where):
+        raise UsageError("a recording is drawn against time: --x, --y and --where are for a sweep's table")
+    if not recording and not args.x:
+        raise UsageError("--x KEY: the swept key on the horizontal axis of a sweep's table")
     interruptible()  # the output's temporary is made next
     try:
-        path = plot_sweep(args.table, args.output, args.x, args.metric, args.y, args.where)
+        if recording:
+            path = plot_recording(args.table, args.output, args.metric.split(","))
+        else:
+            path = plot_sweep(args.table, args.output, args.x, args.metric, args.y, args.where)
     except PlotError as err:
         raise UsageError(str(err)) from None
     print(f"{args.table} -> {path}")

@@ -261,7 +261,11 @@ def lagged_period(speed: float, lag: float = 0.0) -> float:
 
 
 def delta_pitch_lag(
-    span: float, chord: float, static_margin: float | None = None, sample_at: float = 0.75, samples: int = 4000
+    span: float,
+    chord: float,
+    static_margin: float | None = None,
+    sample_at: float | None = 0.75,
+    samples: int = 4000,
 ) -> dict:
     """Strip theory's pitch-damping lag ``k`` [m] of a rigid flat delta wing (nose to a straight trailing edge,
     ``span`` and keel ``chord`` [m]) with no tail, hands off: the lift it loses per unit ``q / V`` (pitch rate over
@@ -269,30 +273,112 @@ def delta_pitch_lag(
 
     Each spanwise strip of chord c(y) carries lift in proportion to its area at its quarter chord and takes its angle
     of attack at ``sample_at`` of its chord (0.75: Pistolesi's rule of thin-aerofoil theory, a pitching plate lifts
-    like one at the angle of attack of its three-quarter chord), so pitching at q about the centre of gravity adds
-    ``q (x_cg - x_s) / V`` to it. The moment about the centre of gravity must vanish, so the wing's angle of attack
-    falls ``(q / V) sum w (x_1/4 - x_cg)(x_s - x_cg) / SM`` below trim (weights w the strips' areas, SM [m] the static
-    margin, the centre of gravity ahead of the aerodynamic centre), and the lift the pitch rate itself makes,
-    ``a (q / V) sum w (x_cg - x_s)``, gives some back: ``k`` is the difference. Returns ``k`` and ``alpha_lag`` (the
-    first term alone, [m]) at ``static_margin`` (if given; ``k`` falls as it grows, about as 1 / SM), the aerodynamic
-    centre ``ac`` [m] forward of the nose and the radius of gyration ``radius`` [m] of the lift about it."""
+    like one at the angle of attack of its three-quarter chord; 0.25: where its lift acts). With ``sample_at=None``
+    every piece of each chord lifts alone at its own angle of attack, the lift spread evenly along the chord: what a
+    sail of flat triangles each under its own air law does. Pitching at q about the centre of gravity adds
+    ``q (x_cg - x_s) / V`` to the angle of attack at x_s. The moment about the centre of gravity must vanish, so the
+    wing's angle of attack falls ``(q / V) sum w (x_L - x_cg)(x_s - x_cg) / SM`` below trim (weights w the lift's
+    shares at x_L, SM [m] the static margin, the centre of gravity ahead of the aerodynamic centre), and the lift
+    the pitch rate itself makes, ``a (q / V) sum w (x_cg - x_s)``, gives some back: ``k`` is the difference, about
+    ``(r^2 - cov(x_1/4, c) / 2) / SM`` at 0.75, ``r^2 / SM`` at 0.25 and ``(r_1/2^2 + mean c^2 / 12) / SM`` for
+    pieces alone (r_1/2 that of the half-chord points). Returns ``k`` and ``alpha_lag`` (the first term alone, [m])
+    at ``static_margin`` (if given), the aerodynamic centre ``ac`` [m] forward of the nose and the radius of gyration
+    ``radius`` [m] of the strips' lift about their quarter-chord aerodynamic centre."""
     semi = 0.5 * span
     y = (np.arange(samples) + 0.5) * semi / samples
     c = chord * (1.0 - y / semi)
     quarter = -chord * y / semi - 0.25 * c  # forward of the nose [m]
-    sampled = quarter - (sample_at - 0.25) * c
     w = c / c.sum()
     ac = float(w @ quarter)
+    if sample_at is None:  # pieces alone: 16 evenly loaded pieces along each chord, each at its own angle of attack
+        xi = (np.arange(16) + 0.5) / 16.0
+        lifting = (-chord * y / semi)[:, None] - xi[None, :] * c[:, None]
+        sampled, weights = lifting, np.repeat(w[:, None] / 16.0, 16, axis=1)
+        ac = float((weights * lifting).sum())
+    else:
+        lifting, sampled, weights = quarter, quarter - (sample_at - 0.25) * c, w
 
     def lags(sm):
         cg = ac + sm
-        alpha = float(w @ ((quarter - cg) * (sampled - cg))) / sm
-        return alpha + float(w @ (sampled - cg)), alpha
+        alpha = float((weights * (lifting - cg) * (sampled - cg)).sum()) / sm
+        return alpha + float((weights * (sampled - cg)).sum()), alpha
 
-    out = {"ac": ac, "radius": float(np.sqrt(w @ (quarter - ac) ** 2))}
+    out = {"ac": ac, "radius": float(np.sqrt(w @ (quarter - float(w @ quarter)) ** 2))}
     if static_margin is not None:
         out["k"], out["alpha_lag"] = lags(static_margin)
     return out
+
+
+def pitch_derivatives(scene: str | dict, solver: dict | None = None, settle: float = 15.0) -> dict:
+    """The trimmed glider's quasi-static pitch derivatives from its own air law, measured as in a wind tunnel: after
+    ``settle`` [s] hands off, the air forces on its particles as they are (sail triangles and drag bodies) are
+    computed for rigid velocity fields, the centre of mass's velocity alone, that velocity turned 0.01 rad
+    nose-down (angle of attack + 0.01) and a nose-up pitch rate q = 0.01 V [rad/s] about the centre of mass, and
+    their lift (across the velocity, in the plane of symmetry) and pitching moment about the centre of mass
+    differenced. Returns ``speed`` [m/s], ``cl``, the lift slope ``slope`` [1/rad], the static margin
+    ``static_margin`` = -M_alpha / L_alpha [m], ``damping`` = M_qhat / M_alpha [m] (qhat = q / V), ``pitch_lift`` =
+    L_qhat / L_alpha [m] and the lag ``k`` = damping - pitch_lift [m] (:func:`delta_pitch_lag`)."""
+    import warp as wp
+
+    from warpsim.kernels.aero import body_drag, triangle_air_force
+
+    sim = Simulation(scene_descriptor(scene, solver))
+    rec = sim.model.objects[0]
+    sim.step(int(round(settle / sim.dt)))
+    q = sim.state.particle_q.numpy().astype(np.float64)
+    q_prev = sim.state.particle_q_prev.numpy().astype(np.float64)
+    inv = sim.model.particle_inv_mass.numpy()
+    mass = np.where(inv > 0, 1.0 / np.where(inv > 0, inv, 1.0), 0.0)[rec.particles]
+    cg = mass @ q[rec.particles] / mass.sum()
+    v_cg = mass @ (q[rec.particles] - q_prev[rec.particles]) / (mass.sum() * sim.dt)
+    fwd = q[rec.nose] - q[rec.keel[-1]]
+    fwd /= np.linalg.norm(fwd)
+    left = q[rec.tips[0]] - q[rec.tips[1]]
+    left -= (left @ fwd) * fwd
+    left /= np.linalg.norm(left)
+    nose_up = -left  # rotating about it lifts the nose
+    tris = sim.model.tri_indices.numpy()[: sim.model.tri_count]
+
+    def lift_moment(velocity, omega):
+        v = velocity[None, :] + np.cross(omega[None, :], q - cg[None, :])
+        sim.state.particle_q_prev.assign(q - v * sim.dt)
+        shares = wp.zeros(max(sim.model.tri_count, 1), dtype=wp.vec3, device=sim.model.device)
+        drag = wp.zeros(sim.model.particle_count, dtype=wp.vec3, device=sim.model.device)
+        triangle_air_force(sim.model, sim.state, sim.control, sim.dt, sim.solver.air, sim.solver.wind, shares)
+        body_drag(sim.model, sim.state, sim.control, sim.dt, sim.solver.air, sim.solver.wind, drag)
+        force = drag.numpy().astype(np.float64)
+        share = shares.numpy()[: sim.model.tri_count].astype(np.float64)  # each vertex's third
+        for corner in range(3):
+            np.add.at(force, tris[:, corner], share)
+        across = np.cross(fwd, left)
+        across -= (across @ v_hat) * v_hat
+        return force.sum(axis=0) @ across / np.linalg.norm(across), np.cross(q - cg, force).sum(axis=0) @ nose_up
+
+    speed = float(np.linalg.norm(v_cg))
+    v_hat = v_cg / speed
+    lift, moment = lift_moment(v_cg, np.zeros(3))
+    step = 0.01
+    lift_a, moment_a = lift_moment(v_cg - step * np.cross(nose_up, v_cg), np.zeros(3))
+    lift_q, moment_q = lift_moment(v_cg, step * speed * nose_up)
+    sim.state.particle_q_prev.assign(q_prev)
+    l_alpha, m_alpha = (lift_a - lift) / step, (moment_a - moment) / step
+    l_q, m_q = (lift_q - lift) / step, (moment_q - moment) / step
+    dynamic = 0.5 * sim.model.air_density * speed**2 * wing_area(scene)
+    return {
+        "speed": speed,
+        "cl": lift / dynamic,
+        "slope": l_alpha / dynamic,
+        "static_margin": -m_alpha / l_alpha,
+        "damping": m_q / m_alpha,
+        "pitch_lift": l_q / l_alpha,
+        "k": m_q / m_alpha - l_q / l_alpha,
+    }
+
+
+def wing_area(scene: str | dict) -> float:
+    """The sail's planform area, span x chord / 2 [m^2]."""
+    g = scene_descriptor(scene)["hang_glider"]
+    return 0.5 * g["span"] * g["chord"]
 
 
 def lift_slope_flight(scene: str | dict, solver: dict | None = None, bars=(-0.4, 0.4), settle=25.0, hold=15.0) -> dict:
@@ -428,9 +514,10 @@ def dive_band(
 
     With ``lift_slope`` a [1/rad] and ``static_margin`` [m] it adds what a rigid tailless wing of the scene's planform
     does hands off (:func:`delta_pitch_lag`, :func:`lag_ratio`): ``rigid_lag`` (c, Pistolesi's three-quarter chord) and
-    ``panel_lag`` (c, each strip's angle of attack where its lift acts, as a law per flat triangle takes it), the
-    heights ``rigid`` and ``panel`` [m] of that point mass with those lags, and ``rigid_period``/``panel_period``, the
-    ratios ``sqrt(1 + c)`` of their phugoid periods to Lanchester's. With ``period_ratio`` (a measured phugoid period
+    ``panel_lag`` (c, each strip's angle of attack where its lift acts) and ``pieces_lag`` (c, every piece of each chord
+    lifting alone, as a sail of triangles each under its own air law does), the heights ``rigid``, ``panel`` and
+    ``pieces`` [m] of that point mass with those lags, and ``rigid_period`` (and so on), the ratios ``sqrt(1 + c)``
+    of their phugoid periods to Lanchester's. With ``period_ratio`` (a measured phugoid period
     over Lanchester's) it adds ``lag`` = ``period_ratio^2 - 1`` and ``predicted`` [m], the point mass with that lag."""
     d = scene_descriptor(scene)
     rho = float(d.get("air", {}).get("density", AIR_DENSITY))
@@ -446,7 +533,7 @@ def dive_band(
     }
     if lift_slope is not None and static_margin is not None:
         g = d["hang_glider"]
-        for key, at in (("rigid", 0.75), ("panel", 0.25)):
+        for key, at in (("rigid", 0.75), ("panel", 0.25), ("pieces", None)):
             k = delta_pitch_lag(g["span"], g["chord"], static_margin, sample_at=at)["k"]
             lag = lag_ratio(k, lift_slope, load, rho)
             out[f"{key}_lag"] = lag
@@ -460,7 +547,7 @@ def dive_band(
 
 def summary(scene: str | dict = "hang-glider", solver: dict | None = None) -> dict:
     """Every handling figure of ``scene`` (one flight each), without the histories."""
-    r, t, dv, p, s, g, a = (
+    r, t, dv, p, s, g, a, pd = (
         roll_flight(scene, solver),
         turn_flight(scene, solver),
         dive_flight(scene, solver),
@@ -468,6 +555,7 @@ def summary(scene: str | dict = "hang-glider", solver: dict | None = None) -> di
         stall_flight(scene, solver),
         glide_flight(scene, solver),
         lift_slope_flight(scene, solver),
+        pitch_derivatives(scene, solver),
     )
     return {
         "time_to_30": r["time_to_30"],
@@ -485,6 +573,7 @@ def summary(scene: str | dict = "hang-glider", solver: dict | None = None) -> di
         "glide": {k: v for k, v in g.items() if k != "history"},
         "lift_slope": a["slope"],
         "static_margin": a["static_margin"],
+        "pitch": {k: float(v) for k, v in pd.items()},
     }
 
 

@@ -54,7 +54,7 @@ def _canopy_load(
     air_density: float,
     shear_exponent: float,
     shear_reference_height: float,
-    canopy_side: wp.array(dtype=wp.vec3),
+    canopy_side_out: wp.array(dtype=wp.vec3),
     canopy_load_out: wp.array(dtype=wp.vec4),
 ):
     c = wp.tid()
@@ -107,8 +107,8 @@ def _canopy_load(
     # the wake lags: the side force follows its steady value with a time constant lag * D_p / |w|
     if params[3] > 0.0:
         tau = params[3] * 2.0 * wp.sqrt(params[1] / wp.pi) / speed
-        side = canopy_side[c] + (side - canopy_side[c]) * wp.min(dt / tau, 1.0)
-    canopy_side[c] = side
+        side = canopy_side_out[c] + (side - canopy_side_out[c]) * wp.min(dt / tau, 1.0)
+    canopy_side_out[c] = side  # the lagged side force, read back next step
     canopy_load_out[c] = wp.vec4(pressure * params[2], side[0], side[1], side[2])
 
 

@@ -44,7 +44,7 @@ def test_mass_splitting_restores_the_force_balance():
     assert kite["kite line angle (mass splitting)"].ok
     assert not kite["kite line angle (paper's average)"].ok
     chute = _rows("parachute")
-    split, plain = chute["parachute flat descent (mass splitting)"], chute["parachute flat descent"]
+    split, plain = chute["parachute flat (mass splitting) descent"], chute["parachute flat descent"]
     assert split.ok and plain.ok and not split.model_limit and not plain.model_limit
     assert float(split.measured.split()[0]) == pytest.approx(float(plain.measured.split()[0]), rel=0.02)
 

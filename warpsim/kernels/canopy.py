@@ -4,7 +4,7 @@ A parachute canopy is not a set of independent plates: the air it catches stagna
 feels one pressure difference over its whole inside, and the flow spilling round the rim decides its side
 force. Parachute designers therefore describe a canopy by two whole-canopy coefficients measured in wind
 tunnels against its angle of attack ``alpha`` (between its axis and the relative wind; Knacke, *Parachute
-Recovery Systems Design Manual*, NWC TP 6575, 1992, ch. 5; Ginn, Clark & Braun, AIAA 2014-2390): the
+Recovery Systems Design Manual*, NWC TP 6575, 1991, ch. 5; Ginn, Clark & Braun, AIAA 2014-2390): the
 tangential force ``C_T(alpha)`` along the axis and the normal force ``C_N(alpha)`` across it, both on the
 nominal (cloth) area ``S_0`` and the dynamic pressure ``q = rho |w|^2 / 2``.
 

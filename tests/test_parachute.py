@@ -127,9 +127,10 @@ def _fly(scene: str, overrides: dict):
 @pytest.mark.parametrize("setting", list(SETTINGS))
 @pytest.mark.parametrize("scene", ["scenes/parachute.toml", "scenes/parachute_ringslot.toml"])
 def test_canopy_descends_and_swings_as_knacke_table_says(scene, setting):
-    """60 s in the scene's gusty breeze, measured from the particles over 10-60 s: the flat canopy's rate of descent
-    gives C_D0 0.75-0.80 and it swings ±10-40° (measured at the defaults 5.91 m/s, ±29°, rms 17°); the ringslot's
-    gives 0.56-0.65 and it swings under ±5° (6.68 m/s, ±0.6°); the same at every solver setting."""
+    """60 s in the scene's breeze and its gusts (run frame by frame, so the gusts act), measured from the particles
+    over 10-60 s: the flat canopy's rate of descent gives C_D0 0.75-0.80 and it swings ±10-40° (measured at the
+    defaults 5.89 m/s, ±22°, rms 16°); the ringslot's gives 0.56-0.65 and it swings under ±5° (6.66 m/s, ±3.7° in
+    the gusts); the same at every solver setting."""
     canopy, c_d0, descent, swing, rms = _fly(scene, SETTINGS[setting])
     (c_low, c_high), (s_low, s_high) = KNACKE[canopy]
     assert c_low <= c_d0 <= c_high, f"{canopy}: {descent:.3f} m/s, C_D0 {c_d0:.3f}"
@@ -163,7 +164,7 @@ def test_canopy_tables():
     """The coefficient tables: C_T(0) = C_D0; the flat canopy's C_N is negative below 25 degrees and positive above
     (its stable angle of attack); the ringslot's positive from zero on."""
     flat, slot = canopy_table(CANOPIES["flat"]), canopy_table(CANOPIES["ringslot"])
-    assert flat[0, 0] == pytest.approx(0.705) and slot[0, 0] == pytest.approx(0.60)
+    assert flat[0, 0] == pytest.approx(0.695) and slot[0, 0] == pytest.approx(0.60)
     assert (flat[1:5, 1] < 0).all() and flat[5, 1] == pytest.approx(0.0, abs=1e-9) and (flat[6:19, 1] > 0).all()
     assert (slot[1:19, 1] > 0).all() and (flat[19:, 0] < 0).all()
 

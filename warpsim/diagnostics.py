@@ -241,6 +241,7 @@ FIGURES: dict[str, tuple[str, tuple[str, ...] | None, str]] = {
     "line_angle": ("deg", ("kite",), "elevation of the line above the horizontal, from the anchor to the tow point"),
     "line_pull": ("N", ("kite",), "|air force on the kite + its weight|, the steady line tension"),
     "radius": ("m", ("parachute",), "mean horizontal distance of the canopy's rim from its centre"),
+    "swing": ("deg", ("parachute",), "angle of the line from the person to the canopy's centre from the vertical"),
 }
 """The figures :class:`Figures` gives: name -> (unit, the object kinds that have it (None: all), meaning)."""
 
@@ -273,7 +274,7 @@ class Figures:
         from .config import GRAVITY
         from .objects.hang_glider import bank
         from .objects.kite import line_elevation
-        from .objects.parachute import projected_radius
+        from .objects.parachute import projected_radius, swing_angle
 
         if self._kites and tri_force is not None and not isinstance(tri_force, np.ndarray):
             tri_force = tri_force.numpy()
@@ -296,6 +297,7 @@ class Figures:
                     values["line_pull"] = float(np.linalg.norm(air - np.array([0.0, 0.0, GRAVITY * mass])))
             elif record.kind == "parachute":
                 values["radius"] = projected_radius(record, frame.positions)
+                values["swing"] = swing_angle(record, frame.positions)
             out.append(values)
         return out
 

@@ -22,7 +22,7 @@ from ..builder import ModelBuilder
 from ..config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
 from ..model import ObjectRecord
 from ..terrain import Heightfield
-from .delta import add_rigid_frame, add_spar_braces, body_axes, delta_sail_aero
+from .delta import add_rigid_frame, add_spar_braces, body_axes, chordwise_loading, delta_sail_aero
 
 PAPER_COUNTS = {"particles": 152, "sticks": 458, "triangles": 221}
 
@@ -80,7 +80,7 @@ class KiteConfig(Checked):
     spine: float = number(0.9, POSITIVE)
     keel_depth: float = number(0.3, POSITIVE)
     tow_point: float = number(0.45, Bounds(0.0, 1.0))
-    mass: float = number(0.2, POSITIVE)
+    mass: float = number(0.15, POSITIVE)
     frame_height: float = number(0.4, POSITIVE)
     spar_mass_fraction: float = number(0.1, Bounds(0.0, 1.0, low_open=True, high_open=True))
     frame_weight: float = number(4.0, POSITIVE)
@@ -93,11 +93,13 @@ class KiteConfig(Checked):
     heading: float = 0.0
     elevation: float = number(10.0, Bounds(0.0, 90.0))
     attack: float = number(40.0, Bounds(0.0, 90.0))
-    dihedral: float = number(20.0, Bounds(-45.0, 45.0))
+    dihedral: float = number(30.0, Bounds(-45.0, 45.0))
     keel_edges: bool = True
     profile_drag: float = number(0.03, NON_NEGATIVE)
     stall_angle: float = number(18.0, Bounds(0.0, 90.0, low_open=True, high_open=True))
-    billow: float = number(0.03, Bounds(0.0, 0.2))
+    billow: float = number(0.0, Bounds(0.0, 0.2))
+    chord_loading: bool = True
+    tail_drag: float = number(0.15, NON_NEGATIVE)
 
 
 PRESETS = {
@@ -106,12 +108,23 @@ PRESETS = {
     "flying": {
         "air": {"model": "sail"},
         "solver": {"dt": 0.005},
-        "kite": {k: getattr(KiteConfig(), k) for k in ("tow_point", "keel_edges", "billow")},
+        "kite": {
+            k: getattr(KiteConfig(), k)
+            for k in ("tow_point", "keel_edges", "billow", "chord_loading", "tail_drag", "dihedral", "mass")
+        },
     },
     "paper": {
         "air": {"model": "paper"},
         "solver": {"dt": 0.01},
-        "kite": {"tow_point": 0.35, "keel_edges": False, "billow": 0.0},
+        "kite": {
+            "tow_point": 0.35,
+            "keel_edges": False,
+            "billow": 0.0,
+            "chord_loading": False,
+            "tail_drag": 0.0,
+            "dihedral": 20.0,
+            "mass": 0.2,
+        },
     },
 }
 """``kite.design`` presets: ``{design: {section: {key: value}}}`` (see :class:`KiteConfig`)."""
@@ -125,6 +138,8 @@ class KiteRecord(ObjectRecord):
         nose: the nose particle. tow: the tow point (keel apex, the rope's top).
         anchor_particle: the rope's nailed ground end. anchor_nail: its nail (index into ``Control.nail_target``).
         spine: spine particles, nose to tail. tips: (left, right) wing-tip particles.
+        sag_chain: the rope's particles from the anchor up to the first doubled stick (the rope's plain sticks),
+            whose sag gives the line's pull (:func:`anchor_pull`).
     """
 
     nose: int
@@ -133,6 +148,7 @@ class KiteRecord(ObjectRecord):
     anchor_nail: int
     spine: np.ndarray
     tips: tuple[int, int]
+    sag_chain: np.ndarray
 
     def controlled_nails(self) -> np.ndarray:
         """The rope's anchor, which the ``anchor`` control walks."""
@@ -172,6 +188,8 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     rows, sail_sticks, sail_tris = builder.add_subdivided_triangle(
         nose, tip_l, tip_r, n, per_particle * sail_count, shape=dihedral
     )
+    if cfg.chord_loading:
+        chordwise_loading(builder, sail_tris, nose, fwd, left, cfg.spine, 0.5 * cfg.span)
     delta_sail_aero(
         builder,
         sail_tris,
@@ -222,6 +240,8 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
             ]
         )
 
+    if cfg.tail_drag > 0.0:
+        builder.set_drag_area(spars.keel[-1], cfg.tail_drag)
     if cfg.billow > 0.0:
         builder.pretension(np.setdiff1d(sail_sticks, spars.sticks), -cfg.billow)
     # rope: from the tow point down to the anchor; the first sticks count double
@@ -257,6 +277,7 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
             anchor_nail=nail,
             spine=np.array(spars.keel),
             tips=(rows[n][0], rows[n][n]),
+            sag_chain=np.array(rope[::-1][: len(rope) - max(int(cfg.rope_doubled), 0)], dtype=np.int64),
         )
     )
 
@@ -283,6 +304,29 @@ def anchor_elevation(record: KiteRecord, q: np.ndarray) -> float:
     above = rope[-2] if len(rope) >= 2 else record.tow
     d = q[above] - q[record.anchor_particle]
     return float(np.degrees(np.arctan2(d[2], np.linalg.norm(d[:2]))))
+
+
+def anchor_pull(record: KiteRecord, q: np.ndarray, mass: np.ndarray, gravity: float = 9.80665) -> float:
+    """The line's pull at the anchor [N], from the rope's sag alone (no air force enters it).
+
+    A rope of sticks that carries only its own weight ``m_j g`` at each particle ``j`` holds the same horizontal
+    tension ``H`` in every segment, and its slope steps up by ``m_j g / H`` at each particle: over the rope's plain
+    sticks from the anchor up (:attr:`KiteRecord.sag_chain`), ``H = g * sum(m_j) / (tan(theta_top) -
+    tan(theta_anchor))`` with ``theta`` the segments' elevations, and the pull along the anchor's segment is
+    ``H / cos(theta_anchor)`` (the catenary's statics, e.g. Irvine, *Cable Structures*, 1981, ch. 1). ``q``: ``[P,
+    3]`` positions [m]; ``mass``: ``[P]`` particle masses [kg]. NaN when the chain has fewer than three particles
+    or does not sag (slack or whipping rope: its slope does not grow upwards).
+    """
+    chain = record.sag_chain
+    if len(chain) < 3:
+        return float("nan")
+    d = np.diff(q[chain], axis=0)
+    slope = d[:, 2] / np.linalg.norm(d[:, :2], axis=1)
+    rise = slope[-1] - slope[0]
+    if not rise > 0.0:
+        return float("nan")
+    horizontal = gravity * float(mass[chain[1:-1]].sum()) / rise
+    return horizontal * float(np.hypot(1.0, slope[0]))
 
 
 def line_state(record: KiteRecord, q: np.ndarray) -> dict:

@@ -29,12 +29,13 @@ PAPER_COUNTS = {"particles": 152, "sticks": 458, "triangles": 221}
 
 @dataclass(kw_only=True)
 class KiteConfig(Checked):
-    """Parameters of the delta kite (defaults: the paper's resolution, a 1.8 m, 0.8 m^2, 200 g kite).
+    """Parameters of the delta kite (defaults: the paper's resolution, a 1.8 m, 0.8 m^2, 150 g kite with a tail).
 
     Attributes:
-        design: ``flying`` (the default: towed from 45 % of the keel, the keel's edges reinforced, the sail
-            cut with 3 % billow, under the ``sail`` air model with a 5 ms step, it flies as a real delta does)
-            or ``paper`` (Section 7: towed from 35 %, the paper's air law and 10 ms step). In a scene or with
+        design: ``flying`` (the default: towed from 45 % of the keel, the keel's edges reinforced, a flat sail
+            whose centre of pressure moves with its angle of attack, 30 deg dihedral and a tail, under the ``sail``
+            air model with a 5 ms step, it flies as a real delta does) or ``paper`` (Section 7: a 200 g kite
+            towed from 35 %, 20 deg dihedral, no tail, the paper's air law and 10 ms step). In a scene or with
             ``--set`` it is a preset (:data:`PRESETS`): it sets those keys, ``air.model`` and ``solver.dt``, and
             keys given beside it win. The builder itself reads only the individual keys.
         divisions: main-sail subdivisions per side (paper: 14 particles per side -> 13).
@@ -68,9 +69,17 @@ class KiteConfig(Checked):
             (:func:`~warpsim.kernels.aero.sail_coefficients`).
         stall_angle: ``sail`` air model: angle of attack [deg] where a triangle's flow separates.
         billow: the sail's cloth sticks are this much longer than the sail as built (a delta's sail is cut
-            with billow, so it sets cambered between its spars; not in the paper). With 0.03 the kite flies
-            on through a lull to 4 m/s and rides kite_gusty.toml's gusts; with 0 a 5 m/s lull brings it
-            down (README, kite).
+            with billow, so it sets cambered between its spars; not in the paper). 0 by default: with
+            ``chord_loading`` a 3 % billow lets the kite settle to one side of the wind window (14 m, banked
+            27 deg in 6 m/s, measured).
+        chord_loading: load the sail's triangles chordwise as thin-aerofoil theory loads each chordwise strip
+            (:func:`~warpsim.objects.delta.chordwise_loading`), so its centre of pressure lies near half the root
+            chord from the nose at small angles of attack and moves back to the area centroid (2/3) as the flow
+            separates: the kite trims its sail at a real angle of attack (about 11 deg in 6 m/s) instead of the
+            ~5 deg a load spread evenly leaves it (the centroid at every angle).
+        tail_drag: drag area ``C_D A`` [m^2] of a tail (a tube or ribbon tail) hung from the spine's back end
+            (``sail`` air model only): its drag behind the tow point keeps the kite's nose into the wind, which
+            holds it in the middle of the wind window (0: no tail).
     """
 
     design: str = choice("flying", ("flying", "paper"))

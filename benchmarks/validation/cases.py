@@ -345,7 +345,7 @@ def kite_line(mass_splitting: bool = False) -> list[Row]:
 
     def sample(frame):
         ref = NumpyVerlet(sim)  # the step's own air force, on the host, from the current state
-        air = ref.air_force()[body].sum(axis=0)
+        air = (ref.air_force() + ref.body_drag())[body].sum(axis=0)  # the sail, the keel and the tail's drag
         forces.append(air + mass * np.array(sim.model.gravity))
         q = frame.positions
         lines.append(q[tow] - q[first_rope])
@@ -361,7 +361,7 @@ def kite_line(mass_splitting: bool = False) -> list[Row]:
     return [
         Row(
             "kite line angle" + (" (mass splitting)" if mass_splitting else " (paper's average)"),
-            "rope elevation at the kite vs direction of the kite's air force + weight (6 m/s wind, 20-30 s)",
+            "rope elevation at the kite vs direction of the kite's air force (tail included) + weight (6 m/s, 20-30 s)",
             f"{expected:.2f}°",
             "force balance of the model: at rest the rope holds the kite's air force and weight",
             f"{measured:.2f}°",

@@ -475,9 +475,9 @@ def kite_flight_rows() -> list[Row]:
             f"{six['lift']:.2f}",
             "0.6-1.0 at both time steps",
             all(0.6 <= runs[(6.0, dt)]["lift"] <= 1.0 for dt in (0.005, 0.0025)),
-            note="the kite trims at ~11° where the sail law's attached lift gives ~0.5; a tow point further back "
-            "(0.5) trims it at 12-13° with C_L 0.58 but drifts 4-7 m in 8-10 m/s; a kite that flies at C_L 0.6-1.0 "
-            "needs more lateral stability than its keel, 30° dihedral and tail give (issue 35, notes)",
+            note="the kite trims at ~10° where its planform's lift slope (Helmbold-DATCOM, 3.64 /rad) gives ~0.6; a "
+            "tow point further back (0.5) trims it at 11° with C_L 0.62-0.67 but drifts 3-11 m in 6-10 m/s: a kite "
+            "flying at C_L 0.6-1.0 needs more lateral stability than its keel, 30° dihedral and tail give here",
         )
     )
     for w in KITE_WINDS:

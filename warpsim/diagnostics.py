@@ -239,7 +239,7 @@ FIGURES: dict[str, tuple[str, tuple[str, ...] | None, str]] = {
     ),
     "bank": ("deg", ("hang-glider",), "bank of the sail, tip to tip against the horizontal, + = right tip lower"),
     "line_angle": ("deg", ("kite",), "elevation of the line above the horizontal, from the anchor to the tow point"),
-    "line_pull": ("N", ("kite",), "|air force on the kite + its weight|, the steady line tension"),
+    "line_pull": ("N", ("kite",), "the line's pull at the anchor, from the rope's sag (objects.kite.anchor_pull)"),
     "radius": ("m", ("parachute",), "mean horizontal distance of the canopy's rim from its centre"),
     "swing": ("deg", ("parachute",), "angle of the line from the person to the canopy's centre from the vertical"),
 }
@@ -253,31 +253,23 @@ def figure_names(kind: str) -> tuple[str, ...]:
 
 class Figures:
     """What a pilot or an observer reads off each object of a frame (:data:`FIGURES`). The heads-up display and
-    the sweeps read their figures here, so each is computed one way; what does not change between frames (a
-    kite's triangles and mass) is found once, here.
+    the sweeps read their figures here, so each is computed one way.
 
-    Call it with a frame and the solver's ``tri_force`` (device or host ``[T, 3]`` air force per triangle
-    vertex [N], copied to the host only when a kite needs it for ``line_pull``; NaN without it): one dict per
-    object, in model order, of the figures its kind has, as floats in their units.
+    Call it with a frame (and, for callers that have it, the solver's ``tri_force``: every figure is measured from
+    the particles, so none reads it): one dict per object, in model order, of the figures its kind has, as floats
+    in their units. A kite's ``line_pull`` is NaN while its rope does not sag
+    (:func:`~warpsim.objects.kite.anchor_pull`).
     """
 
     def __init__(self, model: Model):
         self.model = model
-        self._kites: dict[int, tuple[np.ndarray, float]] = {}  # object -> (its triangles, their mass [kg])
-        for k, record in enumerate(model.objects):
-            if record.kind == "kite":
-                triangles = np.concatenate([np.asarray(t) for t in record.tri_parts.values()]).astype(np.int64)
-                mass = float(model.particle_free_mass[np.unique(model.tri_indices_np[triangles])].sum())
-                self._kites[k] = (triangles, mass)
 
     def __call__(self, frame: Frame, tri_force=None) -> list[dict[str, float]]:
         from .config import GRAVITY
         from .objects.hang_glider import bank
-        from .objects.kite import line_elevation
+        from .objects.kite import anchor_pull, line_elevation
         from .objects.parachute import projected_radius, swing_angle
 
-        if self._kites and tri_force is not None and not isinstance(tri_force, np.ndarray):
-            tri_force = tri_force.numpy()
         metrics = object_metrics(self.model, frame)
         out = []
         for k, record in enumerate(self.model.objects):
@@ -290,11 +282,7 @@ class Figures:
                 values["bank"] = bank(record, frame.positions)
             elif record.kind == "kite":
                 values["line_angle"] = line_elevation(record, frame.positions)
-                values["line_pull"] = float("nan")
-                if tri_force is not None:
-                    triangles, mass = self._kites[k]
-                    air = 3.0 * tri_force[triangles].sum(axis=0)  # tri_force is each vertex's third
-                    values["line_pull"] = float(np.linalg.norm(air - np.array([0.0, 0.0, GRAVITY * mass])))
+                values["line_pull"] = anchor_pull(record, frame.positions, self.model.particle_free_mass, GRAVITY)
             elif record.kind == "parachute":
                 values["radius"] = projected_radius(record, frame.positions)
                 values["swing"] = swing_angle(record, frame.positions)

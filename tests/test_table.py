@@ -47,8 +47,8 @@ def test_table_matches_the_printed_spread_and_the_sweep(kite_tables):
     printed = [float(v) for v in re.search(r"line angle ([0-9.]+) deg \(([0-9.]+) to ([0-9.]+)\)", line).groups()]
     angles = parquet["line_angle_mean"].to_numpy()
     assert printed == pytest.approx([angles.mean(), angles.min(), angles.max()], abs=0.051)
-    assert np.all(np.diff(angles) > 0)  # more wind: a steeper line and a stronger pull
-    assert np.all(np.diff(parquet["line_pull_mean"]) > 0)
+    assert np.all(np.diff(parquet["line_pull_mean"]) > 0)  # more wind: a stronger pull (the line's angle at 5-10 s
+    # still depends on how far each kite has climbed)
     base = descriptor.resolve("kite")[0]
     plan = sweeps.SweepPlan(base, sweeps.parse_axes(base, ["wind.speed=4:8:3"]), seconds=10.0)
     rows = sweeps.run_chunk(plan.chunks(3, set(), "cpu", None)[0])

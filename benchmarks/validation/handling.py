@@ -260,6 +260,53 @@ def lagged_period(speed: float, lag: float = 0.0) -> float:
     return math.pi * math.sqrt(2.0) * speed / GRAVITY * math.sqrt(1.0 + lag)
 
 
+def inertial_phugoid(
+    speed: float,
+    glide_ratio: float,
+    lag: float = 0.0,
+    static_margin: float = math.inf,
+    inertia_per_mass: float = 0.0,
+) -> dict:
+    """The phugoid of a wing with drag, pitch damping and pitch inertia: its damped ``period`` [s], damping ratio
+    ``zeta`` and ``tau`` [s], at ``speed`` V [m/s] and ``glide_ratio`` L/D, with the lag ``c`` (:func:`lag_ratio`),
+    the ``static_margin`` SM [m] and the pitch inertia over the mass I/m [m^2] (:func:`pitch_inertia`).
+
+    Linearised about trim (speed V + u, path angle gamma, the pitch rate the path's, q = dgamma/dt): the pitch
+    equation ``I dq/dt = -M_alpha dalpha - M_q q`` with ``M_alpha = L_alpha SM`` makes the lift change by
+    ``L_alpha dalpha = -(I / SM) d^2gamma/dt^2 - c m V dgamma/dt``: the wing's angle of attack must fall to
+    accelerate its pitch. With ``m V dgamma/dt = 2 m g u / V + L_alpha dalpha`` and ``du/dt = -g gamma - d u``
+    (``d = 2 g / (V L/D)``, drag ~ V^2) the modes are the roots of
+    ``(tau s^2 + (1 + c) s) (s + d) + 2 g^2 / V^2 = 0``, ``tau = (I/m) / (SM V)``. Without inertia
+    (``tau = 0``) this is Lanchester's phugoid with the lag: ``zeta = sqrt(1 + c) / (sqrt(2) L/D)``, period
+    ``sqrt(1 + c)`` times his (:func:`lagged_period`). Inertia lowers the damping by about
+    ``tau omega / (2 (1 + c))`` (``omega = sqrt(2) g / (V sqrt(1 + c))``): the lift that accelerates the pitch is in
+    phase with the speed's rate of change and feeds the oscillation."""
+    d = 2.0 * GRAVITY / (speed * glide_ratio)
+    tau = inertia_per_mass / (static_margin * speed)
+    roots = np.roots([tau, (1.0 + lag) + tau * d, (1.0 + lag) * d, 2.0 * GRAVITY**2 / speed**2])
+    mode = roots[np.argmax(np.abs(roots.imag))]
+    return {"period": 2.0 * math.pi / abs(mode.imag), "zeta": -mode.real / abs(mode), "tau": tau}
+
+
+def pitch_inertia(scene: str | dict, solver: dict | None = None, settle: float = 15.0) -> dict:
+    """The flying object's (the glider with its pilot and control frame) ``mass`` [kg] and pitch inertia about its
+    centre of mass over that mass, ``inertia_per_mass`` [m^2], after ``settle`` [s] hands off: the particles' masses
+    times their squared distances from the horizontal axis through the centre of mass across the flight path."""
+    sim = Simulation(scene_descriptor(scene, solver))
+    sim.step(max(1, int(round(settle / sim.dt))))
+    record = sim.model.objects[0]
+    q = sim.state.positions()[record.particles]
+    q_prev = sim.state.particle_q_prev.numpy()[record.particles]
+    inv = sim.model.particle_inv_mass.numpy()[record.particles]
+    mass = np.where(inv > 0, 1.0 / np.where(inv > 0, inv, 1.0), 0.0)
+    centre = mass @ q / mass.sum()
+    axis = np.cross(mass @ (q - q_prev), (0.0, 0.0, 1.0))
+    axis /= np.linalg.norm(axis)
+    r = q - centre
+    across = r - np.outer(r @ axis, axis)
+    return {"mass": float(mass.sum()), "inertia_per_mass": float(mass @ (across**2).sum(axis=1) / mass.sum())}
+
+
 def delta_pitch_lag(
     span: float,
     chord: float,

@@ -69,6 +69,15 @@ class NumpyVerlet:
         self.drag_area = m.drag_area.numpy()[: m.drag_count] if m.drag_count else np.zeros(0, F32)
         self.air = solver.air
         self.wind_profile = solver.wind
+        # whole-canopy air force (warpsim.kernels.canopy): each canopy's triangles, table, parameters, lagged side force
+        self.canopies = []
+        if m.canopy_count:
+            start, ids = m.canopy_tri_start.numpy(), m.canopy_tri_ids.numpy()
+            table = m.canopy_table.numpy().reshape(m.canopy_count, -1, 2)
+            params = m.canopy_params.numpy()
+            for c in range(m.canopy_count):
+                self.canopies.append((ids[start[c] : start[c + 1]], table[c], params[c]))
+            self.canopy_side = solver.canopy_side.numpy()[: m.canopy_count].copy()
         self.ground = solver.ground
         t = m.terrain
         heights = np.asarray(t.heights, dtype=F64)  # as Heightfield.device_data: float32 above a float64 base
@@ -153,6 +162,7 @@ class NumpyVerlet:
         if self.air.model == AeroModel.SAIL:
             force = self._sail(n, area, w, q) * (F32(self.air.scale) / F32(3.0))
             force = np.where(ok[:, None], force, F32(0.0))
+            self._canopy_force(force, cross, area, velocity, a, b, c)
             return self._sum_per_particle(t.ravel(), np.repeat(force, 3, axis=0))
         if self.air.model == AeroModel.PAPER:
             mag = self.air_density * wn * np.abs(wn) * area
@@ -165,7 +175,49 @@ class NumpyVerlet:
             sign = np.where(wn < 0, F32(-1.0), F32(1.0))  # wp.sign: 1 at zero
             mag = np.where(live, F32(0.5) * self.air_density * speed * speed * area * c_n * sign, F32(0.0))
         force = np.where(ok[:, None], n * mag[:, None], F32(0.0)) * (F32(self.air.scale) / F32(3.0))
+        self._canopy_force(force, cross, area, velocity, a, b, c)
         return self._sum_per_particle(t.ravel(), np.repeat(force, 3, axis=0))
+
+    def _canopy_force(self, force, cross, area, velocity, a, b, c) -> None:
+        """Overwrite the canopies' triangles in ``force`` (``[T, 3]``, each vertex's third [N]) with their share of
+        the whole canopy's force, as :mod:`warpsim.kernels.canopy` (sums in float64, then rounded)."""
+        for k, (ids, table, (nominal, projected0, orient, lag)) in enumerate(self.canopies):
+            tri_area = area[ids].astype(F64)
+            total = tri_area.sum()
+            area_vec = (F64(0.5) * cross[ids].astype(F64)).sum(axis=0)
+            projected = np.linalg.norm(area_vec)
+            if not (total > 0.0 and projected > 0.0):
+                force[ids] = F32(0.0)
+                continue
+            axis = area_vec * (orient / projected)
+            v = (velocity[ids].astype(F64) * tri_area[:, None]).sum(axis=0) / total
+            centre = (((a + b + c)[ids] / F64(3.0)) * tri_area[:, None]).sum(axis=0) / total
+            wind = self.wind[self.tri_world[ids[0]]].astype(F64)
+            shear = self.wind_profile
+            if shear.shear_exponent != 0.0:
+                h = max(centre[2] - float(self.height(centre[:1], centre[1:2])[0]), 0.1)
+                wind = wind * (h / shear.reference_height) ** shear.shear_exponent
+            w = wind - v
+            speed = np.linalg.norm(w)
+            if speed == 0.0:
+                force[ids] = F32(0.0)
+                continue
+            x = np.degrees(np.arccos(np.clip(w @ axis / speed, -1.0, 1.0))) / 5.0
+            row = min(int(x), len(table) - 2)
+            frac = min(x - row, 1.0)
+            coef = table[row] * (1.0 - frac) + table[row + 1] * frac
+            q = 0.5 * float(self.air_density) * speed * speed
+            pressure = q * coef[0] * nominal / projected0
+            across = w - axis * (w @ axis)
+            side = np.zeros(3)
+            if np.linalg.norm(across) > 1e-6 * speed:
+                side = across * (q * coef[1] * nominal * projected / (projected0 * total * np.linalg.norm(across)))
+            if lag > 0.0:
+                tau = lag * 2.0 * np.sqrt(projected0 / np.pi) / speed
+                side = self.canopy_side[k] + (side - self.canopy_side[k]) * min(float(self.dt) / tau, 1.0)
+            self.canopy_side[k] = side
+            per = cross[ids].astype(F64) * (0.5 * pressure * orient) + side * tri_area[:, None]
+            force[ids] = _f32(per * (float(self.air.scale) / 3.0))
 
     def _sail(self, n, area, w, q) -> np.ndarray:
         """``sail`` air force [N] per triangle (before the 1/3 share), as

@@ -27,6 +27,7 @@ def program(tmp_path_factory):
 # is a change of arithmetic on one side. The glider and the parachute are free worlds: warpsim gives them back
 # the momentum the projection moved (keep_momentum, on by default: 5e-5 m on the glider and 1.2e-3 m on the
 # parachute after 3 steps), and so does the C.
+PAPER_CANOPY = {"parachute": {"canopy": "paper"}}  # the C has the per-triangle laws only (the NumPy has the canopy)
 GROUND = {"terrain": {"kind": "procedural", "amplitude": 5.0}, "flag": {"pole_height": 0.5}}
 
 
@@ -38,8 +39,8 @@ GROUND = {"terrain": {"kind": "procedural", "amplitude": 5.0}, "flag": {"pole_he
         ("hang-glider", {"solver": {"keep_momentum": False}}, 3),  # the paper's projection alone
         ("kite", {}, 3),  # a nail (the rope's anchor)
         ("kite", {}, 30),
-        ("parachute", {}, 3),  # 400 m up
-        ("parachute", {}, 30),
+        ("parachute", PAPER_CANOPY, 3),  # 400 m up
+        ("parachute", PAPER_CANOPY, 30),
         ("flag", GROUND, 3),  # 6 particles on sloped terrain: normal push-out with friction
         ("flag", {**GROUND, "ground": {"collision": "clamp"}}, 30),
     ],
@@ -53,6 +54,12 @@ def test_c_step_agrees_with_warpsim(program, scene, override, steps):
     np.testing.assert_array_equal(q, sim.state.positions())  # bit for bit
     assert np.abs(q - start).max() > 0.01  # the steps moved things: the comparison means something
     assert seconds > 0 and set(spent) == {"air", "verlet", "constraints", "terrain"}
+
+
+def test_c_reference_refuses_the_whole_canopy_force(tmp_path):
+    sim = Simulation(descriptor.resolve("parachute")[0])
+    with pytest.raises(ValueError, match="whole-canopy"):
+        c_reference.export(sim, tmp_path / "model.bin")
 
 
 def test_c_reference_refuses_wind_shear(tmp_path):

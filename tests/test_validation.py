@@ -40,12 +40,12 @@ def test_pendulum_period_and_the_damping_of_projection():
 def test_mass_splitting_restores_the_force_balance():
     """The kite's rope angle matches its force balance only when the constraint corrections conserve momentum (its
     rope is nailed: the momentum projection leaves it alone); the free parachute's momentum is kept after every
-    projection, so its descent is Knacke's with the paper's average as with mass splitting."""
+    projection, so its descent is Knacke's with the paper's average as with mass splitting, to 2 %."""
     kite = _rows("kite")
     assert kite["kite line angle (mass splitting)"].ok
     assert not kite["kite line angle (paper's average)"].ok
     chute = _rows("parachute")
-    split, plain = chute["parachute descent (mass splitting)"], chute["parachute descent"]
+    split, plain = chute["parachute flat (mass splitting) descent"], chute["parachute flat descent"]
     assert split.ok and plain.ok and not split.model_limit and not plain.model_limit
     assert float(split.measured.split()[0]) == pytest.approx(float(plain.measured.split()[0]), rel=0.02)
 
@@ -114,8 +114,9 @@ def test_glider_converges_as_dt_halves_and_iterations_double():
 @pytest.mark.slow
 def test_flight_figures_converge():
     """The turn rate (bank held at 20°), the phugoid period and the parachute's descent at the defaults lie within
-    10 %, 10 % and 5 % of dt/4 with 220 iterations. (The kite's line angle does not converge, its
-    launch failing at some fine settings: the validation's convergence-figures part reports it as a model limit.)"""
+    10 %, 10 % and 5 % of dt/4 with 220 iterations. (The kite's line angle rises from 52.2° at the defaults to
+    58.4° as the cloth stiffens with the iterations: the validation's convergence-figures part reports it as a model
+    limit.)"""
     rows = cases.convergence_figures(
         ["glider turn rate, bank held at 20°", "glider phugoid period", "parachute descent"]
     )

@@ -373,7 +373,7 @@ def test_window_first_picture_shows_the_sail_where_the_glider_is(glider_flight):
     x, y = result["sail_pixel"]  # where the sail's centre projects
     h, w = picture.shape[:2]
     assert abs(cols.mean() - x) < 0.1 * w and abs(rows.mean() - y) < 0.1 * h
-    sky = picture[5:40, w // 2 :]
+    sky = picture[5:40, w - 3 :]  # the right edge: the heads-up panel leaves at least 4 pixels there
     assert (sky[..., 2] > sky[..., 0]).all()  # a blue sky above
 
 
@@ -528,3 +528,92 @@ def test_the_display_going_away_keeps_the_recording_and_screenshot(tmp_path):
     simulated = float(lines[0].split("at t = ")[1].split(" s")[0])
     with Recording(tmp_path / "f.h5") as recording:
         assert recording.frame_count >= 20 and recording.time[-1] == pytest.approx(simulated, abs=0.006)
+
+
+# ---------------------------------------------------------------------------------------------- what is drawn
+
+
+@pytest.fixture(scope="module")
+def pictures(display, tmp_path_factory):
+    """Screenshots of a flag, a kite from the ground, a glider from the side and two worlds, with where their drawn
+    parts project (tests/viewer_driver.py pictures)."""
+    from PIL import Image
+
+    out = tmp_path_factory.mktemp("pictures")
+    result = _drive(display, "pictures", out)
+    shots = {name: np.asarray(Image.open(out / f"{name}.png").convert("RGB")).astype(int) for name in result}
+    return result, shots
+
+
+def _found(picture: np.ndarray, point, test, reach: int = 2) -> bool:
+    """Whether a pixel within ``reach`` of ``point`` (column, row) passes ``test`` ([n, 3] rgb -> [n] bool)."""
+    x, y = (int(round(v)) for v in point)
+    patch = picture[max(y - reach, 0) : y + reach + 1, max(x - reach, 0) : x + reach + 1].reshape(-1, 3)
+    return bool(len(patch)) and bool(test(patch).any())
+
+
+def _dark(p):
+    return p.max(axis=1) < 90
+
+
+def test_hud_text_is_on_a_dark_panel_and_the_objects_below_it(pictures):
+    result, shots = pictures
+    for name, picture in shots.items():
+        height = int(result[name]["panel_height"])
+        assert 40 < height < picture.shape[0] // 2, name
+        panel = picture[4 : height - 4, 8:300]
+        assert (panel.max(axis=2) < 110).mean() > 0.6, name  # dark blue-grey, semi-opaque
+        assert (panel.min(axis=2) > 200).sum() > 50, name  # white text on it
+    flag = shots["flag"]  # the flag's red cloth is all below the panel
+    red = (flag[..., 0] > 80) & (flag[..., 1] < 50) & (flag[..., 2] < 50)
+    assert red.sum() > 500 and np.flatnonzero(red.any(axis=1)).min() > result["flag"]["panel_height"]
+
+
+def test_flag_has_a_pole(pictures):
+    result, shots = pictures
+
+    def grey(p):  # the pole's light grey; grass is green, sky blue
+        return (np.ptp(p, axis=1) < 15) & (p.min(axis=1) > 100)
+
+    for point in ("pole_low", "pole_mid"):  # under the cloth, down to the ground
+        assert _found(shots["flag"], result["flag"][point], grey), point
+
+
+def test_kite_line_is_drawn_and_the_ground_camera_frames_horizon_and_kite(pictures):
+    result, shots = pictures
+    kite, where = shots["kite"], result["kite"]
+    on_line = [_found(kite, where[f"line_{k}"], _dark) for k in range(2, 9)]
+    assert all(on_line), on_line  # a dark line 2 pixels wide against the sky, tens of metres away
+    h, w = kite.shape[:2]
+    x, y = where["sail"]
+    assert 0 < x < w and where["panel_height"] < y < h  # the kite in the picture, below the panel
+    assert where["horizon"][1] < h - 5  # the horizon in the picture too: ground under it, sky above
+    ground = kite[-4:].reshape(-1, 3)
+    assert (ground[:, 1] > ground[:, 2]).mean() > 0.9  # green
+    sky = kite[int(where["panel_height"]) + 5 : int(where["panel_height"]) + 15, -20:].reshape(-1, 3)
+    assert (sky[:, 2] > sky[:, 0] + 30).all()  # blue
+
+
+def test_glider_has_a_control_frame_and_a_pilot_on_the_strap(pictures):
+    result, shots = pictures
+    glider, where = shots["glider"], result["glider"]
+    uprights = [_found(glider, where[f"upright_{k}"], _dark) for k in range(3, 9)]
+    assert all(uprights), uprights  # the A-frame's upright from the hang point to the base bar
+    assert _found(glider, where["harness"], lambda p: p.max(axis=1) < 70)  # the pilot's harness
+    assert _found(glider, where["head"], lambda p: (p[:, 0] > 120) & (p[:, 1] > 100) & (p[:, 2] < 60), reach=3)
+
+
+def test_worlds_are_drawn_apart(pictures):
+    result, shots = pictures
+    worlds, where = shots["worlds"], result["worlds"]
+    a, b = np.array(where["world_0"]), np.array(where["world_1"])
+    assert np.linalg.norm(a - b) > 60  # pixels apart at 640 x 360
+
+    def red(p):
+        return (p[:, 0] > 80) & (p[:, 1] < 50) & (p[:, 2] < 50)
+
+    assert _found(worlds, a, red) and _found(worlds, b, red)
+    middle = (a + b) / 2  # between the two flags: not cloth
+    assert not _found(worlds, middle, red, reach=3)
+    cloth = (worlds[..., 0] > 80) & (worlds[..., 1] < 50) & (worlds[..., 2] < 50)
+    assert np.flatnonzero(cloth.any(axis=1)).min() > where["panel_height"]

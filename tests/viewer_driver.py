@@ -5,7 +5,7 @@ going away never takes the test process with it). Keys are injected with xdotool
 focused window); the wall clock is the test's own (one frame interval per tick), so that what is stepped
 does not depend on how fast the machine draws.
 
-    python tests/viewer_driver.py glider|kite OUT_DIR
+    python tests/viewer_driver.py glider|kite|pictures OUT_DIR
 """
 
 from __future__ import annotations
@@ -59,9 +59,9 @@ class Clock:
 
 
 def projected(viewer, point: np.ndarray) -> list[float]:
-    """Pixel (column, row from the top) of a world point in the viewer's current view."""
+    """Pixel (column, row from the top) of a world point in the viewer's current view (below the heads-up panel)."""
     w, h = SIZE
-    clip = view_matrix(viewer.view(), w, h) @ np.append(point, 1.0)
+    clip = view_matrix(viewer.view(), w, h, viewer.backend.hud_fraction) @ np.append(point, 1.0)
     x, y = clip[:2] / clip[3]
     return [float((x + 1) / 2 * w), float((1 - y) / 2 * h)]
 
@@ -120,8 +120,72 @@ def kite(out: Path) -> dict:
     return result
 
 
+def _fly(scene: str, title: str, seconds: float, camera: str, overrides: dict | None = None):
+    """A viewer of ``scene`` flown hands off for ``seconds`` on the test's clock, with ``camera``."""
+    from warpsim.scene.descriptor import merge
+
+    descriptor, _, where = resolve(scene, scene_dirs())
+    if overrides:
+        descriptor = merge("test", descriptor, overrides)
+    backend = PygletBackend(SIZE, keep_pictures=True)
+    viewer = Viewer(Simulation(descriptor), backend, title, None, to_toml(descriptor), where, say=lambda line: None)
+    viewer.camera = camera
+    Clock(viewer).seconds(seconds)
+    return viewer, backend
+
+
+def pictures(out: Path) -> dict:
+    """Screenshots of what the viewer draws besides cloth, with where the drawn parts project (pixels)."""
+    from PIL import Image
+
+    from warpsim.io.shapes import BODY
+
+    result = {}
+
+    def save(name, viewer, backend, **points):
+        Image.fromarray(backend.screenshot()).save(out / f"{name}.png")
+        result[name] = {key: projected(viewer, np.asarray(p, dtype=float)) for key, p in points.items()}
+        result[name]["panel_height"] = backend.hud_fraction * SIZE[1]
+        viewer.close()
+
+    viewer, backend = _fly("flag", "warpsim-test-flag", 1.0, "orbit")
+    pole = viewer.model.objects[0].parts["pole"]
+    q = viewer.points
+    foot = q[pole].mean(axis=0) * [1, 1, 0]  # the terrain under the flag is flat at 0
+    save("flag", viewer, backend, pole_low=foot + [0, 0, 0.5], pole_mid=foot + [0, 0, 1.5])
+
+    viewer, backend = _fly("kite", "warpsim-test-kite-ground", 3.0, "ground")
+    kite = viewer.model.objects[0]
+    q = viewer.points
+    rope = kite.curves["rope"][0]
+    points = {f"line_{k}": q[rope[int(k * (len(rope) - 1) / 10)]] for k in range(2, 9)}
+    save("kite", viewer, backend, sail=q[kite.parts["sail"]].mean(axis=0), horizon=viewer.view().eye + [1e4, 0, 0],
+         **points)  # fmt: skip
+
+    viewer, backend = _fly("hang-glider", "warpsim-test-glider-side", 0.5, "orbit")
+    viewer.orbit.update(azimuth=-100.0, elevation=-3.0)
+    viewer.tick(viewer._last)  # draw again from the side (no time passes)
+    glider = viewer.model.objects[0]
+    q = viewer.points
+    hang, left, _ = glider.parts["control_frame"]
+    fwd = q[glider.nose] - q[glider.keel[-1]]
+    fwd /= np.linalg.norm(fwd)
+    upright = {f"upright_{k}": q[hang] + k / 10 * (q[left] - q[hang]) for k in range(3, 9)}
+    save("glider", viewer, backend, head=q[glider.pilot] + BODY["head"] * fwd,
+         harness=q[glider.pilot] - 0.25 * fwd, **upright)  # fmt: skip
+
+    viewer, backend = _fly("flag", "warpsim-test-worlds", 1.0, "orbit", {"worlds": {"count": 2}})
+    q = viewer.points
+    centres = {
+        f"world_{w}": q[np.flatnonzero(viewer.model.particle_world_np == w)].mean(axis=0)
+        for w in range(viewer.model.world_count)
+    }
+    save("worlds", viewer, backend, **centres)
+    return result
+
+
 if __name__ == "__main__":
     _warp.init()
     scenario, out = sys.argv[1], Path(sys.argv[2])
-    result = {"glider": glider, "kite": kite}[scenario](out)
+    result = {"glider": glider, "kite": kite, "pictures": pictures}[scenario](out)
     (out / f"{scenario}.json").write_text(json.dumps(result))

@@ -52,6 +52,8 @@ def export(sim: Simulation, path: Path) -> None:
     ref = NumpyVerlet(sim)
     if ref.wind_profile.shear_exponent != 0.0:
         raise ValueError("the C reference has no wind shear: set wind.shear_exponent = 0")
+    if ref.canopies:
+        raise ValueError("the C reference has no whole-canopy air force: set parachute.canopy = paper")
     laws = {AeroModel.PAPER: 0, AeroModel.PLATE: 1, AeroModel.SAIL: 2}
     n = ref.n
     nail_of = np.full(n, -1, dtype=np.int32)

@@ -37,7 +37,7 @@ def command(args) -> int:
         if paper:
             print(
                 f"  the paper's model: particles {paper['particles']}, sticks {paper['sticks']}, "
-                f"triangles {paper['triangles']} (see README: counts)"
+                f"triangles {paper['triangles']} (see docs/objects.md)"
             )
     print(f"  terrain: {model.terrain}")
     print("settings:")

@@ -12,7 +12,9 @@ def command(args) -> int:
 
     interruptible()  # the output's temporary is made next
     try:
-        path = render_recording(args.recording, args.output, args.frame, args.size, args.azimuth, args.elevation)
+        path = render_recording(
+            args.recording, args.output, args.frame, args.size, args.azimuth, args.elevation, wide=args.wide
+        )
     except RuntimeError as err:  # no Pillow (a bad recording or output: exit 2 in main._exit_code)
         raise UsageError(str(err)) from None
     print(f"{args.recording} -> {path}")
@@ -26,7 +28,7 @@ def add_parser(sub) -> None:
         help="draw a recording as a picture (.png, one frame) or an animation (.gif)",
         description="Draw a recording with a small built-in renderer (needs Pillow: pip install -e '.[render]'): "
         "OUT.png shows one frame (default the last), OUT.gif the whole run at simulated speed. The camera looks "
-        "from the side and a little above and follows the objects.",
+        "from the side and a little above, under the sky, at the distance that frames the objects, and follows them.",
     )
     render.add_argument("recording", metavar="REC.h5")
     render.add_argument("output", metavar="OUT.png|OUT.gif")
@@ -41,6 +43,9 @@ def add_parser(sub) -> None:
     render.add_argument(
         "--elevation",
         type=number_type("--elevation", "an angle in degrees from -90 to 90", -90.0, 90.0, closed=True),
-        default=20.0,
-        help="view height above the horizon [deg], -90..90 (default 20)",
+        default=12.0,
+        help="view height above the horizon [deg], -90..90 (default 12)",
+    )
+    render.add_argument(
+        "--wide", action="store_true", help="frame the ropes and lines too (a kite's line down to its anchor)"
     )

@@ -58,10 +58,13 @@ class _StopRequests:
 def command(args) -> int:
     """Run a scene (or continue a recording) and print the summary: check the options, resolve the scene, open
     the outputs, run, report."""
+    from ..io import OutputWriteError
+    from ..io.table import check_table_path, write_world_table
     from ..run.replay import RecordedControls
     from ..run.simulation import BlowUpError
 
     usd_path, h5_path = _check_run_options(args)
+    table = checked_output(check_table_path, args.table, "--table")
     device = check_device(args.device)
     with contextlib.ExitStack() as outputs:
         lock = _claim_recording(outputs, args, h5_path)
@@ -70,7 +73,7 @@ def command(args) -> int:
         stop = _StopRequests()
         outputs.callback(stop.restore)
         writer = _Outputs(outputs, sim, run, args, h5_path, usd_path, lock, stop)
-        figures = None if args.quiet else _flight_figures(sim, run.seconds)
+        figures = None if args.quiet and not table else _flight_figures(sim, run.seconds)
         on_frame = writer.on_frame if writer.any else None
         if figures is not None:
             on_frame = _both(figures, on_frame)
@@ -87,7 +90,12 @@ def command(args) -> int:
         except BlowUpError as err:
             blowup, summary = err, err.summary
         writer.close()
-    return _report(args, run, summary, blowup, writer.failures, h5_path, usd_path, figures)
+    if table is not None:
+        try:
+            write_world_table(table, figures, sim.descriptor)
+        except OutputWriteError as err:
+            writer.failures.append(err)
+    return _report(args, run, summary, blowup, writer.failures, h5_path, usd_path, figures, table)
 
 
 def _flight_figures(sim, seconds: float):
@@ -301,7 +309,7 @@ class _Outputs:
                     self.failures.append(err)
 
 
-def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path, figures=None) -> int:
+def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path, figures=None, table=None) -> int:
     """Print the summary, the flight figures, the outputs and any error line; return the exit code."""
     if not args.quiet and sys.stderr.isatty():
         sys.stderr.write("\r" + " " * 70 + "\r")
@@ -309,7 +317,7 @@ def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path,
         print(summary.text())
         for line in figures.lines() if figures is not None else ():
             print(line)
-        for label, path in (("recording", args.resume or h5_path), ("USD stage", usd_path)):
+        for label, path in (("recording", args.resume or h5_path), ("USD stage", usd_path), ("table", table)):
             if path and not any(str(path) in str(err) for err in failures):
                 print(f"  {label}: {path}")
     for err in failures:
@@ -323,7 +331,7 @@ def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path,
             if run.descriptor["solver"]["method"] == "euler"
             else "try a smaller --dt or more --iterations"
         )
-        sys.stderr.write(f"warpsim run: error: {one_line(str(blowup))}\n  ({hint}; see README: Blow-ups)\n")
+        sys.stderr.write(f"warpsim run: error: {one_line(str(blowup))}\n  ({hint}; see docs/outputs.md: Blow-ups)\n")
         return EXIT_BLOWUP
     return EXIT_INTERRUPTED if summary.interrupted else 0
 
@@ -357,6 +365,11 @@ def add_parser(sub) -> None:
         metavar="OUT.h5",
         help="stream a recording (positions, diagnostics, topology, descriptor) frame by frame; "
         "an interrupted run keeps every completed frame",
+    )
+    run.add_argument(
+        "--table",
+        metavar="OUT.parquet|OUT.csv",
+        help="write the closing figures, one row per world (the sweep's columns; warpsim.io.table)",
     )
     run.add_argument(
         "--resume",

@@ -211,7 +211,7 @@ def add_parser(sub) -> None:
     sweep.add_argument(
         "--scheduler",
         metavar="tcp://HOST:PORT",
-        help="run on this running Dask scheduler's workers instead of a local cluster (see README: Sweeps)",
+        help="run on this running Dask scheduler's workers instead of a local cluster (see docs/sweeps.md)",
     )
     sweep.add_argument(
         "--chunk", type=world_count_type, metavar="N", help="cases per task (default: about 4 tasks per worker, <= 64)"

@@ -5,7 +5,6 @@ not in the diagnostics."""
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -14,8 +13,8 @@ import numpy as np
 from ..physics.config import GRAVITY
 from ..physics.model import Model, ObjectRecord
 from .hang_glider import bank
-from .kite import line_elevation
-from .parachute import projected_radius
+from .kite import anchor_pull, line_elevation
+from .parachute import projected_radius, swing_angle
 
 
 @dataclass(frozen=True)
@@ -62,32 +61,33 @@ def glider_figures(model: Model, record: ObjectRecord) -> Measure:
 
 KITE_FIGURES = {
     "line_angle": ("deg", "elevation of the line above the horizontal, from the anchor to the tow point"),
-    "line_pull": ("N", "|air force on the kite + its weight|, the steady line tension"),
+    "line_pull": ("N", "the line's pull at the anchor, from the rope's sag (objects.kite.anchor_pull)"),
 }
 
 
 def kite_figures(model: Model, record: ObjectRecord) -> Measure:
-    """The kite's :data:`KITE_FIGURES` of a frame; its triangles and their mass are found once, here."""
-    triangles = np.concatenate([np.asarray(t) for t in record.tri_parts.values()]).astype(np.int64)
-    mass = float(model.particle_free_mass[np.unique(model.tri_indices_np[triangles])].sum())
+    """The kite's :data:`KITE_FIGURES` of a frame, measured from the particles (the pull from the rope's sag:
+    NaN while the rope does not sag, :func:`~warpsim.objects.kite.anchor_pull`)."""
 
     def measure(view: FigureView) -> dict[str, float]:
-        values = {"line_angle": line_elevation(record, view.positions), "line_pull": math.nan}
-        if view.tri_force is not None:
-            air = 3.0 * view.tri_force[triangles].sum(axis=0)  # tri_force is each vertex's third
-            values["line_pull"] = float(np.linalg.norm(air - np.array([0.0, 0.0, GRAVITY * mass])))
-        return values
+        return {
+            "line_angle": line_elevation(record, view.positions),
+            "line_pull": anchor_pull(record, view.positions, model.particle_free_mass, GRAVITY),
+        }
 
     return measure
 
 
-PARACHUTE_FIGURES = {"radius": ("m", "mean horizontal distance of the canopy's rim from its centre")}
+PARACHUTE_FIGURES = {
+    "radius": ("m", "mean horizontal distance of the canopy's rim from its centre"),
+    "swing": ("deg", "angle of the line from the person to the canopy's centre from the vertical"),
+}
 
 
 def parachute_figures(model: Model, record: ObjectRecord) -> Measure:
     """The parachute's :data:`PARACHUTE_FIGURES` of a frame."""
 
     def measure(view: FigureView) -> dict[str, float]:
-        return {"radius": projected_radius(record, view.positions)}
+        return {"radius": projected_radius(record, view.positions), "swing": swing_angle(record, view.positions)}
 
     return measure

@@ -20,21 +20,23 @@ import numpy as np
 
 from ..physics.builder import ModelBuilder
 from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
+from ..physics.kernels.aero import sail_coefficients
 from ..physics.model import ObjectRecord
 from ..physics.terrain import Heightfield
-from .delta import add_rigid_frame, add_spar_braces, body_axes, delta_sail_aero
+from .delta import add_rigid_frame, add_spar_braces, body_axes, chordwise_loading, delta_sail_aero
 
 PAPER_COUNTS = {"particles": 152, "sticks": 458, "triangles": 221}
 
 
 @dataclass(kw_only=True)
 class KiteConfig(Checked):
-    """Parameters of the delta kite (defaults: the paper's resolution, a 1.8 m, 0.8 m^2, 200 g kite).
+    """Parameters of the delta kite (defaults: the paper's resolution, a 1.8 m, 0.8 m^2, 150 g kite with a tail).
 
     Attributes:
-        design: ``flying`` (the default: towed from 45 % of the keel, the keel's edges reinforced, the sail
-            cut with 3 % billow, under the ``sail`` air model with a 5 ms step, it flies as a real delta does)
-            or ``paper`` (Section 7: towed from 35 %, the paper's air law and 10 ms step). In a scene or with
+        design: ``flying`` (the default: towed from 47 % of the keel, the keel's edges reinforced, a flat sail
+            whose centre of pressure moves with its angle of attack, 30 deg dihedral and a tail, under the ``sail``
+            air model with a 5 ms step, it flies as a real delta does) or ``paper`` (Section 7: a 200 g kite
+            towed from 35 %, 20 deg dihedral, no tail, the paper's air law and 10 ms step). In a scene or with
             ``--set`` it is a preset (:data:`PRESETS`): it sets those keys, ``air.model`` and ``solver.dt``, and
             keys given beside it win. The builder itself reads only the individual keys.
         divisions: main-sail subdivisions per side (paper: 14 particles per side -> 13).
@@ -68,9 +70,22 @@ class KiteConfig(Checked):
             (:func:`~warpsim.kernels.aero.sail_coefficients`).
         stall_angle: ``sail`` air model: angle of attack [deg] where a triangle's flow separates.
         billow: the sail's cloth sticks are this much longer than the sail as built (a delta's sail is cut
-            with billow, so it sets cambered between its spars; not in the paper). With 0.03 the kite flies
-            on through a lull to 4 m/s and rides kite_gusty.toml's gusts; with 0 a 5 m/s lull brings it
-            down (README, kite).
+            with billow, so it sets cambered between its spars; not in the paper). 0 by default: with
+            ``chord_loading`` a 3 % billow lets the kite settle to one side of the wind window (14 m, banked
+            27 deg in 6 m/s, measured).
+        chord_loading: load the sail's triangles chordwise as thin-aerofoil theory loads each chordwise strip
+            (:func:`~warpsim.objects.delta.chordwise_loading`), so its centre of pressure lies near half the root
+            chord from the nose at small angles of attack and moves back to the area centroid (2/3) as the flow
+            separates: the kite trims its sail at a real angle of attack (about 11 deg in 6 m/s) instead of the
+            ~5 deg a load spread evenly leaves it (the centroid at every angle).
+        tail_drag: drag area ``C_D A`` [m^2] of a tail (a tube or ribbon tail) hung from the spine's back end
+            (``sail`` air model only): its drag behind the tow point keeps the kite's nose into the wind, which
+            holds it in the middle of the wind window (0: no tail).
+        delta_lift: ``sail`` air model: give the sail the lift slope of its delta planform, the Helmbold-DATCOM
+            slope at its half-chord sweep (:func:`~warpsim.kernels.aero.sail_coefficients`; 3.64 /rad for the
+            default 1.8 x 0.9 m sail), divided per triangle by the cosine of the leading edge's sweep, which the
+            attached flow's sweep theory takes off again. Without it the sail lifts ~0.7 of that (sweep theory on
+            top of the unswept slope), C_L 0.51 at 10.9 deg in 6 m/s against the planform's 0.69.
     """
 
     design: str = choice("flying", ("flying", "paper"))
@@ -79,8 +94,8 @@ class KiteConfig(Checked):
     span: float = number(1.8, POSITIVE)
     spine: float = number(0.9, POSITIVE)
     keel_depth: float = number(0.3, POSITIVE)
-    tow_point: float = number(0.45, Bounds(0.0, 1.0))
-    mass: float = number(0.2, POSITIVE)
+    tow_point: float = number(0.47, Bounds(0.0, 1.0))
+    mass: float = number(0.15, POSITIVE)
     frame_height: float = number(0.4, POSITIVE)
     spar_mass_fraction: float = number(0.1, Bounds(0.0, 1.0, low_open=True, high_open=True))
     frame_weight: float = number(4.0, POSITIVE)
@@ -93,11 +108,14 @@ class KiteConfig(Checked):
     heading: float = 0.0
     elevation: float = number(10.0, Bounds(0.0, 90.0))
     attack: float = number(40.0, Bounds(0.0, 90.0))
-    dihedral: float = number(20.0, Bounds(-45.0, 45.0))
+    dihedral: float = number(30.0, Bounds(-45.0, 45.0))
     keel_edges: bool = True
     profile_drag: float = number(0.03, NON_NEGATIVE)
     stall_angle: float = number(18.0, Bounds(0.0, 90.0, low_open=True, high_open=True))
-    billow: float = number(0.03, Bounds(0.0, 0.2))
+    billow: float = number(0.0, Bounds(0.0, 0.2))
+    chord_loading: bool = True
+    tail_drag: float = number(0.15, NON_NEGATIVE)
+    delta_lift: bool = True
 
 
 PRESETS = {
@@ -106,12 +124,33 @@ PRESETS = {
     "flying": {
         "air": {"model": "sail"},
         "solver": {"dt": 0.005},
-        "kite": {k: getattr(KiteConfig(), k) for k in ("tow_point", "keel_edges", "billow")},
+        "kite": {
+            k: getattr(KiteConfig(), k)
+            for k in (
+                "tow_point",
+                "keel_edges",
+                "billow",
+                "chord_loading",
+                "delta_lift",
+                "tail_drag",
+                "dihedral",
+                "mass",
+            )
+        },
     },
     "paper": {
         "air": {"model": "paper"},
         "solver": {"dt": 0.01},
-        "kite": {"tow_point": 0.35, "keel_edges": False, "billow": 0.0},
+        "kite": {
+            "tow_point": 0.35,
+            "keel_edges": False,
+            "billow": 0.0,
+            "chord_loading": False,
+            "delta_lift": False,
+            "tail_drag": 0.0,
+            "dihedral": 20.0,
+            "mass": 0.2,
+        },
     },
 }
 """``kite.design`` presets: ``{design: {section: {key: value}}}`` (see :class:`KiteConfig`)."""
@@ -125,6 +164,8 @@ class KiteRecord(ObjectRecord):
         nose: the nose particle. tow: the tow point (keel apex, the rope's top).
         anchor_particle: the rope's nailed ground end. anchor_nail: its nail (index into ``Control.nail_target``).
         spine: spine particles, nose to tail. tips: (left, right) wing-tip particles.
+        sag_chain: the rope's particles from the anchor up to the first doubled stick (the rope's plain sticks),
+            whose sag gives the line's pull (:func:`anchor_pull`).
     """
 
     nose: int
@@ -133,6 +174,7 @@ class KiteRecord(ObjectRecord):
     anchor_nail: int
     spine: np.ndarray
     tips: tuple[int, int]
+    sag_chain: np.ndarray
 
     def controlled_nails(self) -> np.ndarray:
         """The rope's anchor, which the ``anchor`` control walks."""
@@ -172,6 +214,8 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     rows, sail_sticks, sail_tris = builder.add_subdivided_triangle(
         nose, tip_l, tip_r, n, per_particle * sail_count, shape=dihedral
     )
+    if cfg.chord_loading:
+        chordwise_loading(builder, sail_tris, nose, fwd, left, cfg.spine, 0.5 * cfg.span)
     delta_sail_aero(
         builder,
         sail_tris,
@@ -184,6 +228,15 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
         cfg.profile_drag,
         cfg.stall_angle,
     )
+    if cfg.delta_lift:
+        # the planform's lift slope (Helmbold-DATCOM with its half-chord sweep), per triangle divided by the cosine
+        # of the leading edge's sweep, which the attached flow's sweep theory takes off again (sail_force)
+        half_chord_sweep = np.degrees(np.arctan(cfg.spine / cfg.span))
+        edge_cos = 0.5 * cfg.span / np.hypot(0.5 * cfg.span, cfg.spine)
+        slope, induced, drag0, stall = sail_coefficients(
+            2.0 * cfg.span / cfg.spine, half_chord_sweep, 0.8, cfg.profile_drag, cfg.stall_angle
+        )
+        builder.set_triangle_sail(sail_tris, (slope / edge_cos, induced, drag0, stall))
     keel_top = [rows[r][r // 2] for r in range(2, 3 + 2 * kd, 2)]
     top_front, top_back = builder.positions([keel_top[0], keel_top[-1]])
     k0 = builder.particle_count
@@ -222,6 +275,8 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
             ]
         )
 
+    if cfg.tail_drag > 0.0:
+        builder.set_drag_area(spars.keel[-1], cfg.tail_drag)
     if cfg.billow > 0.0:
         builder.pretension(np.setdiff1d(sail_sticks, spars.sticks), -cfg.billow)
     # rope: from the tow point down to the anchor; the first sticks count double
@@ -257,6 +312,7 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
             anchor_nail=nail,
             spine=np.array(spars.keel),
             tips=(rows[n][0], rows[n][n]),
+            sag_chain=np.array(rope[::-1][: len(rope) - max(int(cfg.rope_doubled), 0)], dtype=np.int64),
         )
     )
 
@@ -283,6 +339,29 @@ def anchor_elevation(record: KiteRecord, q: np.ndarray) -> float:
     above = rope[-2] if len(rope) >= 2 else record.tow
     d = q[above] - q[record.anchor_particle]
     return float(np.degrees(np.arctan2(d[2], np.linalg.norm(d[:2]))))
+
+
+def anchor_pull(record: KiteRecord, q: np.ndarray, mass: np.ndarray, gravity: float = 9.80665) -> float:
+    """The line's pull at the anchor [N], from the rope's sag alone (no air force enters it).
+
+    A rope of sticks that carries only its own weight ``m_j g`` at each particle ``j`` holds the same horizontal
+    tension ``H`` in every segment, and its slope steps up by ``m_j g / H`` at each particle: over the rope's plain
+    sticks from the anchor up (:attr:`KiteRecord.sag_chain`), ``H = g * sum(m_j) / (tan(theta_top) -
+    tan(theta_anchor))`` with ``theta`` the segments' elevations, and the pull along the anchor's segment is
+    ``H / cos(theta_anchor)`` (the catenary's statics, e.g. Irvine, *Cable Structures*, 1981, ch. 1). ``q``: ``[P,
+    3]`` positions [m]; ``mass``: ``[P]`` particle masses [kg]. NaN when the chain has fewer than three particles
+    or does not sag (slack or whipping rope: its slope does not grow upwards).
+    """
+    chain = record.sag_chain
+    if len(chain) < 3:
+        return float("nan")
+    d = np.diff(q[chain], axis=0)
+    slope = d[:, 2] / np.linalg.norm(d[:, :2], axis=1)
+    rise = slope[-1] - slope[0]
+    if not rise > 0.0:
+        return float("nan")
+    horizontal = gravity * float(mass[chain[1:-1]].sum()) / rise
+    return horizontal * float(np.hypot(1.0, slope[0]))
 
 
 def line_state(record: KiteRecord, q: np.ndarray) -> dict:

@@ -83,7 +83,6 @@ OBJECTS: dict[str, ObjectSpec] = {
         presets=kite.PRESETS,
         figures=figures.KITE_FIGURES,
         measure_figures=figures.kite_figures,
-        figures_need_air_force=True,
     ),
     "parachute": ObjectSpec(
         config=parachute.ParachuteConfig,

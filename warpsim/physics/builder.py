@@ -48,6 +48,7 @@ class ModelBuilder:
         self.tri_sail: list[tuple[float, float, float, float]] = []
         self.tri_span: list[tuple[int, int]] = []
         self.drag_area: dict[int, float] = {}
+        self.canopies: list[tuple[np.ndarray, np.ndarray, tuple[float, float, float]]] = []
         self.nail_particles: list[int] = []
         self._nailed: set[int] = set()  # the same, for constant-time membership tests
         self.nail_target: list[Sequence[float]] = []
@@ -179,6 +180,36 @@ class ModelBuilder:
         if not (np.isfinite(area) and area >= 0.0):
             raise ValueError(f"drag area must be finite and >= 0, got {area}")
         self.drag_area[int(particle)] = self.drag_area.get(int(particle), 0.0) + area
+
+    def add_canopy(self, tri_ids, table, axis, wake_lag: float = 0.0) -> int:
+        """Make triangles ``tri_ids`` one parachute canopy whose air force is the whole canopy's
+        (:mod:`warpsim.kernels.canopy`) instead of each triangle's own; returns the canopy's index.
+
+        ``table`` is ``[TABLE_ROWS, 2]``: the tangential and normal force coefficients ``(C_T, C_N)`` on the nominal
+        area at angles of attack 0, 5, ..., 180 degrees; ``axis`` a direction [m] from the canopy's mouth to its apex
+        as built. The nominal area ``S_0`` (the cloth's) and projected area ``S_p0`` are measured here. ``wake_lag``
+        (>= 0) is the time its side force takes to follow the angle of attack, in units of ``D_p / |w|`` (the time
+        the canopy takes to travel its projected diameter; 0 = at once)."""
+        from .kernels.canopy import TABLE_ROWS
+
+        tri_ids = np.atleast_1d(np.asarray(tri_ids, dtype=np.int64))
+        table = np.asarray(table, dtype=np.float64)
+        if len(tri_ids) == 0 or tri_ids.min() < 0 or tri_ids.max() >= self.tri_count:
+            raise ValueError("a canopy needs existing triangles")
+        if table.shape != (TABLE_ROWS, 2) or not np.isfinite(table).all():
+            raise ValueError(f"a canopy's table must be {TABLE_ROWS} x 2 finite numbers, got shape {table.shape}")
+        q = np.asarray(self.particle_q, dtype=np.float64)
+        tris = np.asarray(self.tri_indices, dtype=np.int64)[tri_ids]
+        a, b, c = q[tris[:, 0]], q[tris[:, 1]], q[tris[:, 2]]
+        cross = np.cross(b - a, c - b)
+        nominal = 0.5 * float(np.linalg.norm(cross, axis=1).sum())
+        area_vec = 0.5 * cross.sum(axis=0)
+        projected = float(np.linalg.norm(area_vec))
+        if not (nominal > 0.0 and projected > 0.0):
+            raise ValueError("a canopy needs a positive projected area")
+        orient = 1.0 if float(np.dot(area_vec, np.asarray(axis, dtype=np.float64))) >= 0.0 else -1.0
+        self.canopies.append((tri_ids, table, (nominal, projected, orient, float(wake_lag))))
+        return len(self.canopies) - 1
 
     def set_triangle_loading(self, tri_ids, loading) -> None:
         """Set the chordwise loading factor of triangles ``tri_ids`` (dimensionless, >= 0).
@@ -408,6 +439,23 @@ class ModelBuilder:
         m.drag_count = len(drag)
         m.drag_particles = wp.array(np.array([p for p, _ in drag], dtype=np.int32), dtype=wp.int32, device=device)
         m.drag_area = wp.array(np.array([a for _, a in drag], dtype=np.float32), dtype=wp.float32, device=device)
+        m.canopy_count = len(self.canopies)
+        if self.canopies:
+            sizes = [len(ids) for ids, _, _ in self.canopies]
+            canopy_ids = np.concatenate([ids for ids, _, _ in self.canopies]).astype(np.int32)
+            owner = np.repeat(np.arange(len(sizes), dtype=np.int32), sizes)
+            table = np.concatenate([t for _, t, _ in self.canopies]).astype(np.float32)
+            params = np.array([p for _, _, p in self.canopies], dtype=np.float32)
+            m.canopy_nominal_area = params[:, 0].astype(np.float64)
+        else:
+            sizes, canopy_ids, owner = [], np.zeros(1, np.int32), np.zeros(1, np.int32)
+            table, params = np.zeros((1, 2), np.float32), np.zeros((1, 4), np.float32)
+            m.canopy_nominal_area = np.zeros(0)
+        m.canopy_tri_start = wp.array(np.concatenate([[0], np.cumsum(sizes)]).astype(np.int32), device=device)
+        m.canopy_tri_ids = wp.array(canopy_ids, dtype=wp.int32, device=device)
+        m.canopy_tri_owner = wp.array(owner, dtype=wp.int32, device=device)
+        m.canopy_table = wp.array(table, dtype=wp.vec2, device=device)
+        m.canopy_params = wp.array(params, dtype=wp.vec4, device=device)
         start, ids = _csr(tris.reshape(-1), np.repeat(np.arange(len(tris), dtype=np.int32), 3), n)
         m.particle_tri_start = wp.array(start, dtype=wp.int32, device=device)
         m.particle_tri_ids = wp.array(ids, dtype=wp.int32, device=device)

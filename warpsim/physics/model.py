@@ -132,6 +132,20 @@ class Model:
     """``[D]`` int32 particle of each drag body."""
     drag_area: wp.array
     """``[D]`` float32 drag area ``C_D A`` [m^2] of each drag body."""
+    canopy_count: int
+    """Number of parachute canopies whose air force is the whole canopy's (:mod:`warpsim.kernels.canopy`)."""
+    canopy_tri_start: wp.array
+    """``[C + 1]`` int32 offsets of each canopy's triangles in ``canopy_tri_ids``."""
+    canopy_tri_ids: wp.array
+    """int32 the canopies' triangles, canopy by canopy; ``canopy_tri_owner`` the canopy of each."""
+    canopy_tri_owner: wp.array
+    canopy_table: wp.array
+    """``[C * TABLE_ROWS]`` vec2 ``(C_T, C_N)`` of each canopy at angles of attack 0, 5, ..., 180 degrees."""
+    canopy_params: wp.array
+    """``[C]`` vec4 nominal area [m^2], projected area as built [m^2], orientation of the area vector (+-1), wake
+    lag of its side force [projected diameters of travel]."""
+    canopy_nominal_area: np.ndarray
+    """Host ``[C]`` nominal (cloth) area [m^2] of each canopy."""
     nail_particles: np.ndarray
     """Host ``[N]`` int32 particle of each nail."""
     nail_target0: np.ndarray
@@ -150,6 +164,7 @@ class Model:
     def __init__(self):
         self.device = None
         self.particle_count = self.stick_count = self.tri_count = self.nail_count = self.drag_count = 0
+        self.canopy_count = 0
         self.world_count = 1
         self.gravity = wp.vec3(0.0, 0.0, -GRAVITY)
         self.air_density = AIR_DENSITY

@@ -16,8 +16,9 @@ import numpy as np
 import warp as wp
 
 from .config import AirConfig, GroundConfig, SolverConfig, WindConfig
-from .kernels import MODULES, aero, collision, constraints, momentum, springs, verlet
+from .kernels import MODULES, aero, canopy, collision, constraints, momentum, springs, verlet
 from .kernels.aero import body_drag, triangle_air_force
+from .kernels.canopy import canopy_air_force
 from .kernels.collision import collide_heightfield
 from .kernels.constraints import make_projector, ramp_nail_targets, ramp_rest_lengths
 from .kernels.momentum import MomentumKeeper
@@ -79,6 +80,8 @@ class _Solver:
         self.use_graph = bool(use_graph)
         self.tri_force = wp.zeros(max(model.tri_count, 1), dtype=wp.vec3, device=model.device)
         self.particle_air = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)  # drag bodies' drag
+        self.canopy_load = wp.zeros(max(model.canopy_count, 1), dtype=wp.vec4, device=model.device)
+        self.canopy_side = wp.zeros(max(model.canopy_count, 1), dtype=wp.vec3, device=model.device)
         sticks = np.unique(np.concatenate([np.zeros(0, np.int32), *(r.controlled_sticks() for r in model.objects)]))
         self.control_sticks = wp.array(sticks.astype(np.int32), dtype=wp.int32, device=model.device)
         """``[K]`` the sticks whose rest lengths the controls set (they ramp: :func:`ramp_rest_lengths`)."""
@@ -147,7 +150,7 @@ class SolverVerlet(_Solver):
     None = fused on the CPU, gather on CUDA.
     """
 
-    modules = (aero, collision, constraints, momentum, verlet)
+    modules = (aero, canopy, collision, constraints, momentum, verlet)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, *, constraint_scheme=None, **kwargs):
         super().__init__(model, config, **kwargs)
@@ -159,6 +162,7 @@ class SolverVerlet(_Solver):
         m, cfg = self.model, self.config
         self._ramp_controls(control, dt)
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
+        canopy_air_force(m, state, control, dt, self.air, self.wind, self.canopy_side, self.canopy_load, self.tri_force)
         body_drag(m, state, control, dt, self.air, self.wind, self.particle_air)
         integrate_verlet(m, state, control, self.tri_force, self.particle_air, dt, cfg.damping)
         if self.momentum is not None:
@@ -174,7 +178,7 @@ class SolverEuler(_Solver):
     ``spring_stiffness`` [N/m] and ``spring_damping`` [N s/m] from its :class:`~warpsim.physics.config.SolverConfig`;
     arguments as for :class:`SolverVerlet`, without a constraint scheme)."""
 
-    modules = (aero, collision, springs)
+    modules = (aero, canopy, collision, springs)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, **kwargs):
         super().__init__(model, config, **kwargs)
@@ -184,6 +188,7 @@ class SolverEuler(_Solver):
         m, cfg = self.model, self.config
         self._ramp_controls(control, dt)
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
+        canopy_air_force(m, state, control, dt, self.air, self.wind, self.canopy_side, self.canopy_load, self.tri_force)
         body_drag(m, state, control, dt, self.air, self.wind, self.particle_air)
         integrate_euler_springs(
             m,

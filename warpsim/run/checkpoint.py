@@ -33,6 +33,8 @@ class Checkpoint:
         stick_rest_target: ``[M]`` float32 rest lengths [m] the control sticks are ramping to.
         nail_target: ``[N, 3]`` float64 where each nailed particle is held [m] (the kite's anchor moves).
         nail_target_goal: ``[N, 3]`` float64 where the controlled nails are moving to [m].
+        canopy_side: ``[max(K, 1), 3]`` float32 the lagged side force [Pa] of each of the ``K`` parachute canopies
+            (:mod:`warpsim.kernels.canopy`; zeros without canopies).
         wind: ``[W, 3]`` float32 current wind of each world [m/s].
         gust_active: ``[W]`` uint8, 1 where the world has gusts.
         gust_g: ``[W, 3]`` float64 the gust processes' current values (dimensionless).
@@ -54,6 +56,7 @@ class Checkpoint:
     stick_rest_target: np.ndarray
     nail_target: np.ndarray
     nail_target_goal: np.ndarray
+    canopy_side: np.ndarray
     wind: np.ndarray
     gust_active: np.ndarray
     gust_g: np.ndarray

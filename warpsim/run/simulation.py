@@ -343,6 +343,7 @@ class Simulation:
             stick_rest_target=self.control.stick_rest_target.numpy().copy(),
             nail_target=self.control.nail_target.numpy().copy(),
             nail_target_goal=self.control.nail_target_goal.numpy().copy(),
+            canopy_side=self._canopy_sides(),
             wind=self.control.wind.numpy().copy(),
             **self.inputs.save(),
             control_names=self.inputs.names,
@@ -364,7 +365,20 @@ class Simulation:
         self.control.nail_target.assign(checkpoint.nail_target)
         self.control.nail_target_goal.assign(checkpoint.nail_target_goal)
         self.control.wind.assign(checkpoint.wind)
+        k = 0
+        for group in self._groups:  # each group's solver holds its canopies' lagged side forces
+            count = group.model.canopy_count
+            if count:
+                side = group.solver.canopy_side.numpy()
+                side[:count] = checkpoint.canopy_side[k : k + count]
+                group.solver.canopy_side.assign(side)
+                k += count
         self.inputs.load(checkpoint)
+
+    def _canopy_sides(self) -> np.ndarray:
+        """``[max(K, 1), 3]`` float32 the lagged side force [Pa] of every canopy, from the groups' solvers."""
+        sides = [g.solver.canopy_side.numpy()[: g.model.canopy_count] for g in self._groups if g.model.canopy_count]
+        return np.concatenate(sides).astype(np.float32) if sides else np.zeros((1, 3), dtype=np.float32)
 
     def start_frames(self) -> Frame:
         """Check the current state and make it the last good frame that :meth:`advance` goes back to on a
@@ -431,6 +445,7 @@ class Simulation:
                 stick_rest_target=stick_rest_target,
                 nail_target=nail_target,
                 nail_target_goal=nail_target_goal,
+                canopy_side=self._canopy_sides(),  # as now: the frame probes keep positions, not these
                 wind=wind,
                 **inputs,
                 control_names=self.inputs.names,

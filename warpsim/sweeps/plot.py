@@ -1,8 +1,10 @@
-"""A quick look at a sweep's table: one metric against one swept key (lines) or two (a heat map), as a PNG.
+"""Quick looks as PNGs: a sweep's table, one metric against one swept key (lines) or two (a heat map)
+(:func:`plot_sweep`); a recording, its objects' figures against simulated time (:func:`plot_recording`).
 
 Swept keys are the table's ``section.key`` columns (metrics have no dot in their names). Cases that blew up are
-left out of the picture and counted in its title. Needs pandas (and pyarrow for ``.parquet``) and matplotlib:
-the ``[sweep]`` extra.
+left out of the picture and counted in its title. Every axis carries its unit (a metric's from
+:data:`warpsim.sweeps.METRICS`, a key's from its config class, :func:`key_unit`). Needs pandas (and pyarrow for
+``.parquet``) and matplotlib: the ``[sweep]`` extra.
 """
 
 from __future__ import annotations
@@ -115,8 +117,7 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    unit = METRICS.get(metric, ("",))[0]
-    label = f"{metric} [{unit}]" if unit else metric
+    label = axis_label(metric, METRICS.get(metric, ("",))[0])
     figure, axes = plt.subplots(figsize=(7.5, 5.0), dpi=110)
     try:
         if y is None:
@@ -132,7 +133,7 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
                 axes.plot(part[x], values.loc[part.index], marker="o", label=text or None)
             if others:
                 axes.legend(fontsize=8)
-            axes.set_xlabel(x)
+            axes.set_xlabel(axis_label(x, key_unit(x)))
             axes.set_ylabel(label)
             axes.grid(True, alpha=0.3)
         else:
@@ -149,8 +150,8 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
                 if np.isfinite(v):
                     axes.text(col, row, f"{v:.3g}", ha="center", va="center", fontsize=7, color="white")
             figure.colorbar(image, ax=axes, label=label)
-            axes.set_xlabel(x)
-            axes.set_ylabel(y)
+            axes.set_xlabel(axis_label(x, key_unit(x)))
+            axes.set_ylabel(axis_label(y, key_unit(y)))
         title = f"{metric} ({len(table)} cases"
         title += f", {int(blew.sum())} blew up: not drawn)" if blew.any() else ")"
         if chosen:
@@ -160,6 +161,160 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
         from ..io import replacing
 
         with replacing(out, "plot") as file:  # whole or not at all: a full disk leaves the old picture as it was
+            figure.savefig(file, format="png")
+    finally:
+        plt.close(figure)
+    return out
+
+
+def key_unit(key: str) -> str:
+    """The unit of a descriptor key ``section.key`` (``wind.speed`` -> ``m/s``) as its config class's docstring
+    writes it (the first ``[...]`` of the key's entry holding a letter); ``""`` when it has none (a fraction)."""
+    import inspect
+    import re
+
+    from ..scene.descriptor import section_class
+
+    section, _, name = key.partition(".")
+    if key == "wind.speed":
+        return "m/s"
+    try:
+        doc = inspect.getdoc(section_class(section)) or ""
+    except Exception:  # noqa: BLE001 - an unknown section (a table from another version): no unit
+        return ""
+    entry = re.search(rf"(?:^|\s){re.escape(name)}:(.*?)(?=\n\s*\w+(?:, \w+)*:|\Z)", doc, re.S)
+    if entry is None:
+        return ""
+    for unit in re.findall(r"\[([^\[\]]+)\]", entry.group(1)):
+        if re.search(r"[A-Za-z]", unit) and "," not in unit:
+            return unit
+    return ""
+
+
+def axis_label(name: str, unit: str) -> str:
+    """``name [unit]``, or ``name`` alone for a dimensionless quantity."""
+    return f"{name} [{unit}]" if unit and unit != "-" else name
+
+
+RECORDED = {
+    "worst_stretch": ("%", "largest |l - r| / r over all sticks (the recording's own, in percent)"),
+    "kinetic_energy": ("J", "kinetic energy of the free particles (the recording's own)"),
+}
+"""Metrics a recording stores for the whole frame, besides the figures of each object."""
+
+
+def recording_metrics(kind: str) -> dict[str, tuple[str, str]]:
+    """What ``warpsim plot REC.h5 --metric`` draws for an object of ``kind``: name -> (unit, meaning): its
+    :data:`warpsim.run.figures.FIGURES` but ``line_pull`` (the air forces are not recorded), then :data:`RECORDED`."""
+    from ..run.figures import FIGURES, figure_names
+
+    out = {name: (FIGURES[name][0], FIGURES[name][2]) for name in figure_names(kind) if name != "line_pull"}
+    return {**out, **RECORDED}
+
+
+class _RecordedFrame:
+    """What :class:`warpsim.run.figures.Figures` reads of a frame, from a recording: positions [m], velocities
+    [m/s] from the positions one frame before (the first frame: one frame after), each world's wind [m/s]."""
+
+    def __init__(self, positions: np.ndarray, velocities: np.ndarray, wind: np.ndarray):
+        self.positions, self.velocities, self.wind = positions, velocities, wind
+
+
+def recording_series(path, metrics) -> tuple[np.ndarray, dict[str, np.ndarray], list[str], str]:
+    """Each of ``metrics`` (names of :func:`recording_metrics`) of every frame of the recording ``path``:
+    ``(time [F] [s], {name: values [F, K]}, object names [K], object kind)``; a whole-frame metric has ``K = 1``.
+
+    The figures are measured from the recorded positions as the heads-up display and ``warpsim run`` measure them
+    (:class:`warpsim.run.figures.Figures`), with velocities over one frame interval and the wind the scene sets
+    at the reference height (each world's, and the wind control where one was recorded; gusts are not recorded
+    and are left out)."""
+    from ..io.h5format import RecordingError
+    from ..io.recording import Recording
+    from ..run.figures import Figures
+    from ..scene.descriptor import world_descriptor
+
+    with Recording(path) as recording:
+        count = recording.frame_count
+        if count == 0:
+            raise RecordingError(f"{path}: the recording has no frames")
+        descriptor = recording.descriptor()
+        kind = descriptor["scene"]["object"]
+        known = recording_metrics(kind)
+        for name in metrics:
+            if name not in known:
+                raise PlotError(f"--metric {name}: a {kind} recording has {', '.join(known)}")
+        model = recording.build_model()
+        names = [record.name for record in model.objects]
+        time = np.asarray(recording.time[:count], dtype=np.float64)
+        out: dict[str, np.ndarray] = {}
+        if "worst_stretch" in metrics:
+            out["worst_stretch"] = 100.0 * recording.file["diagnostics/worst_stretch"][:count].astype(float)[:, None]
+        if "kinetic_energy" in metrics:
+            out["kinetic_energy"] = recording.file["diagnostics/kinetic_energy"][:count].astype(float)[:, None]
+        wanted = [name for name in metrics if name not in RECORDED]
+        if wanted:
+            winds = np.array(
+                [world_descriptor(descriptor, w)["wind"]["velocity"] for w in range(model.world_count)], dtype=float
+            )
+            figures = Figures(model)
+            q = recording.positions()
+            values = {name: np.full((count, len(names)), np.nan) for name in wanted}
+            for k in range(count):
+                j = k - 1 if k > 0 else min(k + 1, count - 1)
+                gap = time[k] - time[j]
+                velocities = (q[k] - q[j]) / gap if gap != 0 else np.zeros_like(q[k])
+                wind = winds
+                recorded = recording.controls(k).get("wind")
+                if recorded is not None:
+                    wind = np.tile(np.asarray(recorded, dtype=float), (model.world_count, 1))
+                found = figures(_RecordedFrame(q[k], velocities, wind))
+                for name in wanted:
+                    values[name][k] = [f[name] for f in found]
+            out.update(values)
+    return time, {name: out[name] for name in metrics}, names, kind
+
+
+def plot_recording(path, out, metrics) -> Path:
+    """Draw ``metrics`` (names of :func:`recording_metrics`, one panel each, stacked over a shared time axis)
+    of the recording ``path`` against simulated time, one line per object (each world's), axes labelled with
+    their units; write ``out`` (a PNG). Returns the path written; raises :class:`PlotError`."""
+    from ..io import OutputPathError, check_output_path
+    from ..io.h5format import RecordingError
+
+    try:
+        out = check_output_path(out, (".png",), "PNG")
+    except OutputPathError as err:
+        raise PlotError(str(err)) from None
+    metrics = [m for m in metrics if m]
+    if not metrics:
+        raise PlotError("--metric: name at least one, e.g. --metric altitude,airspeed")
+    try:
+        time, series, names, kind = recording_series(path, metrics)
+    except (RecordingError, OSError) as err:
+        raise PlotError(str(err)) from None
+    matplotlib = _require("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    units = recording_metrics(kind)
+    figure, panels = plt.subplots(len(metrics), 1, sharex=True, figsize=(7.5, 1.0 + 2.4 * len(metrics)), dpi=110)
+    panels = np.atleast_1d(panels)
+    try:
+        for axes, name in zip(panels, metrics, strict=True):
+            values = series[name]
+            labels = names if values.shape[1] == len(names) else ["all objects"]
+            for column, label in enumerate(labels):
+                axes.plot(time, values[:, column], label=label if len(labels) > 1 else None)
+            if len(labels) > 1:
+                axes.legend(fontsize=7)
+            axes.set_ylabel(axis_label(name.replace("_", " "), units[name][0]))
+            axes.grid(True, alpha=0.3)
+        panels[-1].set_xlabel(axis_label("simulated time", "s"))
+        panels[0].set_title(f"{Path(path).name}: {kind}, {len(time)} frames", fontsize=10)
+        figure.tight_layout()
+        from ..io import replacing
+
+        with replacing(out, "plot") as file:
             figure.savefig(file, format="png")
     finally:
         plt.close(figure)

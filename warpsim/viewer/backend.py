@@ -24,22 +24,30 @@ class DrawList:
     Attributes:
         meshes: ``(triangles [t, 3] particle indices, rgb)`` per object part (sail, keel, canopy, cloth).
         curves: ``(particle chain [n], rgb)`` per rope or line.
-        spheres: ``(particle, radius [m], rgb)`` per pilot or person.
+        spheres: ``(point, radius [m], rgb)`` per ball (a parachutist's head, a pole's finial).
+        tubes: ``(point a, point b, radius [m], rgb)`` per tube drawn from a to b (a glider's keel and control frame,
+            the pilot's body and arms, a flag's pole: :mod:`warpsim.io.shapes`).
         terrain_points: ``[v, 3]`` terrain vertices [m]. terrain_triangles: ``[t, 3]`` vertex indices.
         terrain_colours: ``[v, 3]`` rgb per terrain vertex.
-        drawn: indices of the particles drawn.
-        focus: the particles the camera frames: those of the meshes and spheres (a rope's ground end is
+        drawn: indices of the points drawn.
+        focus: the points the camera frames: those of the meshes, spheres and tubes (a rope's ground end is
             not what one watches), else every drawn one.
+        place: ``positions [P, 3] -> points [P + added, 3]`` [m]: the particles as drawn (the worlds of a batch
+            side by side) followed by the points the tubes and spheres add; indices above refer to these points.
+
+    The backend is given placed points (:meth:`Backend.draw`).
     """
 
     meshes: list = field(default_factory=list)
     curves: list = field(default_factory=list)
     spheres: list = field(default_factory=list)
+    tubes: list = field(default_factory=list)
     terrain_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.float32))
     terrain_triangles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int32))
     terrain_colours: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.float32))
     drawn: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     focus: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    place: object = field(default=lambda q: q)
 
 
 @dataclass
@@ -73,8 +81,9 @@ class Backend:
         raise NotImplementedError
 
     def draw(self, positions: np.ndarray, view: View, hud: list[str], overlay: list[str]) -> None:
-        """Draw one picture: particles at ``positions`` ``[P, 3]`` [m] seen from ``view``, the ``hud`` lines
-        in a corner and ``overlay`` lines (help, errors) in the middle when not empty; then show it."""
+        """Draw one picture: the points ``positions`` ``[P + added, 3]`` [m] (``DrawList.place`` of the particles)
+        seen from ``view``, the ``hud`` lines on a panel in a corner and ``overlay`` lines (help, errors) in the
+        middle when not empty; then show it."""
         raise NotImplementedError
 
     def screenshot(self) -> np.ndarray:

@@ -42,8 +42,9 @@ CAMERAS = ("orbit", "chase", "ground")
 
 
 def draw_list(model, terrain_samples: int = 129) -> DrawList:
-    """What to draw of ``model``: part meshes with the outputs' colours, curves, spheres, and the terrain
-    resampled to at most ``terrain_samples`` per side (heights from the model's heightfield)."""
+    """What to draw of ``model``: part meshes with the outputs' colours, curves, spheres, tubes (the pictures'
+    :class:`warpsim.io.render.Scene`: a batch's worlds side by side), and the terrain resampled to at most
+    ``terrain_samples`` per side (heights from the model's heightfield)."""
     from ..io.render import Scene
 
     scene = Scene(model)
@@ -67,17 +68,17 @@ def draw_list(model, terrain_samples: int = 129) -> DrawList:
     s = ((gz - low) / (high - low) if high > low else np.zeros_like(gz)).reshape(-1, 1)
     grass, rock = np.asarray(COLOURS["terrain"]), np.array([0.55, 0.50, 0.42])
     colours = (grass * (1 - s) + rock * s).astype(np.float32)
-    bodies = [np.asarray(t).ravel() for t, _ in scene.triangles] + [np.array([p]) for p, _, _ in scene.discs]
-    focus = np.unique(np.concatenate(bodies)) if bodies else scene.drawn
     return DrawList(
         meshes=scene.triangles,
         curves=scene.curves,
         spheres=scene.discs,
+        tubes=scene.tubes,
+        place=scene.place,
         terrain_points=points,
         terrain_triangles=triangles,
         terrain_colours=colours,
         drawn=scene.drawn,
-        focus=focus,
+        focus=scene.focus,
     )
 
 
@@ -135,6 +136,7 @@ class Viewer:
         self.figures = Figures(self.model)
         self.initial = sim.checkpoint()
         self.frame: Frame = sim.start_frames()
+        self.points = self.draw_list.place(self.frame.positions)  # the frame as drawn [m]
         self.axes = {"pitch": 0.0, "roll": 0.0}
         self.paused = False
         self.show_help = False
@@ -146,8 +148,8 @@ class Viewer:
         self.step_time = self.draw_time = 0.0
         self.pictures = 0
         focus = self.draw_list.focus
-        size = np.ptp(self.frame.positions[focus], axis=0) if len(focus) else np.ones(3)
-        self.orbit = {"azimuth": -120.0, "elevation": 20.0, "distance": float(max(1.6 * np.linalg.norm(size), 6.0))}
+        size = np.ptp(self.points[focus], axis=0) if len(focus) else np.ones(3)
+        self.orbit = {"azimuth": -120.0, "elevation": 20.0, "distance": float(max(1.25 * np.linalg.norm(size), 6.0))}
         self._chase_heading = np.array([1.0, 0.0])
         self._ground_eye = self._ground_point()
         self._debt = 0.0  # simulated seconds owed to the wall clock
@@ -371,7 +373,8 @@ class Viewer:
         while len(self._rate) > 2 and now - self._rate[0][0] > 1.0:
             self._rate.pop(0)
         started = time.perf_counter()
-        self.backend.draw(self.frame.positions, self.view(), self.hud(), self.overlay())
+        self.points = self.draw_list.place(self.frame.positions)
+        self.backend.draw(self.points, self.view(), self.hud(), self.overlay())
         self.draw_time += time.perf_counter() - started
         self.pictures += 1
         return not self.quit
@@ -406,14 +409,16 @@ class Viewer:
     # ------------------------------------------------------------------ camera
     def centre(self) -> np.ndarray:
         """Centre of the bounding box of the particles the camera frames [m] (``DrawList.focus``)."""
-        p = self.frame.positions[self.draw_list.focus]
+        p = self.draw_list.place(self.frame.positions)[self.draw_list.focus]
         return (p.min(axis=0) + p.max(axis=0)) / 2
 
     def _ground_point(self) -> np.ndarray:
-        """Where the ground observer stands: the kite's anchor, else 30 m aside of the start, eyes at 1.7 m."""
+        """Where the ground observer stands, eyes at 1.7 m: 10 m behind the kite's anchor and 12 m to its side (the
+        line seen from the side), else 20 m behind and 30 m to the side of the objects' start."""
         if self.kite is not None:
-            x, y = self._anchor()
-            x, y = x - 8.0, y - 8.0
+            anchor = np.asarray(self._anchor(), dtype=np.float64)
+            ahead = self._bearing(anchor)
+            x, y = anchor - 10.0 * ahead + 12.0 * np.array([-ahead[1], ahead[0]])
         else:
             c = self.centre()
             x, y = c[0] - 20.0, c[1] - 30.0
@@ -423,7 +428,8 @@ class Viewer:
         """The camera of the current mode."""
         target = self.centre()
         if self.camera == "chase":
-            velocity = self.frame.velocities[self.draw_list.focus].mean(axis=0)
+            focus = self.draw_list.focus
+            velocity = self.frame.velocities[focus[focus < len(self.frame.velocities)]].mean(axis=0)
             if np.linalg.norm(velocity[:2]) > 0.5:
                 heading = velocity[:2] / np.linalg.norm(velocity[:2])
                 self._chase_heading = 0.9 * self._chase_heading + 0.1 * heading  # smooth the turns
@@ -433,7 +439,7 @@ class Viewer:
         elif self.camera == "ground":
             if self.kite is not None:  # the observer walks with the anchor
                 self._ground_eye = self._ground_point()
-            eye = self._ground_eye
+            return self._ground_view(self._ground_eye, target)
         else:
             az, el = np.radians(self.orbit["azimuth"]), np.radians(self.orbit["elevation"])
             back = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
@@ -441,6 +447,25 @@ class Viewer:
         floor = float(self.model.terrain.height(eye[0], eye[1])) + 0.5  # never look from under the ground
         eye = np.array([eye[0], eye[1], max(eye[2], floor)])
         return View(eye=eye, target=target)
+
+    def _ground_view(self, eye: np.ndarray, target: np.ndarray) -> View:
+        """The ground observer's view from ``eye`` [m]: turned towards ``target`` and tilted so that the picture
+        holds both the horizon (with a strip of ground under it) and the objects, the field of view as narrow as
+        that allows (30 to 100 degrees)."""
+        p = self.points[self.draw_list.focus]
+        offset = target - eye
+        reach = max(float(np.linalg.norm(offset)), 1e-3)
+        along = max(float(np.linalg.norm(offset[:2])), 1e-6)
+        elevation = math.degrees(math.atan2(offset[2], along))
+        size = 0.5 * float(np.linalg.norm(np.ptp(p, axis=0))) if len(p) else 1.0
+        half = math.degrees(math.atan2(size, reach))
+        low = min(-6.0, elevation - half - 4.0)  # the horizon is at 0
+        high = max(elevation + half + 4.0, 0.0)
+        fov = min(max(high - low, 30.0), 100.0)
+        tilt = math.radians(low + fov / 2 if high - low <= fov else (low + high) / 2)  # horizon low in the picture
+        heading = offset[:2] / along
+        look = np.append(math.cos(tilt) * heading, math.sin(tilt))
+        return View(eye=eye, target=eye + reach * look, fov=fov)
 
     # ------------------------------------------------------------------ text
     def rates(self) -> tuple[float, float]:

@@ -2,9 +2,12 @@
 
 Meshes are drawn from one vertex buffer each (position, normal, colour), rewritten from NumPy every frame;
 the terrain is uploaded once. Cloth is lit from both sides with a sun and sky light; the terrain gets a 10 m
-grid so that motion over it can be seen; ropes and lines are lines; the pilot or person a small sphere; the
-sky a gradient. Text (heads-up and overlay) is pyglet's. Runs on Mesa's software renderer (llvmpipe), as on
-a virtual X screen, and on GPUs.
+grid so that motion over it can be seen and fades into haze with distance; ropes and lines are lines 2 pixels wide
+(a kite's line shows at any distance); tubes (a glider's keel and control frame, the pilot's body, a flag's pole)
+are capped 8-sided cylinders and balls are spheres, placed every frame; the sky goes from haze at the horizon to
+blue overhead and the ground beyond the terrain is hazy to the horizon. The heads-up text is on a dark semi-opaque
+panel and the view's centre is the middle of the picture below it. Text (heads-up and overlay) is pyglet's. Runs
+on Mesa's software renderer (llvmpipe), as on a virtual X screen, and on GPUs.
 """
 
 from __future__ import annotations
@@ -37,11 +40,28 @@ _FRAGMENT = """
 in vec3 v_normal;
 in vec3 v_colour;
 in vec3 v_world;
-uniform int mode;  // 0: lit both sides, 1: unlit, 2: lit terrain with a 10 m grid
+uniform int mode;  // 0: lit both sides, 1: unlit, 2: lit terrain with a 10 m grid, 3: sky (v_normal: the ray)
 uniform vec3 sun;
+uniform vec3 eye;  // [m]
+uniform float eye_height;  // above the ground under the eye [m]
+uniform vec3 ground;  // the terrain's colour, lit from straight above
+const vec3 horizon = vec3(0.86, 0.91, 0.96);
+const vec3 zenith = vec3(0.42, 0.62, 0.90);
+const float haze_distance = 2500.0;  // [m]: the ground's colour halfway to the haze's at 0.69 times this
 out vec4 colour;
 void main() {
     vec3 c = v_colour;
+    if (mode == 3) {  // sky above the horizon, hazy ground below it (where the terrain does not reach)
+        vec3 d = normalize(v_normal);
+        if (d.z >= 0.0) {
+            c = mix(horizon, zenith, sqrt(d.z));
+        } else {
+            float reach = max(eye_height, 0.5) * length(d.xy) / max(-d.z, 1e-4);
+            c = mix(ground, 0.92 * horizon, 1.0 - exp(-reach / haze_distance));
+        }
+        colour = vec4(c, 1.0);
+        return;
+    }
     if (mode != 1) {
         vec3 n = normalize(v_normal);
         float light = 0.35 + 0.65 * abs(dot(n, sun));
@@ -52,6 +72,7 @@ void main() {
         vec2 d = abs(fract(g + 0.5) - 0.5) / max(fwidth(g), vec2(1e-6));  // distance to a line in pixels
         float line = (1.0 - min(min(d.x, d.y), 1.0)) * (1.0 - smoothstep(0.05, 0.5, max(fwidth(g).x, fwidth(g).y)));
         c = mix(c, c * 0.82, line);  // grid lines fade out where they would be closer than 2 pixels
+        c = mix(c, 0.92 * horizon, 1.0 - exp(-length(v_world.xy - eye.xy) / haze_distance));
     }
     colour = vec4(c, 1.0);
 }
@@ -140,11 +161,53 @@ def _perspective(fov: float, aspect: float, near: float, far: float) -> np.ndarr
     )
 
 
-def view_matrix(view: View, width: int, height: int) -> np.ndarray:
-    """The 4x4 matrix from world coordinates [m] to clip space of ``view`` in a ``width`` x ``height`` picture."""
+def view_matrix(view: View, width: int, height: int, below: float = 0.0) -> np.ndarray:
+    """The 4x4 matrix from world coordinates [m] to clip space of ``view`` in a ``width`` x ``height`` picture;
+    ``below``: the fraction of the height a panel covers at the top (the heads-up text): what the field of view
+    holds is drawn in the rest, below the panel, shrunk by ``1 - below`` about the bottom middle (the panel's
+    strip and the sides show what lies beyond it)."""
     eye, target = np.asarray(view.eye, float), np.asarray(view.target, float)
     near = max(0.05, float(np.linalg.norm(target - eye)) / 500)  # depth precision where the object is
-    return _perspective(view.fov, width / max(height, 1), near, 20000.0) @ _look_at(eye, target)
+    projection = _perspective(view.fov, width / max(height, 1), near, 20000.0)
+    # normalised x and y scaled by 1 - below, then y moved down by below: [-1, 1] -> [-1, 1 - 2 below]
+    projection[:2] *= 1.0 - below
+    projection[1] -= below * projection[3]
+    return projection @ _look_at(eye, target)
+
+
+def _tube_mesh(count: int, sides: int = 8) -> np.ndarray:
+    """Triangles ``[t, 3]`` of ``count`` capped tubes whose vertices are, per tube, ``sides`` around one end,
+    ``sides`` around the other, then the two ends' centres."""
+    k = np.arange(sides)
+    k1 = (k + 1) % sides
+    per = 2 * sides + 2
+    one = np.concatenate(
+        [
+            np.stack([k, k1, sides + k1], 1),
+            np.stack([k, sides + k1, sides + k], 1),
+            np.stack([np.full(sides, 2 * sides), k1, k], 1),
+            np.stack([np.full(sides, 2 * sides + 1), sides + k, sides + k1], 1),
+        ]
+    )
+    return (one[None] + per * np.arange(count)[:, None, None]).reshape(-1, 3).astype(np.int32)
+
+
+def tube_points(a: np.ndarray, b: np.ndarray, radius: np.ndarray, sides: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and normals ``[count * (2 * sides + 2), 3]`` of tubes from ``a`` to ``b`` ``[count, 3]`` [m] of
+    ``radius`` ``[count]`` [m], in the order :func:`_tube_mesh` numbers them."""
+    axis = b - a
+    n = axis / np.maximum(np.linalg.norm(axis, axis=1, keepdims=True), 1e-9)
+    u = np.cross(n, [0.0, 0.0, 1.0])
+    flat = np.linalg.norm(u, axis=1) < 1e-3
+    u[flat] = np.cross(n[flat], [1.0, 0.0, 0.0])
+    u /= np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-9)
+    v = np.cross(n, u)
+    angle = 2 * np.pi * np.arange(sides) / sides
+    ring = np.cos(angle)[None, :, None] * u[:, None] + np.sin(angle)[None, :, None] * v[:, None]  # [count, sides, 3]
+    r = np.asarray(radius)[:, None, None]
+    points = np.concatenate([a[:, None] + r * ring, b[:, None] + r * ring, a[:, None], b[:, None]], axis=1)
+    normals = np.concatenate([ring, ring, -n[:, None], n[:, None]], axis=1)
+    return points.reshape(-1, 3), normals.reshape(-1, 3)
 
 
 def _look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
@@ -266,12 +329,19 @@ class PygletBackend(Backend):
             self._sphere_particles = np.repeat([p for p, _, _ in d.spheres], n)
             self._sphere_normals = np.tile(unit, (count, 1))
             self._sphere_colours = np.concatenate([np.tile(np.asarray(c, np.float32), (n, 1)) for *_, c in d.spheres])
-        sky = np.array([[-1, -1, 0.999], [1, -1, 0.999], [1, 1, 0.999], [-1, 1, 0.999]], np.float32)
-        sky_colours = np.array(
-            [[0.88, 0.93, 0.98], [0.88, 0.93, 0.98], [0.45, 0.65, 0.90], [0.45, 0.65, 0.90]], np.float32
-        )
+        self._tubes = None
+        if d.tubes:  # one buffer for every tube; the ends move with their points
+            count = len(d.tubes)
+            self._tube_ends = np.array([(a, b) for a, b, _, _ in d.tubes], dtype=np.int64)
+            self._tube_radii = np.array([r for _, _, r, _ in d.tubes], dtype=np.float64)
+            per = len(tube_points(np.zeros((1, 3)), np.ones((1, 3)), np.ones(1))[0])
+            self._tube_colours = np.repeat(np.array([c for *_, c in d.tubes], np.float32), per, axis=0)
+            self._tubes = _Buffer(gl, per * count, _tube_mesh(count), gl.GL_TRIANGLES)
+        self._sky_corners = np.array([[-1, -1, 0.999], [1, -1, 0.999], [1, 1, 0.999], [-1, 1, 0.999]], np.float32)
         self._sky = _Buffer(gl, 4, np.array([0, 1, 2, 0, 2, 3]), gl.GL_TRIANGLES)
-        self._sky.update(sky, np.zeros_like(sky), sky_colours)
+        from ..io.style import COLOURS
+
+        self._ground_colour = tuple(float(c) * 0.95 for c in COLOURS["terrain"])
         small = self.size[0] < 1000
 
         def label(font_size: int, colour: tuple, **place):
@@ -280,7 +350,10 @@ class PygletBackend(Backend):
             )
 
         width, height = self.size
-        self._hud = label(7 if small else 11, (15, 20, 30, 255), x=10, y=height - 10, anchor_y="top", width=width - 20)
+        white = (255, 255, 255, 255)
+        self._hud = label(7 if small else 11, white, x=14, y=height - 12, anchor_y="top", width=width - 28)
+        self._panel = pyglet.shapes.Rectangle(0, 0, 1, 1, color=(20, 25, 35, 185))  # under the heads-up text
+        self.hud_fraction = 0.0  # the share of the height the heads-up panel covers (the view slides below it)
         self._overlay = label(
             8 if small else 12, (255, 255, 255, 255), x=width // 2, y=height // 2, anchor_x="center",
             anchor_y="center", width=int(width * 0.8),
@@ -326,7 +399,7 @@ class PygletBackend(Backend):
         @w.event
         def on_resize(width, height):
             self.size = (max(width, 1), max(height, 1))
-            self._hud.y, self._hud.width = height - 10, max(width - 20, 10)
+            self._hud.y, self._hud.width = height - 12, max(width - 28, 10)
             self._overlay.x, self._overlay.y = width // 2, height // 2
             self._overlay.width = max(int(width * 0.8), 10)
 
@@ -359,14 +432,26 @@ class PygletBackend(Backend):
         gl.glClear(gl.GL_COLOR_BUFFER_BIT | gl.GL_DEPTH_BUFFER_BIT)
         program = self._program
         program.use()
-        matrix = view_matrix(view, width, height)
+        self._hud.text = "\n".join(hud)  # laid out first: the view goes below the panel it needs
+        self._panel.height = self._hud.content_height + 16
+        self.hud_fraction = (self._panel.height + 4) / max(height, 1)
+        matrix = view_matrix(view, width, height, self.hud_fraction)
+        eye = np.asarray(view.eye, dtype=np.float64)
+        far = np.linalg.inv(matrix) @ np.hstack([self._sky_corners, np.ones((4, 1))]).T  # the corners' rays
+        rays = (far[:3] / far[3]).T - eye
         gl.glDisable(gl.GL_DEPTH_TEST)
         program["view_projection"] = tuple(np.eye(4).T.ravel())
-        program["mode"] = 1
+        program["mode"] = 3
+        program["eye"] = tuple(float(v) for v in eye)
+        under = float(self.draw_list.terrain_points[:, 2].mean()) if len(self.draw_list.terrain_points) else 0.0
+        program["eye_height"] = float(eye[2] - under)
+        sun = np.array([0.35, -0.25, 0.9]) / np.linalg.norm([0.35, -0.25, 0.9])
+        program["ground"] = tuple(c * (0.35 + 0.65 * sun[2]) for c in self._ground_colour)
+        self._sky.update(self._sky_corners, rays.astype(np.float32), np.zeros_like(self._sky_corners))
         self._sky.draw()
         gl.glEnable(gl.GL_DEPTH_TEST)
         program["view_projection"] = tuple(matrix.T.ravel())
-        program["sun"] = tuple(np.array([0.35, -0.25, 0.9]) / np.linalg.norm([0.35, -0.25, 0.9]))
+        program["sun"] = tuple(sun)
         program["mode"] = 2
         self._terrain.draw()
         program["mode"] = 0
@@ -379,14 +464,23 @@ class PygletBackend(Backend):
                 self._sphere_offsets + q[self._sphere_particles], self._sphere_normals, self._sphere_colours
             )
             self._spheres.draw()
-        if len(self._segments):
+        if self._tubes is not None:
+            ends = q[self._tube_ends].astype(np.float64)
+            points, normals = tube_points(ends[:, 0], ends[:, 1], self._tube_radii)
+            self._tubes.update(points, normals, self._tube_colours)
+            self._tubes.draw()
+        if len(self._segments):  # ropes and lines 2 pixels wide at any distance
             program["mode"] = 1
             p = q[self._segments]
             self._lines.update(p, np.zeros_like(p), self._segment_colours)
+            gl.glLineWidth(2.0)
             self._lines.draw()
+            gl.glLineWidth(1.0)
         program.stop()
         gl.glDisable(gl.GL_DEPTH_TEST)
-        self._hud.text = "\n".join(hud)
+        self._panel.x, self._panel.width = 4, min(self._hud.content_width + 20, width - 8)
+        self._panel.y = height - 4 - self._panel.height
+        self._panel.draw()
         self._hud.draw()
         if overlay:
             self._overlay.text = "\n".join(overlay)

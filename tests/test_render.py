@@ -102,7 +102,7 @@ def test_picture_has_sky_horizon_ground_and_frames_the_objects(recording, tmp_pa
 
 
 def test_kite_line_drawn_from_the_anchor_to_the_kite(kite_recording, tmp_path):
-    from warpsim.io.hdf5 import Recording
+    from warpsim.io.recording import Recording
     from warpsim.io.render import Camera, Scene
 
     with Recording(kite_recording) as rec:
@@ -132,7 +132,7 @@ def test_default_camera_frames_the_kite_not_its_whole_line(kite_recording, tmp_p
 
 
 def test_flag_pole_and_glider_frame_are_drawn(tmp_path_factory, tmp_path):
-    from warpsim.io.hdf5 import Recording
+    from warpsim.io.recording import Recording
     from warpsim.io.render import Camera, Scene
     from warpsim.io.shapes import POLE, TUBE
 
@@ -151,7 +151,7 @@ def test_flag_pole_and_glider_frame_are_drawn(tmp_path_factory, tmp_path):
 def test_gif_frames_are_simulated_time_apart(kite_recording, tmp_path):
     """The kite records 30 frames a second: a GIF frame every 2 (66.7 ms of simulated time, shown 70 ms: GIF
     counts in 10 ms), not one frame every 420 ms."""
-    from warpsim.io.hdf5 import Recording
+    from warpsim.io.recording import Recording
 
     out = tmp_path / "kite.gif"
     assert main(["render", str(kite_recording), str(out), "--size", "160x90"]) == 0

@@ -21,13 +21,13 @@ class PictureOutput(FrameOutput):
         size: ``(width, height)`` [pixels]. azimuth, elevation: the view direction [deg], as ``warpsim render``.
     """
 
-    def __init__(self, path, model, label: str = "", size=(960, 540), azimuth: float = -60.0, elevation=20.0):
+    def __init__(self, path, model, label: str = "", size=(960, 540), azimuth: float = -60.0, elevation: float = 12.0):
         self.path = check_picture_path(path)
         if self.path.suffix.lower() != ".png":
             raise ValueError(f"{path}: a picture output writes a .png")
         require_pillow()
         self.scene, self.label = Scene(model), label
-        self.camera = Camera(azimuth, elevation, 1.0, tuple(size))
+        self.camera = Camera(azimuth, elevation, size=tuple(size))
         self.last: tuple[float, np.ndarray] | None = None
         self.closed = False
 

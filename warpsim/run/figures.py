@@ -99,7 +99,7 @@ class FigureWindow:
         self.worst = np.zeros(count)
 
     def add(self, values: np.ndarray, live: np.ndarray, in_window: bool, touching: np.ndarray, t: float) -> None:
-        """Add one frame: ``values`` ``[F, count]`` figures, for the ``live`` worlds."""
+        """Add one frame: ``values`` ``[F, count]`` figures, for the ``live`` worlds (not read outside the window)."""
         first = live & touching & np.isnan(self.ground_time)
         self.ground_time[first] = t
         if not in_window:
@@ -152,8 +152,11 @@ class FlightFigures:
         self._seen = 0
 
     def __call__(self, frame: Frame) -> None:
+        # every frame, as a sweep: each world's worst stretch as the device measured it, and its first ground contact
+        self.window.worst = np.maximum(self.window.worst, frame.world_stretch)
         eps = 0.25 * self.sim.dt  # frame times are sums of dt
         if not self.start - eps <= frame.time <= self.stop + eps:
+            self.window.add(None, self.live, False, self.contacts.touching(frame), frame.time)
             return
         self._seen += 1
         if (self._seen - 1) % self.every:

@@ -374,7 +374,7 @@ def case_sweep(opts: Options) -> dict:
 
     import pandas as pd
 
-    from warpsim.sweeps import plan as sweeps
+    from warpsim import sweeps
 
     d = scene("kite")
     plan = sweeps.SweepPlan(d, sweeps.parse_axes(d, list(SWEEP_AXES)), SWEEP_SECONDS)

@@ -51,11 +51,11 @@ SIZE = (1280, 720)
 
 def shoot(name: str) -> Path:
     """Fly shot ``name`` in a window on the current display and save its last picture."""
-    from warpsim import _warp
-    from warpsim.cli import scene_dirs
     from warpsim.io.render import save_png
+    from warpsim.physics import _warp
     from warpsim.run.simulation import Simulation
     from warpsim.scene.descriptor import merge, resolve, to_toml
+    from warpsim.scene.dirs import scene_dirs
     from warpsim.viewer.core import Viewer
     from warpsim.viewer.gl import PygletBackend
 

@@ -69,7 +69,8 @@ class NumpyVerlet:
         self.drag_area = m.drag_area.numpy()[: m.drag_count] if m.drag_count else np.zeros(0, F32)
         self.air = solver.air
         self.wind_profile = solver.wind
-        # whole-canopy air force (warpsim.kernels.canopy): each canopy's triangles, table, parameters, lagged side force
+        # whole-canopy air force (warpsim.physics.kernels.canopy): each canopy's triangles, table, parameters,
+        # lagged side force
         self.canopies = []
         if m.canopy_count:
             start, ids = m.canopy_tri_start.numpy(), m.canopy_tri_ids.numpy()
@@ -180,7 +181,7 @@ class NumpyVerlet:
 
     def _canopy_force(self, force, cross, area, velocity, a, b, c) -> None:
         """Overwrite the canopies' triangles in ``force`` (``[T, 3]``, each vertex's third [N]) with their share of
-        the whole canopy's force, as :mod:`warpsim.kernels.canopy` (sums in float64, then rounded)."""
+        the whole canopy's force, as :mod:`warpsim.physics.kernels.canopy` (sums in float64, then rounded)."""
         for k, (ids, table, (nominal, projected0, orient, lag)) in enumerate(self.canopies):
             tri_area = area[ids].astype(F64)
             total = tri_area.sum()

@@ -4,7 +4,7 @@
  * plate or sail law, and drag bodies), Verlet with damping, K Jacobi iterations of the averaged stick corrections
  * (with the model's per-stick coefficients and per-particle scales, so mass splitting and stick weights are the
  * model's; Chebyshev weights per iteration; the increments carried apart from the starting positions), nails,
- * the momentum the projection moved given back to each free world (warpsim.kernels.momentum; solver.keep_momentum),
+ * the momentum the projection moved given back to each free world (warpsim.physics.kernels.momentum; solver.keep_momentum),
  * and the terrain (bilinear heightfield, normal push-out with friction, or a clamp).
  *
  * Precision, as warpsim's kernels: positions, previous positions, nail targets and the projection's origins are
@@ -114,7 +114,7 @@ static float dot3(const float *a, const float *b) { return a[0] * b[0] + a[1] * 
 /* Warp's sign(): -1 below zero, else 1 (so 1 at zero) */
 static float sign1(float x) { return x < 0.0f ? -1.0f : 1.0f; }
 
-/* the sail law (warpsim.kernels.aero.sail_force), before the 1/3 share */
+/* the sail law (warpsim.physics.kernels.aero.sail_force), before the 1/3 share */
 static void sail_force(const Model *m, int tri, const float *n, float area, const float *w, const float *span,
                        float *out) {
     const float *c = m->sail + 4 * tri;
@@ -265,7 +265,7 @@ static void cross3d(const double *a, const double *b, double *out) {
     out[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-/* warpsim.kernels.momentum: give each free world back the linear and angular momentum the projection moved
+/* warpsim.physics.kernels.momentum: give each free world back the linear and angular momentum the projection moved
  * (x -= dP / M + I^-1 dL x r), in double, with the kernel's operations in its order; `predicted` holds the
  * positions before the projection */
 static void keep_momentum(Model *m, const double *predicted) {

@@ -5,7 +5,7 @@ keys such as ``wind.speed``, one column each, named as in the descriptor), the w
 window_stop]`` [s] and the figures of :class:`warpsim.run.figures.FigureWindow` over it: ``NAME_mean``,
 ``NAME_min`` and ``NAME_max`` of every figure of :data:`warpsim.run.figures.FIGURES` the object has (in their
 units), ``airborne`` (the share of the window's frames off the ground), ``ground_time`` (first ground contact [s],
-NaN when none), ``worst_stretch`` (dimensionless) and ``window_frames``. The same columns as a sweep's table of
+NaN when none), ``worst_stretch`` [%] and ``window_frames``. The same columns as a sweep's table of
 the same cases, so either reads the other's tools (``pandas.read_parquet``, ``pandas.read_csv``).
 
 Parquet needs pandas and pyarrow, CSV only the standard library (the ``sweep`` extra has both). The file is

@@ -64,7 +64,7 @@ class HangGliderConfig(Checked):
             average (1 = the paper; 6 counts each as six sticks). Under the pilot's load the frame also needs
             heavy virtual particles (``virtual_mass_fraction``) to stay within 1 % (README, hang glider).
         chord_loading: load the sail most near its leading edge under the ``plate`` air model (thin-aerofoil
-            loading, centre of pressure near the quarter chord; see :mod:`warpsim.kernels.aero`). Off:
+            loading, centre of pressure near the quarter chord; see :mod:`warpsim.physics.kernels.aero`). Off:
             uniform load, centre of pressure at the area centroid, and the glider has almost no pitch
             stiffness.
         suspension: ``sticks`` (the paper: the pilot on seven control sticks to the frame) or ``strap`` (a real
@@ -88,9 +88,10 @@ class HangGliderConfig(Checked):
             struts (tip rods, sprogs) tied to the frame (0 = none): a tensioned sail would flatten it otherwise.
         sail_tension: the cloth's sticks are this much shorter than the sail as built (a sail tensioned on its
             frame, as a crossbar or VG does); a taut sail billows less, so its triangles spread less in angle of
-            attack. Stretch is reported against the sail as built (:meth:`~warpsim.builder.ModelBuilder.pretension`).
+            attack. Stretch is reported against the sail as built
+            (:meth:`~warpsim.physics.builder.ModelBuilder.pretension`).
         oswald: ``sail`` air model: span efficiency of the induced drag
-            (:func:`~warpsim.kernels.aero.sail_coefficients`).
+            (:func:`~warpsim.physics.kernels.aero.sail_coefficients`).
         profile_drag: ``sail`` air model: the sail's zero-lift drag coefficient.
         stall_angle: ``sail`` air model: angle of attack [deg] where a triangle's flow separates.
         billow_shift: the sail's billow shift under weight shift, as twist: the extra washout [deg] at the tip that
@@ -157,7 +158,7 @@ PRESETS = {
 
 @dataclass(kw_only=True)
 class HangGliderRecord(ObjectRecord):
-    """A hang glider's :class:`~warpsim.model.ObjectRecord` with its reference particles and control sticks.
+    """A hang glider's :class:`~warpsim.physics.model.ObjectRecord` with its reference particles and control sticks.
 
     Attributes:
         nose: the nose particle. keel: keel particles, nose to tail. tips: (left, right) wing-tip particles.

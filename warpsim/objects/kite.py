@@ -67,7 +67,7 @@ class KiteConfig(Checked):
             (the keel's reinforced edges; not in the paper): without them the line's pull stretches the keel's
             cloth sticks near the tow point by ~9 % in steady flight under the ``sail`` air model.
         profile_drag: ``sail`` air model: the sail's zero-lift drag coefficient
-            (:func:`~warpsim.kernels.aero.sail_coefficients`).
+            (:func:`~warpsim.physics.kernels.aero.sail_coefficients`).
         stall_angle: ``sail`` air model: angle of attack [deg] where a triangle's flow separates.
         billow: the sail's cloth sticks are this much longer than the sail as built (a delta's sail is cut
             with billow, so it sets cambered between its spars; not in the paper). 0 by default: with
@@ -82,7 +82,7 @@ class KiteConfig(Checked):
             (``sail`` air model only): its drag behind the tow point keeps the kite's nose into the wind, which
             holds it in the middle of the wind window (0: no tail).
         delta_lift: ``sail`` air model: give the sail the lift slope of its delta planform, the Helmbold-DATCOM
-            slope at its half-chord sweep (:func:`~warpsim.kernels.aero.sail_coefficients`; 3.64 /rad for the
+            slope at its half-chord sweep (:func:`~warpsim.physics.kernels.aero.sail_coefficients`; 3.64 /rad for the
             default 1.8 x 0.9 m sail), divided per triangle by the cosine of the leading edge's sweep, which the
             attached flow's sweep theory takes off again. Without it the sail lifts ~0.7 of that (sweep theory on
             top of the unswept slope), C_L 0.51 at 10.9 deg in 6 m/s against the planform's 0.69.
@@ -158,7 +158,7 @@ PRESETS = {
 
 @dataclass(kw_only=True)
 class KiteRecord(ObjectRecord):
-    """A kite's :class:`~warpsim.model.ObjectRecord` with its reference particles and its anchor.
+    """A kite's :class:`~warpsim.physics.model.ObjectRecord` with its reference particles and its anchor.
 
     Attributes:
         nose: the nose particle. tow: the tow point (keel apex, the rope's top).

@@ -7,7 +7,7 @@ person, built like the kite rope at a lower resolution.
 The canopy's air force (``canopy``):
 
 * ``flat`` (default) and ``ringslot``: the whole canopy's force from tangential and normal force coefficients
-  against its angle of attack (:data:`CANOPIES`, :mod:`warpsim.kernels.canopy`): an internal pressure that
+  against its angle of attack (:data:`CANOPIES`, :mod:`warpsim.physics.kernels.canopy`): an internal pressure that
   inflates the cloth and gives the drag, and a side force spread over the triangles. The flat canopy's side
   force is unstable about its axis, with a stable angle of attack at 25 degrees, and follows the angle of attack
   a canopy's travel of its own diameter late (its wake re-forming): it swings as flat circular canopies do. The
@@ -56,7 +56,7 @@ class ParachuteConfig(Checked):
         position: start (x, y) [m].
         speed: start descent speed [m/s].
         canopy: the canopy's air force: ``flat`` (a flat circular canopy) or ``ringslot`` (a slotted one) from
-            whole-canopy coefficients (:data:`CANOPIES`, :mod:`warpsim.kernels.canopy`), or ``paper``: each
+            whole-canopy coefficients (:data:`CANOPIES`, :mod:`warpsim.physics.kernels.canopy`), or ``paper``: each
             triangle on its own under the scene's ``[air]`` model (the paper's Section 8, where only the hoop keeps
             the canopy open).
     """
@@ -90,7 +90,7 @@ class CanopyType:
         normal_slope: ``dC_N/dalpha`` at zero angle of attack [1/rad]; negative = statically unstable about the
             axis (the canopy slides off to one side and swings).
         wake_lag: the time the side force takes to follow the angle of attack, in times to travel the projected
-            diameter (see :mod:`warpsim.kernels.canopy`).
+            diameter (see :mod:`warpsim.physics.kernels.canopy`).
     """
 
     tangential: float
@@ -152,7 +152,7 @@ def _zip_rings(inner: list[int], inner_angles: np.ndarray, outer: list[int], out
 
 @dataclass(kw_only=True)
 class ParachuteRecord(ObjectRecord):
-    """A parachute's :class:`~warpsim.model.ObjectRecord` with its rim and person.
+    """A parachute's :class:`~warpsim.physics.model.ObjectRecord` with its rim and person.
 
     Attributes:
         rim: the canopy's rim particles, in order around it. person: the person particle.

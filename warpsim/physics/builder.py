@@ -183,7 +183,7 @@ class ModelBuilder:
 
     def add_canopy(self, tri_ids, table, axis, wake_lag: float = 0.0) -> int:
         """Make triangles ``tri_ids`` one parachute canopy whose air force is the whole canopy's
-        (:mod:`warpsim.kernels.canopy`) instead of each triangle's own; returns the canopy's index.
+        (:mod:`warpsim.physics.kernels.canopy`) instead of each triangle's own; returns the canopy's index.
 
         ``table`` is ``[TABLE_ROWS, 2]``: the tangential and normal force coefficients ``(C_T, C_N)`` on the nominal
         area at angles of attack 0, 5, ..., 180 degrees; ``axis`` a direction [m] from the canopy's mouth to its apex

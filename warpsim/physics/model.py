@@ -133,7 +133,7 @@ class Model:
     drag_area: wp.array
     """``[D]`` float32 drag area ``C_D A`` [m^2] of each drag body."""
     canopy_count: int
-    """Number of parachute canopies whose air force is the whole canopy's (:mod:`warpsim.kernels.canopy`)."""
+    """Number of parachute canopies whose air force is the whole canopy's (:mod:`warpsim.physics.kernels.canopy`)."""
     canopy_tri_start: wp.array
     """``[C + 1]`` int32 offsets of each canopy's triangles in ``canopy_tri_ids``."""
     canopy_tri_ids: wp.array

@@ -34,7 +34,7 @@ class Checkpoint:
         nail_target: ``[N, 3]`` float64 where each nailed particle is held [m] (the kite's anchor moves).
         nail_target_goal: ``[N, 3]`` float64 where the controlled nails are moving to [m].
         canopy_side: ``[max(K, 1), 3]`` float32 the lagged side force [Pa] of each of the ``K`` parachute canopies
-            (:mod:`warpsim.kernels.canopy`; zeros without canopies).
+            (:mod:`warpsim.physics.kernels.canopy`; zeros without canopies).
         wind: ``[W, 3]`` float32 current wind of each world [m/s].
         gust_active: ``[W]`` uint8, 1 where the world has gusts.
         gust_g: ``[W, 3]`` float64 the gust processes' current values (dimensionless).

@@ -123,7 +123,7 @@ class FigureWindow:
         frames = int(self.frames[k])
         out["airborne"] = self.airborne[k] / frames if frames else math.nan
         out["ground_time"] = float(self.ground_time[k])
-        out["worst_stretch"] = float(self.worst[k])
+        out["worst_stretch"] = 100.0 * float(self.worst[k])  # in percent, as the run summary prints it
         out["window_frames"] = frames
         return {key: float(v) if isinstance(v, np.floating) else v for key, v in out.items()}
 

@@ -252,7 +252,8 @@ def triangle_air_force(model, state, control, dt: float, air, wind, tri_force_ou
     """Compute each triangle's per-vertex air force [N] into ``tri_force_out`` (shape ``[tri_count]``) for steps
     of ``dt`` [s].
 
-    ``air`` is a :class:`warpsim.config.AirConfig` (law and scale), ``wind`` a :class:`warpsim.config.WindConfig`
+    ``air`` is a :class:`warpsim.physics.config.AirConfig` (law and scale), ``wind`` a
+    :class:`warpsim.physics.config.WindConfig`
     (its shear profile; the wind itself is ``control.wind``).
     """
     if model.tri_count == 0:

@@ -141,7 +141,7 @@ def canopy_air_force(
     """Overwrite the per-vertex air force [N] of every canopy triangle in ``tri_force_out`` with its share of its
     canopy's whole-canopy force (see the module text), for steps of ``dt`` [s]; ``canopy_load`` (``[C]`` vec4) is
     scratch space for each canopy's pressure [Pa] and normal traction [Pa]. ``air`` and ``wind`` as for
-    :func:`warpsim.kernels.aero.triangle_air_force`. Models without canopies are left alone."""
+    :func:`warpsim.physics.kernels.aero.triangle_air_force`. Models without canopies are left alone."""
     if getattr(model, "canopy_count", 0) == 0:
         return
     wp.launch(

@@ -30,9 +30,10 @@ class CollisionMode(enum.IntEnum):
 
 @wp.struct
 class HeightfieldData:
-    """Device view of a :class:`warpsim.terrain.Heightfield`: float32 heights [m] above a float64 ``base`` [m] (the
-    middle of their range, so that a terrain 3 km up is looked up as finely as one at sea level), float64 grid
-    origin [m] and cell size [m] (so that a point 10 km out finds its place in the cell to float64 precision)."""
+    """Device view of a :class:`~warpsim.physics.terrain.Heightfield`: float32 heights [m] above a float64
+    ``base`` [m] (the middle of their range, so that a terrain 3 km up is looked up as finely as one at sea level),
+    float64 grid origin [m] and cell size [m] (so that a point 10 km out finds its place in the cell to float64
+    precision)."""
 
     heights: wp.array2d(dtype=wp.float32)
     base: wp.float64

@@ -435,8 +435,8 @@ class StickProjector:
     made once. Use a scheme's subclass, or :func:`make_projector` to pick one.
 
     Args:
-        model: the :class:`~warpsim.model.Model`.
-        config: the :class:`~warpsim.config.SolverConfig` whose ``relaxation`` (over-relaxation factor, 1 = the
+        model: the :class:`~warpsim.physics.model.Model`.
+        config: the :class:`~warpsim.physics.config.SolverConfig` whose ``relaxation`` (over-relaxation factor, 1 = the
             paper), ``mass_splitting`` (split masses instead of the paper's plain average) and ``chebyshev``
             (spectral-radius estimate for :func:`chebyshev_weights`, 0 = plain Jacobi) it uses.
     """

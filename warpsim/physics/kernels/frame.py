@@ -87,7 +87,7 @@ class FrameProbe:
     """Device buffers and launches of the frame bookkeeping of one model (see the module's docstring).
 
     Args:
-        model: the :class:`~warpsim.model.Model`.
+        model: the :class:`~warpsim.physics.model.Model`.
         owner: host ``[P]`` index of the object whose terrain contact each particle tells, -1 for particles whose
             contact is not news (nailed, or parts meant to lie on the ground).
     """

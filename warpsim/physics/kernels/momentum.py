@@ -117,7 +117,7 @@ class MomentumKeeper:
     module's docstring): :meth:`before` keeps the positions the projection starts from, :meth:`after` corrects.
 
     Args:
-        model: the :class:`~warpsim.model.Model`.
+        model: the :class:`~warpsim.physics.model.Model`.
     """
 
     def __init__(self, model):

@@ -144,3 +144,53 @@ def unpack_controls(names: tuple[str, ...], flags: np.ndarray, table: np.ndarray
         else:
             out[name] = tuple(float(v) for v in table[k, : VECTOR_CONTROLS[name]])
     return out
+
+
+def take_checkpoint(sim) -> Checkpoint:
+    """The :class:`Checkpoint` of :class:`~warpsim.run.simulation.Simulation` ``sim`` as it is now (host copies)."""
+    c = sim.control
+    return Checkpoint(
+        q=sim.state.particle_q.numpy().copy(),
+        q_prev=sim.state.particle_q_prev.numpy().copy(),
+        time=np.array([sim.state.time], dtype=np.float64),
+        steps=np.array([sim.steps_taken], dtype=np.int64),
+        stick_rest=c.stick_rest.numpy().copy(),
+        stick_rest_target=c.stick_rest_target.numpy().copy(),
+        nail_target=c.nail_target.numpy().copy(),
+        nail_target_goal=c.nail_target_goal.numpy().copy(),
+        canopy_side=canopy_sides(sim),
+        wind=c.wind.numpy().copy(),
+        **sim.inputs.save(),
+        control_names=sim.inputs.names,
+    )
+
+
+def restore_checkpoint(sim, checkpoint: Checkpoint) -> None:
+    """Put ``checkpoint`` (already checked to fit, :meth:`Checkpoint.check_like`) back into ``sim``'s state,
+    control arrays, canopies and inputs."""
+    sim.state.particle_q.assign(checkpoint.q)
+    sim.state.particle_q_prev.assign(checkpoint.q_prev)
+    sim.state.time = float(checkpoint.time[0])
+    sim.steps_taken = int(checkpoint.steps[0])
+    c = sim.control
+    c.stick_rest.assign(checkpoint.stick_rest)
+    c.stick_rest_target.assign(checkpoint.stick_rest_target)
+    c.nail_target.assign(checkpoint.nail_target)
+    c.nail_target_goal.assign(checkpoint.nail_target_goal)
+    c.wind.assign(checkpoint.wind)
+    k = 0
+    for group in sim._groups:  # each group's solver holds its canopies' lagged side forces
+        count = group.model.canopy_count
+        if count:
+            side = group.solver.canopy_side.numpy()
+            side[:count] = checkpoint.canopy_side[k : k + count]
+            group.solver.canopy_side.assign(side)
+            k += count
+    sim.inputs.load(checkpoint)
+
+
+def canopy_sides(sim) -> np.ndarray:
+    """``[max(K, 1), 3]`` float32 the lagged side force [Pa] of every canopy, from the groups' solvers."""
+    groups = [g for g in sim._groups if g.model.canopy_count]
+    sides = [g.solver.canopy_side.numpy()[: g.model.canopy_count] for g in groups]
+    return np.concatenate(sides).astype(np.float32) if sides else np.zeros((1, 3), dtype=np.float32)

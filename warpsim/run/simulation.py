@@ -7,17 +7,13 @@ control arrays, :mod:`warpsim.run.diagnostics` says what a frame shows. After ea
 numbers (worst stretch, non-finite particles, terrain clearance: :mod:`warpsim.physics.kernels.frame`), captured in one
 graph with the frame's steps; positions reach the host only when an output, the viewer or a check asks.
 
-With ``threads > 1`` on the CPU the worlds of a batch are cut into one group per thread (:class:`_Group`): each
-group has its own model, solver, probe and frame graphs, working on views of the simulation's state and control
-arrays, and its graph is replayed by its own thread (Warp's CPU graph replay releases the GIL). The threads meet
-at every frame end, where outputs, controls and checks see one whole frame; a world computes exactly what it
-computes alone, so the frames are bit for bit those of one thread.
+With ``threads > 1`` on the CPU the worlds of a batch are cut into one group per thread
+(:mod:`warpsim.run.groups`), each replayed by its own thread. The threads meet at every frame end, where outputs,
+controls and checks see one whole frame; the frames are bit for bit those of one thread.
 """
 
 from __future__ import annotations
 
-import concurrent.futures
-import itertools
 import time
 import weakref
 from collections.abc import Callable
@@ -28,13 +24,13 @@ import warp as wp
 
 from ..physics.config import WindConfig, from_section
 from ..physics.kernels import frame as frame_kernels
-from ..physics.model import Control, State
 from ..physics.solver import SOLVERS, load_modules, make_solver
 from ..scene.build import build_model, settings
 from ..scene.controls import ControlError, ControlSchedule
 from ..scene.descriptor import DescriptorError, world_descriptor
-from .checkpoint import Checkpoint
+from .checkpoint import Checkpoint, canopy_sides, restore_checkpoint, take_checkpoint
 from .diagnostics import Frame, FrameSource, GroundContacts, find_blowup
+from .groups import GroupThreads, WorldGroup, split_worlds
 from .inputs import Inputs, control_names
 from .summary import BlowUpError, RunSummary, _Pace, available_cores
 
@@ -115,13 +111,9 @@ class Simulation:
             raise DescriptorError(str(err)) from None
         self.inputs = Inputs(self.model, self.control, winds, schedule)
         self.contacts = GroundContacts(self.model)
-        self._groups = self._make_groups(threads, where)
+        self._groups = split_worlds(self, threads, where)
         self.threads = len(self._groups)
-        # the other groups' graphs are replayed by these threads, the first group's by the caller's
-        self._pool = None
-        if self.threads > 1:
-            self._pool = concurrent.futures.ThreadPoolExecutor(self.threads - 1, thread_name_prefix="warpsim-group")
-            weakref.finalize(self, self._pool.shutdown, wait=False)
+        self._threads = GroupThreads(self._groups, self)
         self._source = FrameSource(self.model, self.state, self.control, self.dt)
         self._out = _nothing  # the last frame handed out (a weak reference), copied before the state moves on
         self._good = GoodFrame(0, 0.0, 0, 0)  # the last frame that passed its checks
@@ -143,52 +135,6 @@ class Simulation:
                 group.graphs = (self._capture_frame(group, 0), self._capture_frame(group, 1))
         wp.synchronize_device(self.model.device)
         self.startup_time = time.perf_counter() - started  # [s] model build, kernel load/compilation
-
-    def _make_groups(self, threads: int, where: str) -> list[_Group]:
-        """One :class:`_Group` per thread, of consecutive worlds (as even in size as they can be); one group is
-        the simulation's own model, state, control and solver."""
-        count = max(1, min(int(threads), self.world_count)) if self.model.device.is_cpu else 1
-        if count == 1:
-            probe = frame_kernels.FrameProbe(self.model, self.contacts.owners())
-            return [_Group(self.model, self.state, self.control, self.solver, probe)]
-        cfg, groups = self.settings, []
-        bounds = [self.world_count * k // count for k in range(count + 1)]
-        p = s = t = n = 0  # where the group's particles, sticks, triangles and nails start in the whole model
-        for first, end in itertools.pairwise(bounds):
-            model = build_model(
-                self.descriptor, self.model.device, where, terrain=self.model.terrain, worlds=range(first, end)
-            )
-            whole = self.model
-            if not (  # the views below need each world's particles, sticks and triangles in one run, in order
-                np.array_equal(model.stick_particles_np + p, whole.stick_particles_np[s : s + model.stick_count])
-                and np.array_equal(model.tri_indices_np + p, whole.tri_indices_np[t : t + model.tri_count])
-            ):
-                raise RuntimeError(f"worlds {first}-{end - 1} are not laid out one after another: cannot thread them")
-            state = State(
-                particle_q=self.state.particle_q[p : p + model.particle_count],
-                particle_q_prev=self.state.particle_q_prev[p : p + model.particle_count],
-            )
-            c = self.control
-            control = Control(
-                stick_rest=c.stick_rest[s : s + model.stick_count],
-                stick_rest_target=c.stick_rest_target[s : s + model.stick_count],
-                nail_target=c.nail_target[n : n + model.nail_count] if model.nail_count else None,
-                nail_target_goal=c.nail_target_goal[n : n + model.nail_count] if model.nail_count else None,
-                wind=c.wind[first:end],
-            )
-            if control.nail_target is None:  # a model without nails keeps one unused target
-                unused = model.control()
-                control.nail_target, control.nail_target_goal = unused.nail_target, unused.nail_target_goal
-            solver = make_solver(
-                model, cfg.solver, air=cfg.air, wind=cfg.wind, ground=cfg.ground, use_graph=self.solver.use_graph
-            )
-            if model.tri_count:  # readers of self.solver.tri_force (figures) see every group's air forces
-                solver.tri_force = self.solver.tri_force[t : t + model.tri_count]
-            probe = frame_kernels.FrameProbe(model, GroundContacts(model).owners())
-            groups.append(_Group(model, state, control, solver, probe))
-            p, s, t = p + model.particle_count, s + model.stick_count, t + model.tri_count
-            n += model.nail_count
-        return groups
 
     @property
     def controls(self) -> dict:
@@ -226,11 +172,11 @@ class Simulation:
                     group.solver.prepare(group.state, group.control, self.dt)
                     group.prepared = True
 
-            def steps(group: _Group) -> None:
+            def steps(group: WorldGroup) -> None:
                 for _ in range(count):
                     group.solver.step(group.state, group.control, self.dt)
 
-            self._in_threads(steps)
+            self._threads.each(steps)
             for _ in range(count):  # the groups' states kept their own time
                 self.state.time += self.dt
         self.steps_taken += count
@@ -269,7 +215,7 @@ class Simulation:
             frame.fetch()
             self._out = _nothing
 
-    def _capture_frame(self, group: _Group, slot: int):
+    def _capture_frame(self, group: WorldGroup, slot: int):
         """The graph of one whole frame of ``group`` kept in probe ``slot``: the probe's start, ``steps_per_frame``
         solver steps, the probe's report (for the group's state and control, whose kernels are loaded; the same
         kernels as stepping one by one)."""
@@ -282,22 +228,7 @@ class Simulation:
 
     def _replay(self, slot: int) -> None:
         """Replay every group's frame graph for probe ``slot``, each group on its own thread."""
-        if self._pool is None:
-            wp.capture_launch(self._groups[0].graphs[slot])
-        else:
-            self._in_threads(lambda group: wp.capture_launch(group.graphs[slot]))
-
-    def _in_threads(self, work: Callable[[_Group], None]) -> None:
-        """Call ``work(group)`` for every group, each on its own thread (the first on this one), and return when
-        all are done, also when this thread is interrupted (no thread is left writing the state)."""
-        first, *rest = self._groups
-        others = [self._pool.submit(work, group) for group in rest]
-        try:
-            work(first)
-        finally:
-            concurrent.futures.wait(others)
-        for done in others:
-            done.result()  # a thread's error is raised here
+        self._threads.each(lambda group: wp.capture_launch(group.graphs[slot]))
 
     def _step_frame(self, count: int) -> None:
         """Take ``count`` steps (one frame or what is left of it) and have the probe report and keep the state in
@@ -334,20 +265,7 @@ class Simulation:
     def checkpoint(self) -> Checkpoint:
         """Everything needed to continue this run exactly (host copies, see :class:`warpsim.run.checkpoint.Checkpoint`):
         state, control arrays, every world's gusts, the controls in force and the step count."""
-        return Checkpoint(
-            q=self.state.particle_q.numpy().copy(),
-            q_prev=self.state.particle_q_prev.numpy().copy(),
-            time=np.array([self.state.time], dtype=np.float64),
-            steps=np.array([self.steps_taken], dtype=np.int64),
-            stick_rest=self.control.stick_rest.numpy().copy(),
-            stick_rest_target=self.control.stick_rest_target.numpy().copy(),
-            nail_target=self.control.nail_target.numpy().copy(),
-            nail_target_goal=self.control.nail_target_goal.numpy().copy(),
-            canopy_side=self._canopy_sides(),
-            wind=self.control.wind.numpy().copy(),
-            **self.inputs.save(),
-            control_names=self.inputs.names,
-        )
+        return take_checkpoint(self)
 
     def restore(self, checkpoint: Checkpoint) -> None:
         """Continue from a :meth:`checkpoint` of a simulation of the same descriptor (bit for bit).
@@ -356,29 +274,7 @@ class Simulation:
         """
         checkpoint.check_like(self.checkpoint())
         self._release()
-        self.state.particle_q.assign(checkpoint.q)
-        self.state.particle_q_prev.assign(checkpoint.q_prev)
-        self.state.time = float(checkpoint.time[0])
-        self.steps_taken = int(checkpoint.steps[0])
-        self.control.stick_rest.assign(checkpoint.stick_rest)
-        self.control.stick_rest_target.assign(checkpoint.stick_rest_target)
-        self.control.nail_target.assign(checkpoint.nail_target)
-        self.control.nail_target_goal.assign(checkpoint.nail_target_goal)
-        self.control.wind.assign(checkpoint.wind)
-        k = 0
-        for group in self._groups:  # each group's solver holds its canopies' lagged side forces
-            count = group.model.canopy_count
-            if count:
-                side = group.solver.canopy_side.numpy()
-                side[:count] = checkpoint.canopy_side[k : k + count]
-                group.solver.canopy_side.assign(side)
-                k += count
-        self.inputs.load(checkpoint)
-
-    def _canopy_sides(self) -> np.ndarray:
-        """``[max(K, 1), 3]`` float32 the lagged side force [Pa] of every canopy, from the groups' solvers."""
-        sides = [g.solver.canopy_side.numpy()[: g.model.canopy_count] for g in self._groups if g.model.canopy_count]
-        return np.concatenate(sides).astype(np.float32) if sides else np.zeros((1, 3), dtype=np.float32)
+        restore_checkpoint(self, checkpoint)
 
     def start_frames(self) -> Frame:
         """Check the current state and make it the last good frame that :meth:`advance` goes back to on a
@@ -445,7 +341,7 @@ class Simulation:
                 stick_rest_target=stick_rest_target,
                 nail_target=nail_target,
                 nail_target_goal=nail_target_goal,
-                canopy_side=self._canopy_sides(),  # as now: the frame probes keep positions, not these
+                canopy_side=canopy_sides(self),  # as now: the frame probes keep positions, not these
                 wind=wind,
                 **inputs,
                 control_names=self.inputs.names,
@@ -520,18 +416,6 @@ class Simulation:
             ground_contacts=self.contacts.by_time(),
             **flags,
         )
-
-
-class _Group:
-    """Consecutive worlds of a simulation that one thread steps: their own model (built from those worlds'
-    descriptors, numbered from 0), solver, frame probe and frame graphs (one per probe slot), on views of the
-    simulation's state and control arrays, so that inputs, checkpoints and frames see every world in one array
-    and nothing is copied when the threads meet."""
-
-    def __init__(self, model, state: State, control: Control, solver, probe: frame_kernels.FrameProbe):
-        self.model, self.state, self.control, self.solver, self.probe = model, state, control, solver, probe
-        self.graphs = None  # (slot 0, slot 1) frame graphs, when the solver replays graphs
-        self.prepared = False  # the solver's one-step graph is captured (Simulation.step)
 
 
 def _nothing() -> None:

@@ -91,3 +91,24 @@ def parachute_figures(model: Model, record: ObjectRecord) -> Measure:
         return {"radius": projected_radius(record, view.positions), "swing": swing_angle(record, view.positions)}
 
     return measure
+
+
+HudText = Callable[[dict[str, float]], str]
+"""One object's part of a heads-up line from its figures of a frame (besides altitude and airspeed)."""
+
+
+def glider_hud(f: dict[str, float]) -> str:
+    """The hang glider's heads-up text: sink rate, glide ratio and bank with its side."""
+    glide = f"{f['glide']:4.1f}" if np.isfinite(f["glide"]) else " -- "
+    side = "right" if f["bank"] > 0.5 else "left" if f["bank"] < -0.5 else ""
+    return f"sink {f['sink']:5.2f} m/s  glide {glide}  bank {abs(f['bank']):3.0f} deg {side}"
+
+
+def kite_hud(f: dict[str, float]) -> str:
+    """The kite's heads-up text: the line's elevation and its pull at the anchor."""
+    return f"line {f['line_angle']:4.1f} deg  pull ~{f['line_pull']:5.1f} N"
+
+
+def parachute_hud(f: dict[str, float]) -> str:
+    """The parachute's heads-up text: rate of descent, canopy radius and swing."""
+    return f"descent {f['sink']:5.2f} m/s  radius {f['radius']:4.2f} m  swing {f['swing']:3.0f} deg"

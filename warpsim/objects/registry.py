@@ -33,6 +33,8 @@ class ObjectSpec:
             figures of a frame (a :class:`~.figures.FigureView`) by name; None for an object with none.
         figures_need_air_force: True when ``measure`` reads the view's ``tri_force`` (it is copied to the host
             only then).
+        hud: ``hud(figures) -> str``, the object's own part of its heads-up line (after altitude and airspeed),
+            from its figures of a frame by name; None for an object with none.
     """
 
     config: type
@@ -45,6 +47,7 @@ class ObjectSpec:
     figures: dict[str, tuple[str, str]] = field(default_factory=dict)
     measure_figures: Callable | None = None
     figures_need_air_force: bool = False
+    hud: Callable | None = None
 
 
 OBJECTS: dict[str, ObjectSpec] = {
@@ -70,6 +73,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         presets=hang_glider.PRESETS,
         figures=figures.GLIDER_FIGURES,
         measure_figures=figures.glider_figures,
+        hud=figures.glider_hud,
     ),
     "kite": ObjectSpec(
         config=kite.KiteConfig,
@@ -83,6 +87,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         presets=kite.PRESETS,
         figures=figures.KITE_FIGURES,
         measure_figures=figures.kite_figures,
+        hud=figures.kite_hud,
     ),
     "parachute": ObjectSpec(
         config=parachute.ParachuteConfig,
@@ -91,6 +96,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         summary="round canopy of rings, lines, heavy person; hoop = true keeps it open (paper Section 8)",
         figures=figures.PARACHUTE_FIGURES,
         measure_figures=figures.parachute_figures,
+        hud=figures.parachute_hud,
     ),
 }
 

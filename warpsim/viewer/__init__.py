@@ -10,6 +10,7 @@ OpenGL renderer needs the CUDA driver, so it is not used.
 """
 
 from .backend import Backend, NullBackend, ViewerUnavailableError
-from .core import KEYS, Viewer
+from .core import Viewer
+from .hud import KEYS
 
 __all__ = ["KEYS", "Backend", "NullBackend", "Viewer", "ViewerUnavailableError"]

@@ -20,23 +20,8 @@ from ..io.style import COLOURS
 from ..run.diagnostics import Frame
 from ..run.figures import Figures
 from ..run.simulation import BlowUpError, Simulation
+from . import camera, hud
 from .backend import Backend, DrawList, View
-
-KEYS = (
-    ("Up / Down", "hang glider: bar in (pitch +1: nose down, faster) / bar out (pitch -1: slower)"),
-    ("Left / Right", "hang glider: weight shift (roll -1 / +1), to turn that way"),
-    ("W A S D", "kite: walk the line's ground anchor towards / left of / away from / right of the kite"),
-    ("+ / -", "wind speed up / down by 1 m/s"),
-    ("[ / ]", "wind direction 15 deg anticlockwise / clockwise (seen from above)"),
-    ("Space", "pause / go on"),
-    (".", "one frame (when paused)"),
-    ("R", "restart from the initial state"),
-    ("C", "camera: orbit / chase behind the object / ground observer"),
-    ("mouse", "drag to orbit, wheel to zoom"),
-    ("H or ?", "show / hide this help"),
-    ("Esc or Q", "quit"),
-)
-"""The key map shown by the help overlay (and the README)."""
 
 CAMERAS = ("orbit", "chase", "ground")
 
@@ -151,7 +136,7 @@ class Viewer:
         size = np.ptp(self.points[focus], axis=0) if len(focus) else np.ones(3)
         self.orbit = {"azimuth": -120.0, "elevation": 20.0, "distance": float(max(1.25 * np.linalg.norm(size), 6.0))}
         self._chase_heading = np.array([1.0, 0.0])
-        self._ground_eye = self._ground_point()
+        self._ground_eye = camera.ground_point(self)
         self._debt = 0.0  # simulated seconds owed to the wall clock
         self._last = None  # wall time of the last tick
         self._rate = []  # (wall time, simulated time, steps) of the last ticks, for the rates shown
@@ -406,126 +391,23 @@ class Viewer:
         self._close_recorder()
         self.backend.close()
 
-    # ------------------------------------------------------------------ camera
+    # ------------------------------------------------------------------ camera and text
     def centre(self) -> np.ndarray:
         """Centre of the bounding box of the particles the camera frames [m] (``DrawList.focus``)."""
-        p = self.draw_list.place(self.frame.positions)[self.draw_list.focus]
-        return (p.min(axis=0) + p.max(axis=0)) / 2
-
-    def _ground_point(self) -> np.ndarray:
-        """Where the ground observer stands, eyes at 1.7 m: 10 m behind the kite's anchor and 12 m to its side (the
-        line seen from the side), else 20 m behind and 30 m to the side of the objects' start."""
-        if self.kite is not None:
-            anchor = np.asarray(self._anchor(), dtype=np.float64)
-            ahead = self._bearing(anchor)
-            x, y = anchor - 10.0 * ahead + 12.0 * np.array([-ahead[1], ahead[0]])
-        else:
-            c = self.centre()
-            x, y = c[0] - 20.0, c[1] - 30.0
-        return np.array([x, y, float(self.model.terrain.height(x, y)) + 1.7])
+        return camera.centre(self)
 
     def view(self) -> View:
         """The camera of the current mode."""
-        target = self.centre()
-        if self.camera == "chase":
-            focus = self.draw_list.focus
-            velocity = self.frame.velocities[focus[focus < len(self.frame.velocities)]].mean(axis=0)
-            if np.linalg.norm(velocity[:2]) > 0.5:
-                heading = velocity[:2] / np.linalg.norm(velocity[:2])
-                self._chase_heading = 0.9 * self._chase_heading + 0.1 * heading  # smooth the turns
-                self._chase_heading /= np.linalg.norm(self._chase_heading)
-            d = max(self.orbit["distance"] * 0.6, 4.0)
-            eye = target - d * np.append(self._chase_heading, 0.0) + np.array([0.0, 0.0, 0.3 * d])
-        elif self.camera == "ground":
-            if self.kite is not None:  # the observer walks with the anchor
-                self._ground_eye = self._ground_point()
-            return self._ground_view(self._ground_eye, target)
-        else:
-            az, el = np.radians(self.orbit["azimuth"]), np.radians(self.orbit["elevation"])
-            back = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
-            eye = target + self.orbit["distance"] * back
-        floor = float(self.model.terrain.height(eye[0], eye[1])) + 0.5  # never look from under the ground
-        eye = np.array([eye[0], eye[1], max(eye[2], floor)])
-        return View(eye=eye, target=target)
+        return camera.view(self)
 
-    def _ground_view(self, eye: np.ndarray, target: np.ndarray) -> View:
-        """The ground observer's view from ``eye`` [m]: turned towards ``target`` and tilted so that the picture
-        holds both the horizon (with a strip of ground under it) and the objects, the field of view as narrow as
-        that allows (30 to 100 degrees)."""
-        p = self.points[self.draw_list.focus]
-        offset = target - eye
-        reach = max(float(np.linalg.norm(offset)), 1e-3)
-        along = max(float(np.linalg.norm(offset[:2])), 1e-6)
-        elevation = math.degrees(math.atan2(offset[2], along))
-        size = 0.5 * float(np.linalg.norm(np.ptp(p, axis=0))) if len(p) else 1.0
-        half = math.degrees(math.atan2(size, reach))
-        low = min(-6.0, elevation - half - 4.0)  # the horizon is at 0
-        high = max(elevation + half + 4.0, 0.0)
-        fov = min(max(high - low, 30.0), 100.0)
-        tilt = math.radians(low + fov / 2 if high - low <= fov else (low + high) / 2)  # horizon low in the picture
-        heading = offset[:2] / along
-        look = np.append(math.cos(tilt) * heading, math.sin(tilt))
-        return View(eye=eye, target=eye + reach * look, fov=fov)
-
-    # ------------------------------------------------------------------ text
     def rates(self) -> tuple[float, float]:
         """(real-time factor, steps per wall second) over the last second of ticks."""
-        if len(self._rate) < 2:
-            return 0.0, 0.0
-        (w0, t0, s0), (w1, t1, s1) = self._rate[0], self._rate[-1]
-        wall = w1 - w0
-        return ((t1 - t0) / wall, (s1 - s0) / wall) if wall > 0 else (0.0, 0.0)
+        return hud.rates(self)
 
     def hud(self) -> list[str]:
         """The heads-up lines: time and rates, each object's flight figures, the controls in force."""
-        factor, steps = self.rates()
-        state = "paused" if self.paused else f"{factor:.2f}x real time" + (" (machine too slow)" if self.behind else "")
-        busy = self.step_time / max(self.step_time + self.draw_time, 1e-9)
-        lines = [
-            f"t = {self.sim.state.time:7.2f} s   {state}   {steps:,.0f} steps/s   "
-            f"time stepping {100 * busy:.0f}% / drawing {100 - 100 * busy:.0f}%   camera {self.camera}"
-        ]
-        lines += object_lines(self.model, self.figures(self.frame, self.sim.solver.tri_force), self.frame)[:8]
-        wind = self.frame.wind[0]  # blowing now (gusts included), in the first world
-        heading = math.degrees(math.atan2(wind[1], wind[0]))
-        where = " (world 0)" if self.model.world_count > 1 else ""
-        controls = [f"wind{where} {np.linalg.norm(wind[:2]):.1f} m/s towards {heading:.0f} deg"]
-        if self.has_glider_keys:
-            pitch, roll = (self.sim.controls.get(name, 0.0) for name in ("pitch", "roll"))
-            controls.append(f"pitch {pitch:+.2f}  roll {roll:+.2f}")
-        if self.has_anchor:
-            x, y = self._anchor()
-            controls.append(f"anchor ({x:.1f}, {y:.1f}) m")
-        lines.append("   ".join(controls))
-        if self.recorder is not None:
-            lines.append(f"recording {self.recorder.path.name}")
-        lines.append("H: help")
-        return lines
+        return hud.hud_lines(self)
 
     def overlay(self) -> list[str]:
         """The lines shown in the middle: an error, else the key map while help is on."""
-        if self.error:
-            return ["", self.error, "", "R: restart    Esc: quit"]
-        if self.show_help:
-            return [f"{keys:>13}   {what}" for keys, what in KEYS]
-        return []
-
-
-def object_lines(model, figures: list[dict], frame: Frame) -> list[str]:
-    """One heads-up line per object of ``model`` from its ``figures`` (:class:`warpsim.run.figures.Figures`):
-    altitude and airspeed, and per kind its own (glider: sink rate, glide ratio, bank; kite: line angle and
-    pull; parachute: descent speed and radius), and the worst stretch of ``frame``."""
-    lines = []
-    for record, f in zip(model.objects, figures, strict=True):
-        text = f"{record.name}: altitude {f['altitude']:6.1f} m  airspeed {f['airspeed']:5.1f} m/s"
-        if record.kind == "hang-glider":
-            glide = f"{f['glide']:4.1f}" if math.isfinite(f["glide"]) else " -- "
-            side = "right" if f["bank"] > 0.5 else "left" if f["bank"] < -0.5 else ""
-            text += f"  sink {f['sink']:5.2f} m/s  glide {glide}  bank {abs(f['bank']):3.0f} deg {side}"
-        elif record.kind == "kite":
-            text += f"  line {f['line_angle']:4.1f} deg  pull ~{f['line_pull']:5.1f} N"
-        elif record.kind == "parachute":
-            text += f"  descent {f['sink']:5.2f} m/s  radius {f['radius']:4.2f} m"
-        lines.append(text)
-    lines.append(f"worst stick stretch {100 * frame.worst_stretch:.2f}%")
-    return lines
+        return hud.overlay_lines(self)

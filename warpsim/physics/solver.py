@@ -16,11 +16,12 @@ import numpy as np
 import warp as wp
 
 from .config import AirConfig, GroundConfig, SolverConfig, WindConfig
-from .kernels import MODULES, aero, canopy, collision, constraints, momentum, springs, verlet
+from .kernels import MODULES, aero, canopy, collision, constraints, controls, momentum, springs, verlet
 from .kernels.aero import body_drag, triangle_air_force
 from .kernels.canopy import canopy_air_force
 from .kernels.collision import collide_heightfield
-from .kernels.constraints import make_projector, ramp_nail_targets, ramp_rest_lengths
+from .kernels.constraints import make_projector
+from .kernels.controls import ramp_nail_targets, ramp_rest_lengths
 from .kernels.momentum import MomentumKeeper
 from .kernels.springs import integrate_euler_springs
 from .kernels.verlet import integrate_verlet
@@ -150,7 +151,7 @@ class SolverVerlet(_Solver):
     None = fused on the CPU, gather on CUDA.
     """
 
-    modules = (aero, canopy, collision, constraints, momentum, verlet)
+    modules = (aero, canopy, collision, constraints, controls, momentum, verlet)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, *, constraint_scheme=None, **kwargs):
         super().__init__(model, config, **kwargs)
@@ -178,7 +179,7 @@ class SolverEuler(_Solver):
     ``spring_stiffness`` [N/m] and ``spring_damping`` [N s/m] from its :class:`~warpsim.physics.config.SolverConfig`;
     arguments as for :class:`SolverVerlet`, without a constraint scheme)."""
 
-    modules = (aero, canopy, collision, springs)
+    modules = (aero, canopy, collision, controls, springs)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, **kwargs):
         super().__init__(model, config, **kwargs)

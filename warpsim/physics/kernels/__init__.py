@@ -5,9 +5,20 @@ shared math lives in ``@wp.func`` helpers. Launch parameters are grouped as mode
 scalars, then outputs (``_out``).
 """
 
-from . import aero, canopy, collision, constraints, frame, momentum, springs, verlet
+from . import aero, canopy, collision, constraints, controls, frame, momentum, springs, verlet
 
-MODULES = (aero, canopy, collision, constraints, momentum, springs, verlet)
+MODULES = (aero, canopy, collision, constraints, controls, momentum, springs, verlet)
 """The solvers' kernel modules (``frame`` is the runner's)."""
 
-__all__ = ["MODULES", "aero", "canopy", "collision", "constraints", "frame", "momentum", "springs", "verlet"]
+__all__ = [
+    "MODULES",
+    "aero",
+    "canopy",
+    "collision",
+    "constraints",
+    "controls",
+    "frame",
+    "momentum",
+    "springs",
+    "verlet",
+]

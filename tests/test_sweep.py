@@ -748,27 +748,42 @@ def test_a_sweep_over_an_edited_terrain_file_is_not_resumed(tmp_path, monkeypatc
 ROOT_DIR = Path(__file__).resolve().parent.parent
 
 
+INTRUDER = """
+import sys
+from dask.distributed import Client
+from distributed.security import Security
+address, how = sys.argv[1], sys.argv[2]
+kwargs = {"security": Security.temporary()} if how == "own-credentials" else {}
+try:
+    client = Client(address, timeout="3s", **kwargs)
+    print("JOINED", client.submit(sum, [1, 2, 3]).result(timeout=10))
+except Exception as err:
+    print("REFUSED", type(err).__name__)
+"""
+
+
 def test_the_local_cluster_cannot_be_joined_by_another_process():
     """The default LocalCluster listened on 127.0.0.1 without TLS or authentication, and another local process ran
     its own function on a worker. Now every connection is mutual TLS with credentials made for this cluster: a
-    plain client, a TCP client and a client with credentials of its own are all refused; the sweep's runs code."""
-    from dask.distributed import Client
-    from distributed.security import Security
-
+    plain client, a TCP client and a client with credentials of its own, each in a process of its own as an
+    intruder would be, are all refused; the sweep's own client runs code."""
     client, cluster = sweep_cluster.local_cluster(1)
     try:
         address = cluster.scheduler_address
         assert address.startswith("tls://127.0.0.1:")
         assert client.submit(sum, [1, 2, 3]).result(timeout=30) == 6
-        for attempt in (
-            lambda: Client(address, timeout="3s"),
-            lambda: Client(address.replace("tls://", "tcp://"), timeout="3s"),
-            lambda: Client(address, security=Security.temporary(), timeout="3s"),
+        for target, how in (
+            (address, "plain"),
+            (address.replace("tls://", "tcp://"), "tcp"),
+            (address, "own-credentials"),
         ):
-            with pytest.raises(Exception) as caught:  # noqa: PT011 - each way fails with an error of its own
-                intruder = attempt()
-                intruder.close()
-            assert not isinstance(caught.value, AssertionError)
+            run = subprocess.run(
+                [sys.executable, "-c", INTRUDER, target, how], capture_output=True, text=True, timeout=120
+            )
+            assert "JOINED" not in run.stdout, (how, run.stdout)
+            # refused with an error (or the process ended by one): never a function run on the cluster
+            assert "REFUSED" in run.stdout or run.returncode != 0, (how, run.stdout, run.stderr[-2000:])
+        assert client.submit(sum, [4, 5]).result(timeout=30) == 9  # the cluster still serves its own client
     finally:
         sweep_cluster.close(client, cluster)
 

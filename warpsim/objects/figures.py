@@ -78,6 +78,32 @@ def kite_figures(model: Model, record: ObjectRecord) -> Measure:
     return measure
 
 
+FLAG_FIGURES = {
+    "flap": (
+        "m",
+        "sideways offset of the flag's top trailing corner from the plane of its pole and the wind; its window "
+        "frequency is the flapping frequency",
+    ),
+}
+
+
+def flag_figures(model: Model, record: ObjectRecord) -> Measure:
+    """The flag's :data:`FLAG_FIGURES` of a frame. The flag is a grid whose rows run from the pole outwards, the
+    top row last (:func:`~warpsim.objects.flag.build_flag`): its last particle is the top trailing corner, the
+    pole's last the top of the pole."""
+    corner, pole_top = int(record.parts["cloth"][-1]), int(record.parts["pole"][-1])
+
+    def measure(view: FigureView) -> dict[str, float]:
+        wind = np.array([view.wind[0], view.wind[1], 0.0], dtype=np.float64)
+        across = np.array([-wind[1], wind[0], 0.0]) / np.linalg.norm(wind) if np.linalg.norm(wind) > 1e-6 else None
+        if across is None:
+            across = np.array([0.0, 1.0, 0.0])  # no wind: across the flag as built (along +x)
+        offset = view.positions[corner] - view.positions[pole_top]
+        return {"flap": float(offset @ across)}
+
+    return measure
+
+
 PARACHUTE_FIGURES = {
     "radius": ("m", "mean horizontal distance of the canopy's rim from its centre"),
     "swing": ("deg", "angle of the line from the person to the canopy's centre from the vertical"),
@@ -107,6 +133,11 @@ def glider_hud(f: dict[str, float]) -> str:
 def kite_hud(f: dict[str, float]) -> str:
     """The kite's heads-up text: the line's elevation and its pull at the anchor."""
     return f"line {f['line_angle']:4.1f} deg  pull ~{f['line_pull']:5.1f} N"
+
+
+def flag_hud(f: dict[str, float]) -> str:
+    """The flag's heads-up text: its trailing corner's sideways offset."""
+    return f"flap {f['flap']:+5.2f} m"
 
 
 def parachute_hud(f: dict[str, float]) -> str:

@@ -35,6 +35,8 @@ class ObjectSpec:
             only then).
         hud: ``hud(figures) -> str``, the object's own part of its heads-up line (after altitude and airspeed),
             from its figures of a frame by name; None for an object with none.
+        oscillations: those of its figures that swing about a mean, whose frequency over a window is measured too
+            (``NAME_frequency`` [Hz], :class:`warpsim.run.figures.FigureWindow`).
     """
 
     config: type
@@ -48,6 +50,7 @@ class ObjectSpec:
     measure_figures: Callable | None = None
     figures_need_air_force: bool = False
     hud: Callable | None = None
+    oscillations: tuple[str, ...] = ()
 
 
 OBJECTS: dict[str, ObjectSpec] = {
@@ -56,6 +59,10 @@ OBJECTS: dict[str, ObjectSpec] = {
         build=build_flag,
         scene_defaults={"wind": {"velocity": [4.0, 0.5, 0.0]}},
         summary="cloth nailed along a pole, in wind (the paper's Verlet/Euler comparison, slide 15)",
+        figures=figures.FLAG_FIGURES,
+        measure_figures=figures.flag_figures,
+        hud=figures.flag_hud,
+        oscillations=("flap",),
     ),
     "hang-glider": ObjectSpec(
         config=hang_glider.HangGliderConfig,

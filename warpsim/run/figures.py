@@ -43,6 +43,11 @@ def figure_names(kind: str) -> tuple[str, ...]:
     return tuple(name for name, (_, kinds, _) in FIGURES.items() if kinds is None or kind in kinds)
 
 
+def oscillation_names(kind: str) -> tuple[str, ...]:
+    """The figures of an object of ``kind`` whose window frequency is measured (``ObjectSpec.oscillations``)."""
+    return registry.OBJECTS[kind].oscillations
+
+
 class Figures:
     """What a pilot or an observer reads off each object of a frame (:data:`FIGURES`). The heads-up display and
     the sweeps read their figures here, so each is computed one way; each object's own figures are measured by
@@ -85,10 +90,21 @@ class FigureWindow:
     """Window means, minima and maxima of each world's figures (:data:`FIGURES`, in their units), the share of
     frames airborne, the first ground contact [s] and the worst stretch, for ``count`` worlds (float64, frame
     order: the same sums for a case whatever chunk it runs in). A sweep's metrics and ``warpsim run``'s closing
-    figures are both these."""
+    figures are both these.
 
-    def __init__(self, count: int, figures: Sequence[str]):
+    For the figures named in ``oscillating`` (a flag's flap) it keeps each world's window series (float32, one
+    value per frame: 4 bytes per world and frame) and gives ``NAME_frequency`` [Hz]: the swings through the
+    window mean, with a hysteresis of a quarter of the half-range so that jitter about the mean is not counted,
+    half the crossings after the first over the time from the first crossing to the last (NaN before three).
+    It is the frequency of the largest swings (a smaller wave riding on them is not counted) and agrees with
+    the peak of the series' spectrum for a flag that flaps steadily.
+    """
+
+    def __init__(self, count: int, figures: Sequence[str], oscillating: Sequence[str] = ()):
         self.figures = list(figures)
+        self.oscillating = [self.figures.index(name) for name in oscillating]
+        self.series: list[list[np.ndarray]] = [[] for _ in self.oscillating]  # per frame: [count] float32
+        self.series_times: list[float] = []
         self.sum = np.zeros((len(figures), count))
         self.n = np.zeros((len(figures), count))
         self.low = np.full((len(figures), count), np.inf)
@@ -111,6 +127,10 @@ class FigureWindow:
         self.n += ok
         self.low = np.where(ok, np.minimum(self.low, values), self.low)
         self.high = np.where(ok, np.maximum(self.high, values), self.high)
+        for k, f in enumerate(self.oscillating):
+            self.series[k].append(np.where(ok[f], values[f], np.nan).astype(np.float32))
+        if self.oscillating:
+            self.series_times.append(t)
 
     def row(self, k: int) -> dict:
         """The metrics of world ``k``."""
@@ -120,6 +140,9 @@ class FigureWindow:
             out[f"{name}_mean"] = self.sum[f, k] / n if n else math.nan
             out[f"{name}_min"] = self.low[f, k] if n else math.nan
             out[f"{name}_max"] = self.high[f, k] if n else math.nan
+        for j, f in enumerate(self.oscillating):
+            series = np.array([values[k] for values in self.series[j]], dtype=np.float64)
+            out[f"{self.figures[f]}_frequency"] = swing_frequency(np.array(self.series_times), series)
         frames = int(self.frames[k])
         out["airborne"] = self.airborne[k] / frames if frames else math.nan
         out["ground_time"] = float(self.ground_time[k])
@@ -145,7 +168,8 @@ class FlightFigures:
         self.names = list(figure_names(self.kind))
         interval = sim.steps_per_frame * sim.dt
         self.every = 1 if rate is None else max(1, int(round(1.0 / (rate * interval))))
-        self.window = FigureWindow(sim.model.world_count, self.names)
+        self.oscillating = oscillation_names(self.kind)
+        self.window = FigureWindow(sim.model.world_count, self.names, self.oscillating)
         self.measure = Figures(sim.model)
         self.contacts = GroundContacts(sim.model)
         self.live = np.ones(sim.model.world_count, dtype=bool)
@@ -174,18 +198,27 @@ class FlightFigures:
         count = self.window.frames.size
         rows = [self.window.row(k) for k in range(count)]
 
-        def shown(name: str, values: list[float]) -> str | None:
+        def shown(values: list[float], unit: str) -> str | None:
+            """The worlds' mean of ``values`` (and their range with several worlds), in ``unit``; None if none."""
             values = [v for v in values if np.isfinite(v)]
             if not values:
                 return None
-            unit = FIGURES[name][0]
-            unit = "" if unit == "-" else f" {unit}"
-            text = f"{name.replace('_', ' ')} {_figure(np.mean(values))}{unit}"
-            if count > 1:
-                text += f" ({_figure(min(values))} to {_figure(max(values))})"
-            return text
+            text = f"{_figure(np.mean(values))}{'' if unit == '-' else ' ' + unit}"
+            return text + (f" ({_figure(min(values))} to {_figure(max(values))})" if count > 1 else "")
 
-        parts = [shown(name, [r[f"{name}_mean"] for r in rows]) for name in self.names]
+        def part(name: str) -> str | None:
+            """A figure's window mean, or for an oscillating one its half-range (amplitude) and frequency."""
+            label, unit = name.replace("_", " "), FIGURES[name][0]
+            if name not in self.oscillating:
+                mean = shown([r[f"{name}_mean"] for r in rows], unit)
+                return None if mean is None else f"{label} {mean}"
+            amplitude = shown([0.5 * (r[f"{name}_max"] - r[f"{name}_min"]) for r in rows], unit)
+            frequency = shown([r[f"{name}_frequency"] for r in rows], "Hz")
+            if amplitude is None:
+                return None
+            return f"{label} \u00b1{amplitude}" + (f" at {frequency}" if frequency is not None else "")
+
+        parts = [part(name) for name in self.names]
         parts = [p for p in parts if p is not None]
         where = f"means over {self.start:g}-{self.stop:g} s, {frames} frames"
         if count == 1:
@@ -193,6 +226,25 @@ class FlightFigures:
         else:
             head = f"  {count} worlds (mean, lowest to highest world)"
         return [f"{head}: {', '.join(parts)} ({where})"]
+
+
+def swing_frequency(times: np.ndarray, values: np.ndarray, hysteresis: float = 0.25) -> float:
+    """Frequency [Hz] of the swings of ``values`` (at ``times`` [s]) through their mean: a crossing counts when
+    the values go from more than ``hysteresis`` of their half-range above the mean to as far below, or back;
+    half the crossings after the first over the time from the first to the last. NaN before three crossings
+    (a figure that does not swing) or with no finite value."""
+    ok = np.isfinite(values)
+    times, values = times[ok], values[ok]
+    if len(values) < 3:
+        return math.nan
+    band = hysteresis * 0.5 * float(values.max() - values.min())
+    side = np.where(values > values.mean() + band, 1, np.where(values < values.mean() - band, -1, 0))
+    out = side != 0
+    side, times = side[out], times[out]
+    flips = np.nonzero(np.diff(side))[0] + 1  # where each crossing lands
+    if len(flips) < 3 or times[flips[-1]] <= times[flips[0]]:
+        return math.nan
+    return (len(flips) - 1) / (2.0 * float(times[flips[-1]] - times[flips[0]]))
 
 
 def _figure(value: float) -> str:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from ..run.figures import FIGURES
+from ..run.figures import FIGURES, oscillation_names
 
 EXTRA_HINT = "pip install -e '.[sweep]'"
 
@@ -32,6 +32,8 @@ def _metric_table() -> dict[str, tuple[str, tuple[str, ...] | None, str]]:
     for name, (unit, kinds, meaning) in FIGURES.items():
         for reduce in ("mean", "min", "max"):
             table[f"{name}_{reduce}"] = (unit, kinds, f"{reduce} over the window of the {meaning}")
+        if kinds is not None and any(name in oscillation_names(kind) for kind in kinds):
+            table[f"{name}_frequency"] = ("Hz", kinds, f"frequency of the swings over the window of the {meaning}")
     table.update(
         {
             "airborne": ("-", None, "share of the window's frames in which the object does not touch the terrain"),

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from warpsim.cli import main
+from warpsim.scene import descriptor
 
 
 def test_list(capsys):
@@ -143,3 +144,15 @@ def test_a_missing_cuda_device_is_one_line():
     )
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert proc.returncode == 2 and len(lines) == 1 and "--device cuda is not available here" in lines[0], lines
+
+
+def test_a_bare_built_in_name_is_the_built_in_beside_a_file_of_that_name(tmp_path, monkeypatch, capsys):
+    """A folder or file named ``kite`` in the current folder hid the built-in kite ('kite: scene file not
+    found'); a bare built-in name is now the built-in, and ``./kite`` the file."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "kite").mkdir()
+    (tmp_path / "flag").write_text("not toml [", encoding="utf-8")
+    assert descriptor.resolve("kite")[2] == "built-in kite"
+    assert descriptor.resolve("flag")[2] == "built-in flag"
+    assert main(["run", "./flag", "--seconds", "0.1"]) == 2
+    assert "not valid TOML" in capsys.readouterr().err

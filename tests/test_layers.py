@@ -1,9 +1,9 @@
 """The package's layers: every import (at module level or inside a function) goes down a layer or stays inside its
 own package, and no chain of imports closes a loop.
 
-Layers, lowest first: ``_version``/``_interrupt`` (no warpsim imports), ``physics``, ``objects``, ``scene``, ``run``,
-``io``, then ``viewer`` and ``sweeps`` (side by side: neither imports the other), ``cli``, and the package itself
-(``warpsim/__init__.py``, ``__main__``). See docs/architecture.md.
+Layers, lowest first: ``_version``/``_interrupt``/``_extras`` (no warpsim imports), ``physics``, ``objects``,
+``scene``, ``run``, ``io``, then ``viewer`` and ``sweeps`` (side by side: neither imports the other), ``cli``, and
+the package itself (``warpsim/__init__.py``, ``__main__``). See docs/architecture.md.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "warpsim"
 LAYERS = {
     "_version": 0,
     "_interrupt": 0,
+    "_extras": 0,
     "physics": 1,
     "objects": 2,
     "scene": 3,

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._extras import install_hint
 from . import OutputWriteError, check_output_path, create_temporary, reason
 from .shapes import shapes_for, world_offsets
 from .style import COLOURS, SPHERE_PARTS
@@ -43,7 +44,7 @@ def require_pillow():
     try:
         from PIL import Image, ImageDraw
     except ImportError:
-        raise RuntimeError("pictures need Pillow: pip install -e '.[render]' (or pip install pillow)") from None
+        raise RuntimeError(f"pictures need Pillow: {install_hint('render')}") from None
     return Image, ImageDraw
 
 

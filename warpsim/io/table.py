@@ -20,6 +20,7 @@ import io
 import json
 from pathlib import Path
 
+from .._extras import install_hint
 from . import OutputPathError, check_output_path, replacing
 
 EXTENSIONS = (".parquet", ".pq", ".csv")
@@ -33,7 +34,7 @@ def check_table_path(path) -> Path:
         missing = [name for name in ("pandas", "pyarrow") if importlib.util.find_spec(name) is None]
         if missing:
             raise OutputPathError(
-                f"{out}: a Parquet table needs {' and '.join(missing)}: pip install -e '.[sweep]' (or write a .csv)"
+                f"{out}: a Parquet table needs {' and '.join(missing)}: {install_hint('sweep')} (or write a .csv)"
             )
     return out
 

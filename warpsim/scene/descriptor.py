@@ -370,10 +370,12 @@ def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, st
     """Find a scene by built-in name or path; returns ``(descriptor, source text, where)``.
 
     A built-in name (``flag``, ``hang-glider``, ...) gives that object's defaults; a path (or a name
-    found as ``NAME.toml`` in ``search_dirs``) is read and validated.
+    found as ``NAME.toml`` in ``search_dirs``) is read and validated. A bare built-in name is the built-in
+    even where the current folder holds a file or folder of that name (write ``./kite`` for the file).
     """
     path = Path(scene)
-    if path.suffix == ".toml" or path.exists():
+    bare = path.suffix != ".toml" and len(path.parts) == 1 and scene in registry.OBJECTS
+    if not bare and (path.suffix == ".toml" or path.exists()):
         if not path.is_file():
             raise DescriptorError(f"{scene}: scene file not found")
         text = _read_text(path)

@@ -5,9 +5,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from .._extras import install_hint
 from ..run.figures import FIGURES, oscillation_names
 
-EXTRA_HINT = "pip install -e '.[sweep]'"
+EXTRA_HINT = install_hint("sweep")
 
 
 class SweepError(ValueError):

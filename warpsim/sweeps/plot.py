@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .._extras import install_hint
+
 MAX_LINES = 12  # lines one line plot draws before it asks for --where
 
 
@@ -26,7 +28,7 @@ def _require(module: str):
     try:
         return importlib.import_module(module)
     except ImportError:
-        raise PlotError(f"plots need {module.split('.')[0]}: pip install -e '.[sweep]'") from None
+        raise PlotError(f"plots need {module.split('.')[0]}: {install_hint('sweep')}") from None
 
 
 def read_table(path) -> object:

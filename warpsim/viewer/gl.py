@@ -16,6 +16,7 @@ import ctypes
 
 import numpy as np
 
+from .._extras import install_hint
 from .backend import Backend, DrawList, View, ViewerUnavailableError
 from .geometry import sphere, tube_mesh, tube_points, vertex_normals, view_matrix
 
@@ -103,9 +104,7 @@ def _pyglet():
     try:
         import pyglet
     except ImportError:
-        raise ViewerUnavailableError(
-            "the viewer needs pyglet: pip install -e '.[viewer]' (or pip install pyglet)"
-        ) from None
+        raise ViewerUnavailableError(f"the viewer needs pyglet: {install_hint('viewer')}") from None
     pyglet.options["debug_gl"] = False  # no glGetError after every call: it halves the frame rate
     return pyglet
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 from pathlib import Path
 
 from ..scene.dirs import scene_dirs
@@ -34,6 +35,7 @@ def one_line(message: str) -> str:
 
 class Parser(argparse.ArgumentParser):
     def error(self, message: str):  # one line, no usage dump
+        message = re.sub(r"^argument (\S+): (?=\1 )", "", message)  # our own messages name the option already
         self.exit(EXIT_USAGE, f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)\n")
 
 

@@ -16,8 +16,9 @@ def command(args) -> int:
         files = sorted(directory.glob("*.toml"))
         if files:
             print(f"scenes in {directory}:")
+            width = max(len(f.stem) for f in files)
             for f in files:
-                print(f"  {f.stem:<22} {f}")
+                print(f"  {f.stem:<{width}}  {f}")
     return 0
 
 

@@ -911,6 +911,23 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider") -> list[Row]
             + was("38.2 m"),
         )
     )
+    piloted = both(lambda f: f["dive_bar_out_height"])
+    rows.append(
+        Row(
+            f"{label}dive recovery, bar held out",
+            "released from rest, nose 60° down, the bar pushed full out (pitch -1) from the release: height lost "
+            "until the flight path is level again",
+            f"{b['low']:.1f}-{b['high']:.1f} m",
+            "R.T. Jones 1977 (the row above): the band is a wing held at its trim C_L or above through the pull-out, "
+            "which is what the pilot does by pushing the bar out; hands off, a tailless wing pulls out below its "
+            "trim (row above)",
+            _fmt(piloted, ".1f", " m"),
+            f"{b['low']:.1f}-{b['high']:.1f} m ({bands[1]['low']:.1f}-{bands[1]['high']:.1f} m at 0.005/110), at both",
+            all(bd["low"] <= v <= bd["high"] for v, bd in zip(piloted, bands, strict=True)),
+            note=f"{figs[0]['dive_bar_out_time']:.1f} s to level ({figs[1]['dive_bar_out_time']:.1f} s at "
+            "0.005/110); near the band's top: the bar reaches its stop 0.5 s after the release",
+        )
+    )
     rows.append(
         Row(
             f"{label}phugoid period",

@@ -596,9 +596,11 @@ def kite_flight_rows() -> list[Row]:
             f"{six['lift']:.2f}",
             "0.6-1.0 at both time steps",
             all(0.6 <= runs[(6.0, dt)]["lift"] <= 1.0 for dt in (0.005, 0.0025)),
-            note="the kite trims at ~10° where its planform's lift slope (Helmbold-DATCOM, 3.64 /rad) gives ~0.6; a "
-            "tow point further back (0.5) trims it at 11° with C_L 0.62-0.67 but drifts 3-11 m in 6-10 m/s: a kite "
-            "flying at C_L 0.6-1.0 needs more lateral stability than its keel, 30° dihedral and tail give here",
+            note="the kite trims at ~10° where its planform's lift slope (Helmbold-DATCOM, 3.64 /rad) gives ~0.6, "
+            "less where the cloth stretches (5 ms); a tow point further back (0.48) gives C_L 0.60 / 0.65 at 11° but "
+            "tips the 3 m/s trim (16-18°, at the sail's 18° stall) into a deep stall at 30° at dt 2.5 ms/110, which "
+            "the finest steps (2.5 ms/220, 1.25 ms/220) reach at 0.47 too: the weight's moment about the tow point "
+            "(centre of mass at ~2/3 of the chord) raises the trim in light wind",
         )
     )
     for w in KITE_WINDS:
@@ -1079,8 +1081,8 @@ CONVERGENCE = {
 
 LIMITS = {
     "kite line angle at the anchor": "the line's angle is set partly by the cloth's compliance: at 55 iterations the "
-    "sail stretches ~4 % under the pull and the kite stands lower on its line (52.2° at 0.005/55, 54.8° at 0.005/110, "
-    "56.4° at 0.0025/110, 58.4° at 0.00125/220, measured); it flies at every rung (issue 35)",
+    "sail stretches up to 2 % under the pull and the kite stands lower on its line (52.9° at 0.005/55, 55.0° at "
+    "0.005/110, 56.8° at 0.0025/110, 57.8° at 0.00125/220, measured); it flies at every rung (issue 35)",
 }
 """Figures known not to converge, and why: a row outside its band shows as a model limit with this note."""
 

@@ -66,6 +66,21 @@ class KiteConfig(Checked):
         keel_edges: tie the tow point straight to the keel's two ends on the spine and to the virtual particles
             (the keel's reinforced edges; not in the paper): without them the line's pull stretches the keel's
             cloth sticks near the tow point by ~9 % in steady flight under the ``sail`` air model.
+        keel_tension: the keel's cloth sticks (all but its top edge, the spine's own particles) are this much
+            shorter than the keel as built, so it sets taut between the spine and the tow point, as a keel is cut
+            to (not in the paper). The sail's pull compresses the spine by ~1 % and the keel's chordwise cloth
+            with it; a slack keel of sticks without bending stiffness then buckles sideways, 0.05-0.1 s after the
+            launch (seeded by float rounding, growing tenfold every ~10 ms), and stays bulged to one side, a
+            rudder that holds the kite 8-20 m to the side of the wind window (measured in 10 m/s at dt 2.5 ms,
+            110 and 220 iterations). 0.02 keeps it taut at every wind from 3 to 10 m/s.
+        spine_sleeve: weight in the constraint average of the sail's cloth sticks that meet the spine (the sail
+            is sewn to the spine through a reinforced sleeve; 1 = plain cloth, the paper). The keel hangs the
+            line's pull on the spine's particles; with plain cloth sticks round them the cloth there stretches
+            ~8 % at dt 5 ms and 55 iterations in 10 m/s, and the kite, launched in that wind, swings out to one
+            side of the window (measured; 2 is not enough, 3 and 4 are).
+        spine_weight: weight of the spine's ties to the virtual particles (the spine spar, which carries the
+            line's pull from the keel; ``frame_weight`` = the paper's). With the sleeve at 4 and the spine's ties
+            at 4 the tie to the spine's back end stretches 1.36 % in 6 m/s; at 8, 0.94 %.
         profile_drag: ``sail`` air model: the sail's zero-lift drag coefficient
             (:func:`~warpsim.physics.kernels.aero.sail_coefficients`).
         stall_angle: ``sail`` air model: angle of attack [deg] where a triangle's flow separates.
@@ -110,6 +125,9 @@ class KiteConfig(Checked):
     attack: float = number(40.0, Bounds(0.0, 90.0))
     dihedral: float = number(30.0, Bounds(-45.0, 45.0))
     keel_edges: bool = True
+    keel_tension: float = number(0.02, Bounds(0.0, 0.2))
+    spine_sleeve: float = number(4.0, POSITIVE)
+    spine_weight: float = number(8.0, POSITIVE)
     profile_drag: float = number(0.03, NON_NEGATIVE)
     stall_angle: float = number(18.0, Bounds(0.0, 90.0, low_open=True, high_open=True))
     billow: float = number(0.0, Bounds(0.0, 0.2))
@@ -129,6 +147,9 @@ PRESETS = {
             for k in (
                 "tow_point",
                 "keel_edges",
+                "keel_tension",
+                "spine_sleeve",
+                "spine_weight",
                 "billow",
                 "chord_loading",
                 "delta_lift",
@@ -144,6 +165,9 @@ PRESETS = {
         "kite": {
             "tow_point": 0.35,
             "keel_edges": False,
+            "keel_tension": 0.0,
+            "spine_sleeve": 1.0,
+            "spine_weight": 4.0,
             "billow": 0.0,
             "chord_loading": False,
             "delta_lift": False,
@@ -245,6 +269,11 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     )
     for s in keel_sticks:
         builder.stick_weight[s] = cfg.frame_weight  # the keel is the kite's reinforced part
+    if cfg.keel_tension > 0.0:
+        # the keel cut taut: every keel stick but its top edge (the spine's particles, which the frame holds)
+        on_top, ends = set(keel_top), builder.stick_particles
+        cloth = [int(s) for s in keel_sticks if not (ends[s][0] in on_top and ends[s][1] in on_top)]
+        builder.pretension(cloth, cfg.keel_tension)
     tow_particle = keel_rows[0][0]
     keel = np.arange(k0, builder.particle_count)
 
@@ -261,6 +290,16 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     )
     if cfg.straight_spars:
         spars.sticks.extend(add_spar_braces(builder, rows, cfg.frame_weight))
+    spine, virtual, ends = set(spars.keel), set(spars.virtual), builder.stick_particles
+    for s in spars.sticks:  # the spine spar's ties to the virtual particles
+        a, b = ends[s]
+        if (a in spine and b in virtual) or (b in spine and a in virtual):
+            builder.stick_weight[s] = cfg.spine_weight
+    if cfg.spine_sleeve != 1.0:
+        # the sail sewn to the spine through a reinforced sleeve: its cloth sticks from the spine count more
+        for s in sail_sticks:
+            if (ends[s][0] in spine) != (ends[s][1] in spine):
+                builder.stick_weight[s] = cfg.spine_sleeve
     if cfg.keel_edges:
         # the keel's reinforced edges: the tow point tied straight to the keel's ends on the spine and to the
         # spars' virtual particles, so the line's pull reaches the frame in one stick, not down a chain of keel

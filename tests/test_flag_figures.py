@@ -12,7 +12,7 @@ import pytest
 from warpsim.cli import main
 from warpsim.run.figures import FlightFigures, swing_frequency
 from warpsim.run.simulation import Simulation
-from warpsim.scene.descriptor import defaults
+from warpsim.scene.descriptor import defaults, merge
 
 
 def test_swing_frequency_of_a_sine_with_jitter_and_of_a_still_figure():
@@ -24,6 +24,19 @@ def test_swing_frequency_of_a_sine_with_jitter_and_of_a_still_figure():
     assert swing_frequency(t, wave) == pytest.approx(1.3, rel=0.01)
     assert math.isnan(swing_frequency(t, np.full(t.size, 2.0)))
     assert math.isnan(swing_frequency(t[:40], np.sin(2 * np.pi * 0.1 * t[:40])))  # less than one swing
+    wave[100] = 50.0  # a one-frame spike does not set the band
+    assert swing_frequency(t, wave) == pytest.approx(1.3, rel=0.01)
+    jitter = 0.002 * rng.standard_normal(t.size)  # 2 mm of noise on a still figure is not a swing
+    assert swing_frequency(t, jitter) > 1.0 and math.isnan(swing_frequency(t, jitter, least=0.01))
+
+
+def test_a_flag_in_a_near_calm_does_not_flap():
+    """In 0.5 m/s the flag hangs: its flap frequency is NaN, not the frequency of its jitter."""
+    sim = Simulation(merge("test", defaults("flag"), {"wind": {"velocity": [0.5, 0.05, 0.0]}}))
+    figures = FlightFigures(sim, 10.0, 30.0)
+    sim.run(30.0, on_frame=figures)
+    row = figures.window.row(0)
+    assert 0.5 * (row["flap_max"] - row["flap_min"]) < 0.01 and math.isnan(row["flap_frequency"])
 
 
 def test_flag_flap_frequency_is_the_peak_of_its_corner_spectrum():

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from warpsim._extras import install_hint
 from warpsim.cli import main
 from warpsim.io.recording import Recording
 from warpsim.objects.hang_glider import bank
@@ -295,7 +296,7 @@ def test_missing_viewer_extra_is_one_line_exit_2(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(stub)}
     result = _cli(["view", "kite"], env=env)
     assert result.returncode == 2
-    assert result.stderr.count("\n") == 1 and "pip install -e '.[viewer]'" in result.stderr
+    assert result.stderr.count("\n") == 1 and install_hint("viewer") in result.stderr
 
 
 @pytest.mark.parametrize(

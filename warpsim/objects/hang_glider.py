@@ -22,6 +22,13 @@ from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, nu
 from ..physics.model import ObjectRecord
 from ..physics.terrain import Heightfield
 from .delta import add_rigid_frame, body_axes, chordwise_loading, delta_sail_aero
+from .glider_flight import (  # noqa: F401 - the glider's controls and flight figures, re-exported
+    apply_controls,
+    bank,
+    billow_rest_lengths,
+    control_rest_lengths,
+    flight_state,
+)
 
 PAPER_COUNTS = {"particles": 49, "sticks": 198, "triangles": 64}
 
@@ -422,7 +429,3 @@ def _hang_strap(builder: ModelBuilder, cfg: HangGliderConfig, rows, frame, nose,
 def _to_frame(points: np.ndarray, origin, fwd, left, up) -> np.ndarray:
     d = points - origin
     return np.stack([d @ fwd, d @ left, d @ up], axis=1)
-
-
-# the pilot's controls and the glider's flight figures (re-exported here: the glider's public functions)
-from .glider_flight import apply_controls, bank, billow_rest_lengths, control_rest_lengths, flight_state  # noqa: E402, F401

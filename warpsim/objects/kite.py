@@ -79,8 +79,9 @@ class KiteConfig(Checked):
             ~8 % at dt 5 ms and 55 iterations in 10 m/s, and the kite, launched in that wind, swings out to one
             side of the window (measured; 2 is not enough, 3 and 4 are).
         spine_weight: weight of the spine's ties to the virtual particles (the spine spar, which carries the
-            line's pull from the keel; ``frame_weight`` = the paper's). With the sleeve at 4 and the spine's ties
-            at 4 the tie to the spine's back end stretches 1.36 % in 6 m/s; at 8, 0.94 %.
+            line's pull from the keel), set apart from ``frame_weight``: changing ``frame_weight`` leaves these
+            ties at ``spine_weight`` (the paper design's 4 is its frame weight). With the sleeve at 4 and the
+            spine's ties at 4 the tie to the spine's back end stretches 1.36 % in 6 m/s; at 8, 0.94 %.
         profile_drag: ``sail`` air model: the sail's zero-lift drag coefficient
             (:func:`~warpsim.physics.kernels.aero.sail_coefficients`).
         stall_angle: ``sail`` air model: angle of attack [deg] where a triangle's flow separates.

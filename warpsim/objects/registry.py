@@ -36,7 +36,8 @@ class ObjectSpec:
         hud: ``hud(figures) -> str``, the object's own part of its heads-up line (after altitude and airspeed),
             from its figures of a frame by name; None for an object with none.
         oscillations: those of its figures that swing about a mean, whose frequency over a window is measured too
-            (``NAME_frequency`` [Hz], :class:`warpsim.run.figures.FigureWindow`).
+            (``NAME_frequency`` [Hz], :class:`warpsim.run.figures.FigureWindow`), each with the least half-range
+            (in the figure's unit) that counts as a swing.
     """
 
     config: type
@@ -50,7 +51,7 @@ class ObjectSpec:
     measure_figures: Callable | None = None
     figures_need_air_force: bool = False
     hud: Callable | None = None
-    oscillations: tuple[str, ...] = ()
+    oscillations: dict[str, float] = field(default_factory=dict)
 
 
 OBJECTS: dict[str, ObjectSpec] = {
@@ -62,7 +63,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         figures=figures.FLAG_FIGURES,
         measure_figures=figures.flag_figures,
         hud=figures.flag_hud,
-        oscillations=("flap",),
+        oscillations={"flap": 0.01},  # a flap under 1 cm is jitter
     ),
     "hang-glider": ObjectSpec(
         config=hang_glider.HangGliderConfig,

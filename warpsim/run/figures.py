@@ -43,9 +43,10 @@ def figure_names(kind: str) -> tuple[str, ...]:
     return tuple(name for name, (_, kinds, _) in FIGURES.items() if kinds is None or kind in kinds)
 
 
-def oscillation_names(kind: str) -> tuple[str, ...]:
-    """The figures of an object of ``kind`` whose window frequency is measured (``ObjectSpec.oscillations``)."""
-    return registry.OBJECTS[kind].oscillations
+def oscillation_names(kind: str) -> dict[str, float]:
+    """The figures of an object of ``kind`` whose window frequency is measured, with the least half-range (in the
+    figure's unit) that counts as a swing (``ObjectSpec.oscillations``)."""
+    return dict(registry.OBJECTS[kind].oscillations)
 
 
 class Figures:
@@ -92,19 +93,20 @@ class FigureWindow:
     order: the same sums for a case whatever chunk it runs in). A sweep's metrics and ``warpsim run``'s closing
     figures are both these.
 
-    For the figures named in ``oscillating`` (a flag's flap) it keeps each world's window series (float32, one
-    value per frame: 4 bytes per world and frame) and gives ``NAME_frequency`` [Hz]: the swings through the
-    window mean, with a hysteresis of a quarter of the half-range so that jitter about the mean is not counted,
-    half the crossings after the first over the time from the first crossing to the last (NaN before three).
-    It is the frequency of the largest swings (a smaller wave riding on them is not counted) and agrees with
-    the peak of the series' spectrum for a flag that flaps steadily.
+    For the figures named in ``oscillating`` (name -> least half-range that counts as a swing: a flag's flap,
+    1 cm) it keeps each world's window series (a float32 ``[frames, count]`` buffer, 4 bytes per world and frame,
+    grown by doubling) and gives ``NAME_frequency`` [Hz] by :func:`swing_frequency`, the peak of the series'
+    spectrum for a flag that flaps steadily.
     """
 
-    def __init__(self, count: int, figures: Sequence[str], oscillating: Sequence[str] = ()):
+    def __init__(self, count: int, figures: Sequence[str], oscillating: dict[str, float] | None = None):
         self.figures = list(figures)
+        oscillating = dict(oscillating or {})
         self.oscillating = [self.figures.index(name) for name in oscillating]
-        self.series: list[list[np.ndarray]] = [[] for _ in self.oscillating]  # per frame: [count] float32
-        self.series_times: list[float] = []
+        self.least = [float(least) for least in oscillating.values()]
+        self.series = np.zeros((len(self.oscillating), 64 if self.oscillating else 0, count), dtype=np.float32)
+        self.series_times = np.zeros(self.series.shape[1])
+        self.series_count = 0
         self.sum = np.zeros((len(figures), count))
         self.n = np.zeros((len(figures), count))
         self.low = np.full((len(figures), count), np.inf)
@@ -127,10 +129,14 @@ class FigureWindow:
         self.n += ok
         self.low = np.where(ok, np.minimum(self.low, values), self.low)
         self.high = np.where(ok, np.maximum(self.high, values), self.high)
-        for k, f in enumerate(self.oscillating):
-            self.series[k].append(np.where(ok[f], values[f], np.nan).astype(np.float32))
         if self.oscillating:
-            self.series_times.append(t)
+            if self.series_count == self.series.shape[1]:  # full: twice the room
+                self.series = np.concatenate([self.series, np.zeros_like(self.series)], axis=1)
+                self.series_times = np.concatenate([self.series_times, np.zeros_like(self.series_times)])
+            for k, f in enumerate(self.oscillating):
+                self.series[k, self.series_count] = np.where(ok[f], values[f], np.nan)
+            self.series_times[self.series_count] = t
+            self.series_count += 1
 
     def row(self, k: int) -> dict:
         """The metrics of world ``k``."""
@@ -140,9 +146,10 @@ class FigureWindow:
             out[f"{name}_mean"] = self.sum[f, k] / n if n else math.nan
             out[f"{name}_min"] = self.low[f, k] if n else math.nan
             out[f"{name}_max"] = self.high[f, k] if n else math.nan
+        n = self.series_count
         for j, f in enumerate(self.oscillating):
-            series = np.array([values[k] for values in self.series[j]], dtype=np.float64)
-            out[f"{self.figures[f]}_frequency"] = swing_frequency(np.array(self.series_times), series)
+            series = self.series[j, :n, k].astype(np.float64)
+            out[f"{self.figures[f]}_frequency"] = swing_frequency(self.series_times[:n], series, least=self.least[j])
         frames = int(self.frames[k])
         out["airborne"] = self.airborne[k] / frames if frames else math.nan
         out["ground_time"] = float(self.ground_time[k])
@@ -228,17 +235,23 @@ class FlightFigures:
         return [f"{head}: {', '.join(parts)} ({where})"]
 
 
-def swing_frequency(times: np.ndarray, values: np.ndarray, hysteresis: float = 0.25) -> float:
-    """Frequency [Hz] of the swings of ``values`` (at ``times`` [s]) through their mean: a crossing counts when
-    the values go from more than ``hysteresis`` of their half-range above the mean to as far below, or back;
-    half the crossings after the first over the time from the first to the last. NaN before three crossings
-    (a figure that does not swing) or with no finite value."""
+def swing_frequency(times: np.ndarray, values: np.ndarray, hysteresis: float = 0.25, least: float = 0.0) -> float:
+    """Frequency [Hz] of the swings of ``values`` (at ``times`` [s]) through their median: a crossing counts when
+    the values go from more than ``hysteresis`` of their half-range above the median to as far below, or back;
+    half the crossings after the first over the time from the first to the last. The half-range is that of the
+    5th to 95th percentiles, so that a spike or a settling start does not set it. NaN before three crossings, with
+    no finite value, or when the half-range is under ``least`` (in the values' unit: a figure that does not swing,
+    whose jitter is not counted)."""
     ok = np.isfinite(values)
     times, values = times[ok], values[ok]
     if len(values) < 3:
         return math.nan
-    band = hysteresis * 0.5 * float(values.max() - values.min())
-    side = np.where(values > values.mean() + band, 1, np.where(values < values.mean() - band, -1, 0))
+    low, centre, high = np.percentile(values, [5.0, 50.0, 95.0])
+    half = 0.5 * float(high - low)
+    if not half > least:
+        return math.nan
+    band = hysteresis * half
+    side = np.where(values > centre + band, 1, np.where(values < centre - band, -1, 0))
     out = side != 0
     side, times = side[out], times[out]
     flips = np.nonzero(np.diff(side))[0] + 1  # where each crossing lands

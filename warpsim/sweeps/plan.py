@@ -20,6 +20,10 @@ from .metrics import SweepError, metrics_of
 MAX_CASES = 1_000_000
 MAX_CHUNK = 64  # worlds per task when the chunk size is chosen automatically
 
+TABLE_FORMAT = 2
+"""The sweep table's format: 2 since ``worst_stretch`` is in percent (1 had it as a fraction). A table of
+another format is not resumed (its rows' units would mix with the new ones)."""
+
 
 @dataclass(frozen=True)
 class Axis:
@@ -170,6 +174,7 @@ class SweepPlan:
         """What must match for rows of an earlier run to count as rows of this sweep (the swept values aside:
         a sweep may gain values and keep the rows it has)."""
         return {
+            "table_format": TABLE_FORMAT,
             "scene": to_toml(self.base),
             "terrain": self._terrain,
             "seconds": self.seconds,

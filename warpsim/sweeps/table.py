@@ -101,11 +101,14 @@ class Results:
     def _check(found: dict | None, definition: dict, path: Path) -> None:
         if not isinstance(found, dict):
             raise SweepError(f"{path} is not the output of a warpsim sweep; choose another --out")
-        for key in ("seconds", "window", "axes", "metrics", "scene", "terrain"):  # the most telling first
+        for key in ("table_format", "seconds", "window", "axes", "metrics", "scene", "terrain"):  # most telling first
             if found.get(key) != definition[key]:
-                what = {"scene": "scene or settings", "axes": "swept keys", "terrain": "terrain heights"}.get(
-                    key, f"--{key}"
-                )
+                what = {
+                    "table_format": "table format (the units of its metrics, an older warpsim's)",
+                    "scene": "scene or settings",
+                    "axes": "swept keys",
+                    "terrain": "terrain heights",
+                }.get(key, f"--{key}")
                 raise SweepError(
                     f"{path} holds a sweep whose {what} differ from this one's; choose another --out, or --restart "
                     "to replace it"

@@ -77,7 +77,7 @@ def tube_mesh(count: int, sides: int = 8) -> np.ndarray:
 
 def tube_points(a: np.ndarray, b: np.ndarray, radius: np.ndarray, sides: int = 8) -> tuple[np.ndarray, np.ndarray]:
     """Vertices and normals ``[count * (2 * sides + 2), 3]`` of tubes from ``a`` to ``b`` ``[count, 3]`` [m] of
-    ``radius`` ``[count]`` [m], in the order :func:`_tube_mesh` numbers them."""
+    ``radius`` ``[count]`` [m], in the order :func:`tube_mesh` numbers them."""
     axis = b - a
     n = axis / np.maximum(np.linalg.norm(axis, axis=1, keepdims=True), 1e-9)
     u = np.cross(n, [0.0, 0.0, 1.0])

@@ -115,7 +115,8 @@ def chordwise_loading(
     xi = np.clip((behind - leading) / np.maximum(chord - leading, 1e-9), xi_min, 1.0 - xi_min)
     area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
     loading = np.sqrt((1.0 - xi) / xi)
-    loading *= area.sum() / (area * loading).sum()
+    total = float((area * loading).sum())
+    loading = loading * (area.sum() / total) if total > 0.0 else np.ones_like(loading)  # a sail of no area: uniform
     builder.set_triangle_loading(tris, loading)
     return loading
 

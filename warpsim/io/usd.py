@@ -43,7 +43,9 @@ from .style import COLOURS, CURVE_WIDTH, SPHERE_PARTS
 
 
 def _vec3f_array(points: np.ndarray) -> Vt.Vec3fArray:
-    return Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(points, dtype=np.float32))
+    # USD points are float32: a coordinate beyond its range (a recording of a blow-up) is written as +-inf
+    with np.errstate(over="ignore"):
+        return Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(points, dtype=np.float32))
 
 
 def _extent(points: np.ndarray) -> Vt.Vec3fArray:

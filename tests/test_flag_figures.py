@@ -80,3 +80,19 @@ def test_run_prints_the_flap_and_sweeps_have_its_frequency():
     assert re.search(r"flag: .*flap ±[0-9.]+ m at [0-9.]+ Hz", text.getvalue()), text.getvalue()
     assert "flap_frequency" in metrics_of("flag") and METRICS["flap_frequency"][0] == "Hz"
     assert "flap_frequency" not in metrics_of("kite")
+
+
+def test_flag_sweep_rows_are_the_same_whatever_the_chunk():
+    """A case's flap and its frequency are its own: the same to the bit in chunks of 1 and of 3 worlds."""
+    from warpsim import sweeps
+    from warpsim.scene import descriptor
+
+    base = descriptor.resolve("flag")[0]
+    plan = sweeps.SweepPlan(base, sweeps.parse_axes(base, ["wind.speed=0.5,3,6"]), seconds=12.0)
+    alone = [sweeps.run_chunk(task)[0] for task in plan.chunks(1, set(), "cpu", None)]
+    together = sweeps.run_chunk(plan.chunks(3, set(), "cpu", None)[0])
+    names = ("flap_mean", "flap_min", "flap_max", "flap_frequency")
+    for one, batched in zip(alone, together, strict=True):
+        for name in names:
+            assert one[name] == batched[name] or (math.isnan(one[name]) and math.isnan(batched[name])), name
+    assert all(row["flap_frequency"] > 0.3 for row in together[1:])  # 3 and 6 m/s: it flaps

@@ -5,7 +5,7 @@ going away never takes the test process with it). Keys are injected with xdotool
 focused window); the wall clock is the test's own (one frame interval per tick), so that what is stepped
 does not depend on how fast the machine draws.
 
-    python tests/viewer_driver.py glider|kite|pictures OUT_DIR
+    python tests/viewer_driver.py glider|kite|typed|pictures OUT_DIR
 """
 
 from __future__ import annotations
@@ -120,6 +120,21 @@ def kite(out: Path) -> dict:
     return result
 
 
+def typed(out: Path) -> dict:
+    """The wind and help keys typed as a person types them: '+' is shift+= (shift let go first, as xdotool does),
+    three times in a row, then '=', the keypad's + and -, '-' twice, and '?' twice; the wind speed and whether
+    help shows after each."""
+    viewer, _ = open_viewer("flag", "warpsim-test-typed", None)
+    clock = Clock(viewer)
+    steps = []
+    for key in ("plus", "plus", "plus", "equal", "KP_Add", "minus", "minus", "KP_Subtract", "question", "question"):
+        xdotool("key", key)
+        clock.ticks(5)
+        steps.append([key, float(np.linalg.norm(viewer.wind()[:2])), viewer.show_help])
+    viewer.close()
+    return {"steps": steps}
+
+
 def _fly(scene: str, title: str, seconds: float, camera: str, overrides: dict | None = None):
     """A viewer of ``scene`` flown hands off for ``seconds`` on the test's clock, with ``camera``."""
     from warpsim.scene.descriptor import merge
@@ -187,5 +202,5 @@ def pictures(out: Path) -> dict:
 if __name__ == "__main__":
     _warp.init()
     scenario, out = sys.argv[1], Path(sys.argv[2])
-    result = {"glider": glider, "kite": kite, "pictures": pictures}[scenario](out)
+    result = {"glider": glider, "kite": kite, "typed": typed, "pictures": pictures}[scenario](out)
     (out / f"{scenario}.json").write_text(json.dumps(result))

@@ -87,17 +87,18 @@ _KEYS = {
     "RIGHT": "RIGHT",
     "SPACE": "SPACE",
     "ESCAPE": "ESCAPE",
-    "PLUS": "PLUS",
-    "EQUAL": "PLUS",
-    "NUM_ADD": "PLUS",
-    "MINUS": "MINUS",
-    "NUM_SUBTRACT": "MINUS",
     "BRACKETLEFT": "[",
     "BRACKETRIGHT": "]",
     "PERIOD": ".",
-    "QUESTION": "?",
     "SLASH": "?",
 }
+"""Keys pressed, by pyglet's symbol name: the viewer's name for each."""
+
+_TEXT_KEYS = {"+": "PLUS", "=": "PLUS", "-": "MINUS", "?": "?"}
+"""Keys read from the text typed instead (pyglet's ``on_text``): on X, pyglet misses every press of a shifted key
+after the first (shift+= for '+', shift+/ for '?') when shift is let go before the key, as xdotool and quick
+fingers do, because it takes the key's release, reported unshifted, for another key's; the typed text comes
+every time, and once for the keypad's + and - too."""
 
 
 def _pyglet():
@@ -266,6 +267,12 @@ class PygletBackend(Backend):
                 self._held.add(key)
                 self._events.append(("press", key))
             return True  # pyglet's default closes the window on Esc: the viewer decides
+
+        @w.event
+        def on_text(text):
+            key = _TEXT_KEYS.get(text)
+            if key:
+                self._events.append(("press", key))
 
         @w.event
         def on_key_release(symbol, modifiers):

@@ -94,12 +94,10 @@ def flag_figures(model: Model, record: ObjectRecord) -> Measure:
     corner, pole_top = int(record.parts["cloth"][-1]), int(record.parts["pole"][-1])
 
     def measure(view: FigureView) -> dict[str, float]:
-        wind = np.array([view.wind[0], view.wind[1], 0.0], dtype=np.float64)
-        across = np.array([-wind[1], wind[0], 0.0]) / np.linalg.norm(wind) if np.linalg.norm(wind) > 1e-6 else None
-        if across is None:
-            across = np.array([0.0, 1.0, 0.0])  # no wind: across the flag as built (along +x)
-        offset = view.positions[corner] - view.positions[pole_top]
-        return {"flap": float(offset @ across)}
+        across = np.array([-view.wind[1], view.wind[0], 0.0], dtype=np.float64)  # horizontal, left of the wind
+        speed = np.linalg.norm(across)
+        across = across / speed if speed > 1e-6 else np.array([0.0, 1.0, 0.0])  # no wind: across the flag as built
+        return {"flap": float((view.positions[corner] - view.positions[pole_top]) @ across)}
 
     return measure
 
@@ -117,10 +115,6 @@ def parachute_figures(model: Model, record: ObjectRecord) -> Measure:
         return {"radius": projected_radius(record, view.positions), "swing": swing_angle(record, view.positions)}
 
     return measure
-
-
-HudText = Callable[[dict[str, float]], str]
-"""One object's part of a heads-up line from its figures of a frame (besides altitude and airspeed)."""
 
 
 def glider_hud(f: dict[str, float]) -> str:

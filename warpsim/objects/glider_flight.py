@@ -1,6 +1,7 @@
 """The hang glider in flight: what its controls set (the pilot's arms and the billow shift's struts, from
 ``pitch`` and ``roll`` in [-1, 1]) and what is read off it (bank, pitch, airspeed, the pilot's offset), all from
-its :class:`~warpsim.objects.hang_glider.HangGliderRecord` and the particles' positions [m]."""
+its :class:`~warpsim.objects.hang_glider.HangGliderRecord` (``record`` below; typed as its base here, since
+:mod:`warpsim.objects.hang_glider` imports this module) and the particles' positions [m]."""
 
 from __future__ import annotations
 
@@ -8,10 +9,8 @@ import numpy as np
 
 from ..physics.model import ObjectRecord
 
-HangGliderRecord = ObjectRecord  # a HangGliderRecord (objects.hang_glider, which imports this module)
 
-
-def control_rest_lengths(record: HangGliderRecord, pitch: float, roll: float) -> np.ndarray:
+def control_rest_lengths(record: ObjectRecord, pitch: float, roll: float) -> np.ndarray:
     """Rest lengths [m] of the control sticks for ``pitch`` and ``roll`` in [-1, 1].
 
     The pilot's target sits ``pitch * pitch_travel`` forward and ``roll * roll_travel`` to the right of
@@ -30,7 +29,7 @@ def control_rest_lengths(record: HangGliderRecord, pitch: float, roll: float) ->
     return np.linalg.norm(record.pilot_attach_frame - target, axis=1)
 
 
-def apply_controls(record: HangGliderRecord, targets: dict, values: dict) -> None:
+def apply_controls(record: ObjectRecord, targets: dict, values: dict) -> None:
     """Write the control sticks' rest lengths for ``values['pitch']``/``values['roll']`` (every control in
     force; one never set is 0) into ``targets['stick_rest']`` (a host copy of ``Control.stick_rest``)."""
     pitch, roll = float(values.get("pitch", 0.0)), float(values.get("roll", 0.0))
@@ -39,7 +38,7 @@ def apply_controls(record: HangGliderRecord, targets: dict, values: dict) -> Non
         targets["stick_rest"][record.billow_sticks] = billow_rest_lengths(record, roll)
 
 
-def billow_rest_lengths(record: HangGliderRecord, roll: float) -> np.ndarray:
+def billow_rest_lengths(record: ObjectRecord, roll: float) -> np.ndarray:
     """Rest lengths [m] of the washout struts' ties at ``roll`` in [-1, 1] (billow shift): the strutted trailing edge
     of the half the pilot moves towards (``roll > 0``: the right) raised as if its washout at the tip were
     ``billow_shift * |roll|`` degrees more, the other half's lowered as much (to first order in the angle)."""
@@ -48,13 +47,13 @@ def billow_rest_lengths(record: HangGliderRecord, roll: float) -> np.ndarray:
     return np.linalg.norm(target - record.billow_anchors, axis=1)
 
 
-def bank(record: HangGliderRecord, q: np.ndarray) -> float:
+def bank(record: ObjectRecord, q: np.ndarray) -> float:
     """Bank of the sail [deg]: the tip-to-tip line against the horizontal, positive with the right tip lower."""
     span_dir = q[record.tips[0]] - q[record.tips[1]]
     return float(np.degrees(np.arctan2(span_dir[2], np.linalg.norm(span_dir[:2]))))
 
 
-def flight_state(record: HangGliderRecord, q: np.ndarray, q_prev: np.ndarray, dt: float, wind) -> dict:
+def flight_state(record: ObjectRecord, q: np.ndarray, q_prev: np.ndarray, dt: float, wind) -> dict:
     """Diagnostics: nose pitch angle [deg], bank [deg], airspeed [m/s], pilot offset [m] in the sail frame."""
     nose = q[record.nose]
     keel_end = q[record.keel[-1]]

@@ -43,7 +43,7 @@ def figure_names(kind: str) -> tuple[str, ...]:
     return tuple(name for name, (_, kinds, _) in FIGURES.items() if kinds is None or kind in kinds)
 
 
-def oscillation_names(kind: str) -> dict[str, float]:
+def oscillations_of(kind: str) -> dict[str, float]:
     """The figures of an object of ``kind`` whose window frequency is measured, with the least half-range (in the
     figure's unit) that counts as a swing (``ObjectSpec.oscillations``)."""
     return dict(registry.OBJECTS[kind].oscillations)
@@ -175,7 +175,7 @@ class FlightFigures:
         self.names = list(figure_names(self.kind))
         interval = sim.steps_per_frame * sim.dt
         self.every = 1 if rate is None else max(1, int(round(1.0 / (rate * interval))))
-        self.oscillating = oscillation_names(self.kind)
+        self.oscillating = oscillations_of(self.kind)
         self.window = FigureWindow(sim.model.world_count, self.names, self.oscillating)
         self.measure = Figures(sim.model)
         self.contacts = GroundContacts(sim.model)

@@ -38,7 +38,7 @@ def run_chunk(task: ChunkTask) -> list[dict]:
 
     _warp.init()
     from ..run.diagnostics import GroundContacts, world_blowups
-    from ..run.figures import Figures, FigureWindow, figure_names, oscillation_names
+    from ..run.figures import Figures, FigureWindow, figure_names, oscillations_of
     from ..run.simulation import Simulation
 
     try:
@@ -50,7 +50,7 @@ def run_chunk(task: ChunkTask) -> list[dict]:
     model = sim.model
     count = model.world_count
     figures = list(figure_names(sim.descriptor["scene"]["object"]))
-    acc = FigureWindow(count, figures, oscillation_names(sim.descriptor["scene"]["object"]))
+    acc = FigureWindow(count, figures, oscillations_of(sim.descriptor["scene"]["object"]))
     contacts = GroundContacts(model)
     max_stretch = sim.settings.solver.max_stretch
     measure_figures = Figures(model)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from .._extras import install_hint
-from ..run.figures import FIGURES, oscillation_names
+from ..run.figures import FIGURES, oscillations_of
 
 EXTRA_HINT = install_hint("sweep")
 
@@ -33,7 +33,7 @@ def _metric_table() -> dict[str, tuple[str, tuple[str, ...] | None, str]]:
     for name, (unit, kinds, meaning) in FIGURES.items():
         for reduce in ("mean", "min", "max"):
             table[f"{name}_{reduce}"] = (unit, kinds, f"{reduce} over the window of the {meaning}")
-        if kinds is not None and any(name in oscillation_names(kind) for kind in kinds):
+        if kinds is not None and any(name in oscillations_of(kind) for kind in kinds):
             table[f"{name}_frequency"] = ("Hz", kinds, f"frequency of the swings over the window of the {meaning}")
     table.update(
         {

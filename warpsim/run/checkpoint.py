@@ -179,7 +179,7 @@ def restore_checkpoint(sim, checkpoint: Checkpoint) -> None:
     c.nail_target_goal.assign(checkpoint.nail_target_goal)
     c.wind.assign(checkpoint.wind)
     k = 0
-    for group in sim._groups:  # each group's solver holds its canopies' lagged side forces
+    for group in sim.groups:  # each group's solver holds its canopies' lagged side forces
         count = group.model.canopy_count
         if count:
             side = group.solver.canopy_side.numpy()
@@ -191,6 +191,6 @@ def restore_checkpoint(sim, checkpoint: Checkpoint) -> None:
 
 def canopy_sides(sim) -> np.ndarray:
     """``[max(K, 1), 3]`` float32 the lagged side force [Pa] of every canopy, from the groups' solvers."""
-    groups = [g for g in sim._groups if g.model.canopy_count]
+    groups = [g for g in sim.groups if g.model.canopy_count]
     sides = [g.solver.canopy_side.numpy()[: g.model.canopy_count] for g in groups]
     return np.concatenate(sides).astype(np.float32) if sides else np.zeros((1, 3), dtype=np.float32)

@@ -137,6 +137,11 @@ class Simulation:
         self.startup_time = time.perf_counter() - started  # [s] model build, kernel load/compilation
 
     @property
+    def groups(self) -> tuple[WorldGroup, ...]:
+        """The groups of worlds the threads step (:mod:`warpsim.run.groups`; one without threads)."""
+        return tuple(self._groups)
+
+    @property
     def controls(self) -> dict:
         """Every control set so far, by name (what is in force now)."""
         return self.inputs.in_force

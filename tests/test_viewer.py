@@ -414,12 +414,14 @@ def test_window_flight_replays_headless_bit_for_bit(glider_flight, tmp_path):
 def test_window_counts_every_typed_plus_minus_and_question_mark(display, tmp_path):
     """'+' is typed as shift+=; pyglet on X reported only the first of three in a row (it took the key's release,
     reported unshifted as '=', for another key's), so the wind rose 1 m/s instead of 3. The window now reads
-    these keys from the typed text: each press counts once, the keypad's too."""
+    the character keys from the typed text: each press counts once, the keypad's too."""
     steps = _drive(display, "typed", tmp_path)["steps"]
-    speeds = [round(speed, 6) for _, speed, _ in steps]
+    speeds = [round(speed, 6) for _, speed, _, _ in steps]
     start = float(np.linalg.norm([4.0, 0.5]))  # the flag's wind
-    assert speeds == [round(start + k, 6) for k in (1, 2, 3, 4, 5, 4, 3, 2, 2, 2)], steps
-    assert [shown for *_, shown in steps][-2:] == [True, False]
+    assert speeds == [round(start + k, 6) for k in (1, 2, 3, 4, 5, 4, 3, 2, 2, 2, 2, 2, 2, 2)], steps
+    assert [shown for _, _, shown, _ in steps][-6:] == [True, False, True, True, True, True]  # ? ? / then [ ] ]
+    headings = [heading for *_, heading in steps][-4:]
+    assert np.allclose(np.diff(headings), [15.0, -15.0, -15.0]), steps  # '[' anticlockwise, ']' clockwise
 
 
 @pytest.mark.display

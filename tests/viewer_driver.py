@@ -122,15 +122,18 @@ def kite(out: Path) -> dict:
 
 def typed(out: Path) -> dict:
     """The wind and help keys typed as a person types them: '+' is shift+= (shift let go first, as xdotool does),
-    three times in a row, then '=', the keypad's + and -, '-' twice, and '?' twice; the wind speed and whether
-    help shows after each."""
+    three times in a row, then '=', the keypad's + and -, '-' twice, '?' twice, '/', '[' and ']' twice; the wind
+    speed, whether help shows and the wind's heading [deg] after each."""
     viewer, _ = open_viewer("flag", "warpsim-test-typed", None)
     clock = Clock(viewer)
     steps = []
-    for key in ("plus", "plus", "plus", "equal", "KP_Add", "minus", "minus", "KP_Subtract", "question", "question"):
+    keys = ("plus", "plus", "plus", "equal", "KP_Add", "minus", "minus", "KP_Subtract", "question", "question")
+    for key in (*keys, "slash", "bracketleft", "bracketright", "bracketright"):
         xdotool("key", key)
         clock.ticks(5)
-        steps.append([key, float(np.linalg.norm(viewer.wind()[:2])), viewer.show_help])
+        wind = viewer.wind()
+        heading = float(np.degrees(np.arctan2(wind[1], wind[0])))
+        steps.append([key, float(np.linalg.norm(wind[:2])), viewer.show_help, heading])
     viewer.close()
     return {"steps": steps}
 

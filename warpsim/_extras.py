@@ -6,11 +6,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-_CHECKOUT = (Path(__file__).resolve().parent.parent / "pyproject.toml").is_file()
+_ROOT = Path(__file__).resolve().parent.parent
+_CHECKOUT = (_ROOT / "pyproject.toml").is_file()
 
 
 def install_hint(extra: str) -> str:
     """The pip command that adds the ``extra`` (``viewer``, ``render``, ``sweep``, ...) to this installation."""
     if _CHECKOUT:
-        return f"pip install -e '.[{extra}]' (in {Path(__file__).resolve().parent.parent})"
+        return f"pip install -e '.[{extra}]' (in {_ROOT})"
     return f"pip install 'warpsim[{extra}]'"

@@ -87,18 +87,15 @@ _KEYS = {
     "RIGHT": "RIGHT",
     "SPACE": "SPACE",
     "ESCAPE": "ESCAPE",
-    "BRACKETLEFT": "[",
-    "BRACKETRIGHT": "]",
-    "PERIOD": ".",
-    "SLASH": "?",
 }
-"""Keys pressed, by pyglet's symbol name: the viewer's name for each."""
+"""Keys that are held or are not characters, by pyglet's symbol name (letters too, see ``_name``): the viewer's
+name for each, pressed and released."""
 
-_TEXT_KEYS = {"+": "PLUS", "=": "PLUS", "-": "MINUS", "?": "?"}
-"""Keys read from the text typed instead (pyglet's ``on_text``): on X, pyglet misses every press of a shifted key
-after the first (shift+= for '+', shift+/ for '?') when shift is let go before the key, as xdotool and quick
-fingers do, because it takes the key's release, reported unshifted, for another key's; the typed text comes
-every time, and once for the keypad's + and - too."""
+_TEXT_KEYS = {"+": "PLUS", "=": "PLUS", "-": "MINUS", "?": "?", "/": "?", "[": "[", "]": "]", ".": "."}
+"""The character keys, which act once per press, read from the text typed (pyglet's ``on_text``): on X, pyglet
+misses every press of a shifted key after the first (shift+= for '+', shift+/ for '?') when shift is let go
+before the key, as xdotool and quick fingers do, because it takes the key's release, reported unshifted, for
+another key's; the typed text comes every time, once for the keypad's + and - too."""
 
 
 def _pyglet():

@@ -34,7 +34,7 @@ class KiteConfig(Checked):
 
     Attributes:
         design: ``flying`` (the default: towed from 47 % of the keel, the keel's edges reinforced, a flat sail
-            whose centre of pressure moves with its angle of attack, 30 deg dihedral and a tail, under the ``sail``
+            whose centre of pressure moves with its angle of attack, 25 deg dihedral and a tail, under the ``sail``
             air model with a 5 ms step, it flies as a real delta does) or ``paper`` (Section 7: a 200 g kite
             towed from 35 %, 20 deg dihedral, no tail, the paper's air law and 10 ms step). In a scene or with
             ``--set`` it is a preset (:data:`PRESETS`): it sets those keys, ``air.model`` and ``solver.dt``, and
@@ -124,7 +124,7 @@ class KiteConfig(Checked):
     heading: float = 0.0
     elevation: float = number(10.0, Bounds(0.0, 90.0))
     attack: float = number(40.0, Bounds(0.0, 90.0))
-    dihedral: float = number(30.0, Bounds(-45.0, 45.0))
+    dihedral: float = number(25.0, Bounds(-45.0, 45.0))
     keel_edges: bool = True
     keel_tension: float = number(0.02, Bounds(0.0, 0.2))
     spine_sleeve: float = number(4.0, POSITIVE)

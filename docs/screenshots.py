@@ -5,7 +5,8 @@
 Each opens ``warpsim view``'s window (PygletBackend) on its own Xvfb, flies the scene hands off for the seconds
 given on a clock of one frame interval per tick (so what is shown does not depend on the machine's speed), sets
 the camera (and the orbit's angles and distance) and saves the last picture as docs/viewer_NAME.png ("turn":
-the glider under full right weight shift from 1.5 to 3 s, then hands off, at 5 s, chase camera, as docs/viewer.png).
+the glider flown with the right arrow held from 4 to 7 s, then hands off, at 8 s, chase camera, as
+docs/viewer.png).
 """
 
 from __future__ import annotations
@@ -23,20 +24,7 @@ SHOTS = {
     "kite": ("kite", 8.0, "ground", None, {}),
     "flag": ("flag", 3.0, "orbit", None, {}),
     "parachute": ("parachute", 3.0, "orbit", None, {}),
-    "turn": (
-        "hang-glider",
-        5.0,
-        "chase",
-        None,
-        {
-            "controls": [
-                {"time": 1.0, "roll": 0.0},
-                {"time": 1.5, "roll": 1.0, "ramp": True},
-                {"time": 3.0, "roll": 1.0},
-                {"time": 3.5, "roll": 0.0, "ramp": True},
-            ]
-        },
-    ),
+    "turn": ("hang-glider", 8.0, "chase", None, {}),
     "worlds": (
         "kite",
         8.0,
@@ -45,12 +33,17 @@ SHOTS = {
         {"worlds": {"count": 4, "wind": {"speed": [4.0, 6.0, 8.0, 10.0]}}},
     ),
 }
+KEYS = {"turn": [(4.0, "on_key_press", "RIGHT"), (7.0, "on_key_release", "RIGHT")]}
+"""Keys pressed and released in a shot's window at a simulated time [s]: the turn is flown with the right arrow,
+through the window's own key handlers, as a pilot at the keyboard flies it."""
 OUTPUT = {"turn": "viewer.png"}  # the others: viewer_NAME.png
 SIZE = (1280, 720)
 
 
 def shoot(name: str) -> Path:
     """Fly shot ``name`` in a window on the current display and save its last picture."""
+    import pyglet
+
     from warpsim.io.render import save_png
     from warpsim.physics import _warp
     from warpsim.run.simulation import Simulation
@@ -70,10 +63,14 @@ def shoot(name: str) -> Path:
     if angles is not None:
         viewer.orbit["azimuth"], viewer.orbit["elevation"], zoom = angles
         viewer.orbit["distance"] *= zoom
+    keys = list(KEYS.get(name, []))
     now = 0.0
     viewer.tick(now)
     for _ in range(int(round(seconds / viewer.frame_interval))):
         now += viewer.frame_interval
+        while keys and keys[0][0] <= now + 1e-9:
+            _, event, key = keys.pop(0)
+            backend.window.dispatch_event(event, getattr(pyglet.window.key, key), 0)
         viewer.tick(now)
     out = save_png(HERE / OUTPUT.get(name, f"viewer_{name}.png"), backend.screenshot())
     viewer.close()

@@ -365,7 +365,8 @@ def flag_flapping(resolution: int, dt: float = 0.01, seconds: float = 30.0) -> d
     cloth = record.parts["cloth"]
     tip = cloth[np.argmax(q[cloth, 0] - 1e-3 * q[cloth, 2])]
     row = cloth[np.abs(q[cloth, 2] - q[tip, 2]) < 1e-6]
-    mid = row[np.argmin(np.abs(q[row, 0] - 0.5 * q[tip, 0]))]
+    pole = q[row, 0].min()  # the flag need not stand at x = 0 (flag.position)
+    mid = row[np.argmin(np.abs(q[row, 0] - 0.5 * (pole + q[tip, 0])))]
     sample = 0.02
     steps = max(1, int(round(sample / dt)))
     tips, mids, stretch = [], [], 0.0

@@ -410,9 +410,11 @@ def flag() -> list[Row]:
     limit = (
         "the paper's air law is local (each triangle feels only its own normal wind): it drives waves that travel at "
         "about the wind's speed, as measured, but nothing in it sets their wavelength, which the mesh then sets "
-        "(finer cloth keeps shorter waves). A wavelength tied to the flag's length needs air whose pressure on one "
-        "place depends on the whole flag (a panel or vortex-lattice model with the Kutta condition at the trailing "
-        "edge), not more iterations"
+        "(finer cloth keeps shorter waves). Lighthill's elongated-body air (tried, not kept; docs/objects.md)"
+        " does not set it either: without a bending stiffness the mesh resolves, its fastest-growing wave is "
+        "the mesh's shortest. A wavelength tied to the flag's length needs a short-wave limit the mesh "
+        "resolves (implicit bending, an added mass falling at short waves, or an unsteady vortex lattice with"
+        " a free wake), not more iterations"
     )
     listed = ", ".join(f"{r['fL/U']:.2f} ({res})" for res, r in runs.items())
     waves = ", ".join(f"{r['wave speed']:.2f}" for r in runs.values())

@@ -109,13 +109,13 @@ def test_the_anchor_walks_instead_of_jumping():
 
 @pytest.fixture(scope="module")
 def launched():
-    from benchmarks.validation.cases import kite_flight
+    from benchmarks.validation.cases import KITE_STEPS, kite_flight
 
-    runs = {}
+    runs, iterations = {}, dict(KITE_STEPS)
 
-    def run(wind, dt):  # the defaults (5 ms, 55 iterations), or dt halved with the iterations doubled
+    def run(wind, dt):  # the validation's rungs: the defaults (5 ms/55), dt halved with the iterations doubled
         if (wind, dt) not in runs:
-            runs[(wind, dt)] = kite_flight(wind, dt, iterations=55 if dt == 0.005 else 110)
+            runs[(wind, dt)] = kite_flight(wind, dt, iterations=iterations[dt])
         return runs[(wind, dt)]
 
     return run
@@ -135,6 +135,7 @@ def test_sail_trims_at_a_real_angle_of_attack_and_lifts_as_a_delta(launched, dt)
 
 DEEP_STALL = pytest.mark.xfail(
     strict=True,
+    raises=AssertionError,
     reason="issue 35: in 3 m/s the kite trims at its sail's 18 deg stall, and as the constraints converge (2.5 ms/110, "
     "1.25 ms/220) it falls into a deep stall at ~30 deg, line 34-44 deg (the weight's moment about the tow point)",
 )
@@ -159,6 +160,8 @@ def test_kite_launched_in_its_wind_flies_high_and_steady(launched, wind, dt):
     # (kite.spine_sleeve), 10 m/s at 5 ms swooped 9-32 deg and 23 m to the side: the slack keel buckled sideways
     # 0.1 s after the launch and held the kite off the window's centre like a rudder.
     r = launched(wind, dt)
+    if (wind, dt) == (3.0, 0.0025) and not r["alpha"] > 22.0:  # the expected failure must stay the deep stall
+        pytest.fail(f"the 3 m/s kite at 2.5 ms/110 no longer deep-stalls: update DEEP_STALL and the docs ({r})")
     assert 40.0 <= r["angle_min"] and r["angle_max"] <= 70.0 and r["angle_max"] - r["angle_min"] < 5.0, r
     assert r["drift"] < 5.0, r
 

@@ -1107,12 +1107,7 @@ CONVERGENCE = {
 }
 """The flight figures whose convergence the validation measures (issue 33)."""
 
-LIMITS = {
-    "kite line angle at the anchor": "the line's angle is set partly by the cloth's compliance: at 55 iterations the "
-    "sail stretches up to 2 % (its keel 3.4 %) under the pull and the kite stands lower on its line (55.4° at "
-    "0.005/55, 57.6° at 0.005/110, 59.1° at 0.0025/110, 59.9° at 0.00125/220, measured); it flies at every rung "
-    "(issue 35)",
-}
+LIMITS: dict[str, str] = {}
 """Figures known not to converge, and why: a row outside its band shows as a model limit with this note."""
 
 

@@ -616,10 +616,8 @@ def kite_flight_rows() -> list[Row]:
             f"{six['lift']:.2f}",
             "0.6-1.0 at both",
             all(0.6 <= runs[(6.0, *step)]["lift"] <= 1.0 for step in KITE_STEPS),
-            note="the kite trims at ~10.5° where its planform's lift slope (Helmbold-DATCOM, 3.64 /rad) and its 25° "
-            "of dihedral give ~0.6 (0.58 at 30° of dihedral); a tow point further back (0.48) lifts more but tips "
-            "the 3 m/s trim into a deep stall sooner: the weight's moment about the tow point (centre of mass at "
-            "~2/3 of the chord) raises the trim in light wind",
+            note="the kite trims at ~10° where its planform's lift slope (Helmbold-DATCOM, 3.64 /rad) and its 25° "
+            "of dihedral give ~0.6 (0.58 at 30° of dihedral)",
         )
     )
     for w in KITE_WINDS:

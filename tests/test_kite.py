@@ -207,3 +207,14 @@ def test_the_papers_kite_stands_at_its_line_angle():
     sim.run(30.0, on_frame=lambda f: angles.append((f.time, line_state(rec, f.positions)["elevation_deg"])))
     settled = np.array([a for t, a in angles if t >= 20.0])
     assert 32.0 < settled.min() and settled.max() < 35.0, (settled.min(), settled.max())
+
+
+def test_an_object_whose_designs_set_different_keys_is_refused():
+    # every design must set the keys any other design sets, or switching design keeps the other's value
+    from warpsim.objects import kite
+    from warpsim.objects.registry import ObjectSpec
+
+    presets = {"flying": kite.PRESETS["flying"], "paper": {**kite.PRESETS["paper"], "solver": {"dt": 0.01}}}
+    with pytest.raises(ValueError, match=r"preset 'paper' leaves out solver\.chebyshev"):
+        ObjectSpec(config=kite.KiteConfig, build=kite.build_kite, presets=presets)
+    ObjectSpec(config=kite.KiteConfig, build=kite.build_kite, presets=kite.PRESETS)  # the shipped ones agree

@@ -522,10 +522,11 @@ def kite_flight(wind: float, dt: float = 0.005, seconds: float = 40.0, iteration
     d = descriptor.merge(
         "validation",
         descriptor.defaults("kite"),
-        {"wind": {"velocity": [float(wind), 0.0, 0.0]}, "solver": {"dt": float(dt)}},
+        {
+            "wind": {"velocity": [float(wind), 0.0, 0.0]},
+            "solver": {"dt": float(dt), **({} if iterations is None else {"iterations": int(iterations)})},
+        },
     )
-    if iterations is not None:
-        d = descriptor.merge("validation", d, {"solver": {"iterations": int(iterations)}})
     sim = Simulation(d)
     record, model = sim.model.objects[0], sim.model
     sail = model.tri_indices_np[np.asarray(record.tri_parts["sail"])]

@@ -39,12 +39,15 @@ def fly_piloted(
     every: float = 0.05,
     slew: float = 2.0,
     stop: Callable[[dict], bool] | None = None,
+    watch: Callable[[Simulation, dict], None] | None = None,
 ) -> list[dict]:
     """Fly the hang glider of descriptor ``d`` for ``seconds`` [s] with ``pilot`` deciding the controls every
     ``every`` seconds; the flight state at each decision, with ``t`` [s] and the ``roll``/``pitch`` then set.
 
     The bar moves at most ``slew`` per second (2: from centre to a stop in 0.5 s, as a pilot's arms do; a step of
-    the arms' lengths jerks the frame)."""
+    the arms' lengths jerks the frame). ``watch(sim, state)``, if given, sees each decision's state first and may
+    change what the controls write (an experiment's imposed twist): the controls are then written at every
+    decision, not only when they move."""
     from warpsim.objects.hang_glider import flight_state
 
     sim = Simulation(d)
@@ -61,9 +64,11 @@ def fly_piloted(
         q, q_prev = sim.state.positions()[record.particles], sim.state.particle_q_prev.numpy()[record.particles]
         state["cg_velocity"] = mass @ (q - q_prev) / (mass.sum() * sim.dt)
         state["cg_speed"] = float(np.linalg.norm(state["cg_velocity"]))
+        if watch is not None:
+            watch(sim, state)
         wanted.update((pilot(state) if pilot else None) or {})
         moved = {k: controls[k] + float(np.clip(v - controls[k], -step_most, step_most)) for k, v in wanted.items()}
-        if moved != controls:
+        if moved != controls or watch is not None:
             controls.update(moved)
             sim.set_controls(**controls)
         state.update(controls)
@@ -187,6 +192,7 @@ def dive_flight(
     nose_down: float = 60.0,
     seconds: float = 12.0,
     bar: float = 0.0,
+    watch: Callable[[Simulation, dict], None] | None = None,
 ) -> dict:
     """Released from rest with the nose ``nose_down`` [deg] below the horizon (R.T. Jones 1977), the bar at
     ``bar`` from the release (0: hands off; -1: pushed full out, the pilot pulling out at the highest lift, as
@@ -194,7 +200,7 @@ def dive_flight(
     until the flight path is level again (the sail's mean vertical velocity back to 0), the time [s] it takes,
     the fastest airspeed [m/s] and the lowest pitch [deg] on the way."""
     d = scene_descriptor(scene, solver, {"speed": 0.0, "nose_up": -nose_down})
-    history = fly_piloted(d, seconds, pilot=(lambda state: {"pitch": bar}) if bar else None, every=0.02)
+    history = fly_piloted(d, seconds, pilot=(lambda state: {"pitch": bar}) if bar else None, every=0.02, watch=watch)
     start = history[0]["altitude"]
     moving = [f for f in history if f["velocity"][2] < -1.0]
     t_level = _crossing(history, moving[0]["t"] if moving else 0.0, lambda f: f["velocity"][2] >= 0.0)
@@ -483,7 +489,9 @@ def _path_angle(velocity) -> float:
     return math.atan2(velocity[2], math.hypot(velocity[0], velocity[1]))
 
 
-def phugoid_flight(scene: str | dict, solver: dict | None = None) -> dict:
+def phugoid_flight(
+    scene: str | dict, solver: dict | None = None, watch: Callable[[Simulation, dict], None] | None = None
+) -> dict:
     """A 2 s pulse of bar in (pitch 0.3) at 20 s from trim, then hands off to 60 s: the airspeed's period [s] from
     its troughs, damping ratio, the trim airspeed [m/s] before the pulse and Lanchester's period
     pi sqrt(2) V / g [s]."""
@@ -495,7 +503,7 @@ def phugoid_flight(scene: str | dict, solver: dict | None = None) -> dict:
             return {"pitch": 0.0}
         return None
 
-    history = fly_piloted(scene_descriptor(scene, solver), 60.0, pilot, every=0.1)
+    history = fly_piloted(scene_descriptor(scene, solver), 60.0, pilot, every=0.1, watch=watch)
     trim = float(np.mean([f["airspeed"] for f in history if 10.0 <= f["t"] <= 20.0]))
     pulse = [f for f in history if f["t"] >= 23.0 - 1e-9]
     dv = np.array([f["airspeed"] for f in pulse]) - trim

@@ -17,28 +17,23 @@ Lanchester's and its damping ratio. The struts' rest lengths are set every decis
 
 from __future__ import annotations
 
-import math
+import contextlib
 import sys
 
 import numpy as np
 
 import warpsim.objects.glider_flight as glider_flight
 from benchmarks.validation import handling
-from warpsim.objects.hang_glider import flight_state
-from warpsim.run.simulation import Simulation
 
 TRIM_SPEED = 12.0
 """Airspeed [m/s] at which the imposed twist is zero (the default glider trims at 11.97 m/s)."""
 
 
-def fly(d: dict, seconds: float, kappa: float, law: str, pilot=None, every: float = 0.02) -> list[dict]:
-    """Fly descriptor ``d`` for ``seconds`` [s] with the imposed washout (``kappa`` [deg], ``law``), ``pilot``
-    deciding the bar every ``every`` seconds; the flight state at each decision, with ``t`` [s] and ``n``."""
-    sim = Simulation(d)
-    record = sim.model.objects[0]
-    steps = max(1, int(round(every / sim.dt)))
-    weight = handling.GRAVITY * float(sim.model.particle_free_mass[record.particles].sum())
-    triangles = np.concatenate([np.asarray(t) for t in record.tri_parts.values()]).astype(np.int64)
+@contextlib.contextmanager
+def imposed_twist(kappa: float, law: str):
+    """Inside the block, the billow shift's struts also raise both trailing edges' washout at the tip by ``kappa``
+    [deg] times the ``law``'s factor; yields the watcher for :func:`handling.fly_piloted` that updates the factor
+    from each decision's state."""
     factor = {"value": 0.0}
     original = glider_flight.billow_rest_lengths
 
@@ -47,57 +42,43 @@ def fly(d: dict, seconds: float, kappa: float, law: str, pilot=None, every: floa
         target = rec.billow_points + np.outer(rec.billow_rise * extra, (0.0, 0.0, 1.0))
         return np.linalg.norm(target - rec.billow_anchors, axis=1)
 
-    glider_flight.billow_rest_lengths = twisted
-    history, controls = [], {"pitch": 0.0, "roll": 0.0}
-    try:
-        for i in range(int(round(seconds / every))):
-            sim.step(steps)
-            state = flight_state(record, sim.state.positions(), sim.state.particle_q_prev.numpy(), sim.dt, (0, 0, 0))
-            state["t"] = (i + 1) * steps * sim.dt
+    def watch(sim, state):
+        record = sim.model.objects[0]
+        if law == "speed":
+            ratio = (state["airspeed"] / TRIM_SPEED) ** 2
+        else:  # the air force across the flight path over the weight
+            triangles = np.concatenate([np.asarray(t) for t in record.tri_parts.values()]).astype(np.int64)
             air = 3.0 * sim.solver.tri_force.numpy()[triangles].sum(axis=0)
             air += sim.solver.particle_air.numpy()[record.particles].sum(axis=0)
             along = state["velocity"] / max(float(np.linalg.norm(state["velocity"])), 1e-9)
-            state["n"] = float(np.linalg.norm(air - (air @ along) * along)) / weight
-            ratio = (state["airspeed"] / TRIM_SPEED) ** 2 if law == "speed" else state["n"]
-            factor["value"] = float(np.clip(ratio, 0.0, 4.0)) - 1.0
-            controls.update((pilot(state) if pilot else None) or {})
-            sim.set_controls(**controls)  # every step: the struts follow the twist
-            history.append({**state, **controls})
+            weight = handling.GRAVITY * float(sim.model.particle_free_mass[record.particles].sum())
+            ratio = float(np.linalg.norm(air - (air @ along) * along)) / weight
+        factor["value"] = float(np.clip(ratio, 0.0, 4.0)) - 1.0
+
+    glider_flight.billow_rest_lengths = twisted
+    try:
+        yield watch
     finally:
         glider_flight.billow_rest_lengths = original
-    return history
 
 
 def run(kappa: float, law: str = "speed", solver: dict | None = None) -> dict:
-    """The dive's height lost [m], and the trim [m/s], glide, phugoid period [s], Lanchester's [s] and damping."""
+    """The dive's height lost [m], and the trim [m/s], glide over 10-20 s, phugoid period [s], Lanchester's [s] and
+    damping, flown by :func:`handling.dive_flight` and :func:`handling.phugoid_flight` with the imposed twist."""
     scene = "scenes/hang_glider.toml"
-    dive = fly(handling.scene_descriptor(scene, solver, {"speed": 0.0, "nose_up": -60.0}), 12.0, kappa, law)
-    moving = next(f["t"] for f in dive if f["velocity"][2] < -1.0)
-    level = next((f["t"] for f in dive if f["t"] >= moving and f["velocity"][2] >= 0.0), math.inf)
-    height = dive[0]["altitude"] - min(f["altitude"] for f in dive if f["t"] <= level)
-
-    def pulse(state):
-        if abs(state["t"] - 20.0) < 1e-6:
-            return {"pitch": 0.3}
-        if abs(state["t"] - 22.0) < 1e-6:
-            return {"pitch": 0.0}
-        return None
-
-    flight = fly(handling.scene_descriptor(scene, solver), 60.0, kappa, law, pulse, every=0.1)
-    steady = [f for f in flight if 10.0 <= f["t"] <= 20.0]
-    trim = float(np.mean([f["airspeed"] for f in steady]))
+    with imposed_twist(kappa, law) as watch:
+        dive = handling.dive_flight(scene, solver, watch=watch)
+        phugoid = handling.phugoid_flight(scene, solver, watch=watch)
+    steady = [f for f in phugoid["history"] if 10.0 <= f["t"] <= 20.0]
     run_m = sum(float(np.hypot(*f["velocity"][:2])) * 0.1 for f in steady[1:])
-    glide = run_m / (steady[0]["altitude"] - steady[-1]["altitude"])
-    after = [f for f in flight if f["t"] >= 23.0 - 1e-9]
-    dv = np.array([f["airspeed"] for f in after]) - trim
-    troughs = [i for i in range(1, len(dv) - 1) if dv[i] < dv[i - 1] and dv[i] <= dv[i + 1] and dv[i] < -0.2]
-    period = zeta = math.nan
-    if len(troughs) >= 2:
-        period = (after[troughs[-1]]["t"] - after[troughs[0]]["t"]) / (len(troughs) - 1)
-        decrement = math.log(dv[troughs[0]] / dv[troughs[-1]]) / (len(troughs) - 1)
-        zeta = decrement / math.hypot(2.0 * math.pi, decrement)
-    lanchester = math.pi * math.sqrt(2.0) * trim / handling.GRAVITY
-    return {"dive": height, "trim": trim, "glide": glide, "period": period, "lanchester": lanchester, "zeta": zeta}
+    return {
+        "dive": dive["height"],
+        "trim": phugoid["trim"],
+        "glide": run_m / (steady[0]["altitude"] - steady[-1]["altitude"]),
+        "period": phugoid["period"],
+        "lanchester": phugoid["lanchester"],
+        "zeta": phugoid["zeta"],
+    }
 
 
 if __name__ == "__main__":

@@ -53,6 +53,16 @@ class ObjectSpec:
     hud: Callable | None = None
     oscillations: dict[str, float] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        # a design is applied on top of the default design's values: one that leaves out a key another design sets
+        # would silently keep that design's value (the flying kite's solver.chebyshev once leaked into the paper's)
+        keys = {d: {(sec, k) for sec, values in p.items() for k in values} for d, p in self.presets.items()}
+        for design, have in keys.items():
+            for other, want in keys.items():
+                if want - have:
+                    missing = ", ".join(f"{sec}.{k}" for sec, k in sorted(want - have))
+                    raise ValueError(f"preset {design!r} leaves out {missing}, which preset {other!r} sets")
+
 
 OBJECTS: dict[str, ObjectSpec] = {
     "flag": ObjectSpec(

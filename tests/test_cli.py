@@ -73,7 +73,7 @@ def test_console_script_runs_in_a_fresh_process():
         [sys.executable, "-m", "warpsim.cli", "run", "flag", "--seconds", "0.3"], capture_output=True, text=True
     )
     assert result.returncode == 0, result.stderr
-    assert "simulated 0.300 s in 30 steps" in result.stdout
+    assert "simulated 0.300 s in 60 steps" in result.stdout  # the flag steps 5 ms
     bad = subprocess.run(
         [sys.executable, "-m", "warpsim.cli", "run", "flag", "--dt", "0"], capture_output=True, text=True
     )

@@ -1,0 +1,120 @@
+"""The flag's flapping against the time step (issue 35): the validation's resolution-17 flag at dt 0.01, 0.0025 and
+0.000625 s, and the same flag handed in mid-flight from dt 0.01 to 0.000625.
+
+    python -m benchmarks.validation.flag_time_step [OUT.png]
+
+Prints each run's frequency and rms sideways motion of the top trailing corner, the handed-over flag's rms in 5 s
+windows, and draws the corner's motion (default ``docs/flag_time_step.png``). About 2 minutes on 2 cores.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+from benchmarks.validation.cases import FLAG_ITERATIONS_PER_RESOLUTION, FLAG_TIME_STEPS
+from warpsim.run.simulation import Simulation
+from warpsim.scene import descriptor
+
+SAMPLE = 0.02
+"""Seconds between samples of the corner [s]."""
+
+
+def flag_simulation(resolution: int, dt: float) -> Simulation:
+    """The validation's flag (:func:`benchmarks.validation.cases.flag_flapping`): ``28 x resolution`` iterations,
+    Chebyshev 0.995, time step ``dt`` [s]."""
+    d = descriptor.merge(
+        "flag-time-step",
+        descriptor.resolve("flag")[0],
+        {
+            "flag": {"resolution": resolution},
+            "solver": {"dt": dt, "iterations": FLAG_ITERATIONS_PER_RESOLUTION * resolution, "chebyshev": 0.995},
+        },
+    )
+    return Simulation(d)
+
+
+def corner(sim: Simulation) -> int:
+    """The top trailing corner: the cloth particle farthest from the pole, on the top row."""
+    q = sim.state.positions()
+    cloth = sim.model.objects[0].parts["cloth"]
+    return int(cloth[np.argmax(q[cloth, 0] + 1e-3 * q[cloth, 2])])
+
+
+def tip_series(sim: Simulation, seconds: float) -> tuple[np.ndarray, np.ndarray]:
+    """Fly ``sim`` ``seconds`` more; the times [s] and the corner's sideways (y) position [m] every 0.02 s."""
+    tip, steps = corner(sim), max(1, int(round(SAMPLE / sim.dt)))
+    times, ys = [], []
+    for _ in range(int(round(seconds / SAMPLE))):
+        sim.step(steps)
+        times.append(sim.state.time)
+        ys.append(sim.state.positions()[tip, 1])
+    return np.array(times), np.array(ys)
+
+
+def peak_frequency(ys: np.ndarray) -> float:
+    """Frequency [Hz] of the largest peak of the series' spectrum (Hann window, mean removed)."""
+    spectrum = np.abs(np.fft.rfft((ys - ys.mean()) * np.hanning(ys.size)))
+    return float(np.fft.rfftfreq(ys.size, SAMPLE)[np.argmax(spectrum[1:]) + 1])
+
+
+def handed_over(resolution: int, dt_from: float, dt_to: float, before: float, after: float) -> dict:
+    """Fly the flag ``before`` seconds at ``dt_from``, carry its positions and velocities over to a flag stepping
+    ``dt_to`` [s] and fly that ``after`` seconds: the corner's rms sideways motion [m] in each 5 s window after."""
+    first = flag_simulation(resolution, dt_from)
+    t0, y0 = tip_series(first, before)
+    second = flag_simulation(resolution, dt_to)
+    second.state.particle_q.assign(first.state.positions())
+    second.state.set_velocity(first.state.velocities(dt_from), dt_to)
+    second.state.time = first.state.time
+    t1, y1 = tip_series(second, after)
+    windows = [y1[(t1 > t0[-1] + 5.0 * k) & (t1 <= t0[-1] + 5.0 * (k + 1))] for k in range(int(after // 5))]
+    return {
+        "times": np.concatenate([t0, t1]),
+        "ys": np.concatenate([y0, y1]),
+        "switch": float(t0[-1]),
+        "rms before": float(np.std(y0[t0 > 5.0])),
+        "rms after": [float(np.std(w)) for w in windows],
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    out = argv[0] if argv else "docs/flag_time_step.png"
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    runs = {}
+    for dt in FLAG_TIME_STEPS:
+        t, y = tip_series(flag_simulation(17, dt), 30.0)
+        keep = t > 5.0
+        runs[dt] = (t[keep], y[keep])
+        print(f"resolution 17, dt {dt:g} s: {peak_frequency(y[keep]):.2f} Hz, rms {np.std(y[keep]):.2f} m")
+    hand = handed_over(17, FLAG_TIME_STEPS[0], FLAG_TIME_STEPS[-1], 20.0, 20.0)
+    print(
+        f"handed over at {hand['switch']:.0f} s from dt {FLAG_TIME_STEPS[0]:g} to {FLAG_TIME_STEPS[-1]:g}: rms "
+        f"{hand['rms before']:.2f} m before, " + ", ".join(f"{r:.2f}" for r in hand["rms after"]) + " m in 5 s windows"
+    )
+    fig, axes = plt.subplots(len(runs) + 1, 1, figsize=(9, 8), sharex=True)
+    for ax, (dt, (t, y)) in zip(axes, runs.items(), strict=False):
+        ax.plot(t, y, lw=0.8)
+        ax.set_title(f"dt {dt:g} s: {peak_frequency(y):.2f} Hz, rms {np.std(y):.2f} m", fontsize=9)
+    ax = axes[-1]
+    ax.plot(hand["times"], hand["ys"], lw=0.8)
+    ax.axvline(hand["switch"], color="k", ls="--", lw=0.8)
+    ax.set_title(f"dt {FLAG_TIME_STEPS[0]:g} s, then {FLAG_TIME_STEPS[-1]:g} s from the dashed line", fontsize=9)
+    ax.set_xlabel("time [s]")
+    for ax in axes:
+        ax.set_ylabel("corner y [m]")
+    fig.suptitle("The validation's flag at resolution 17: its trailing corner's sideways motion", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(out, dpi=80)
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

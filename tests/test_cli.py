@@ -55,6 +55,7 @@ def test_run_descriptor_file(tmp_path, capsys):
         (["run", "flag", "--set", "solver.method=rk4"], "not one of verlet, euler"),
         (["run", "flag", "--set", "nonsense"], "expected section.key=value"),
         (["run", "flag", "--set", "wind.velocity=3"], "must be a list of 3 numbers"),
+        (["run", "flag", "--set", "wind.speed=8"], "set wind.velocity=[8,0,0]"),
         (["run", "flag", "--device", "tpu"], "--device tpu is not available"),
         (["info", "missing.toml"], "scene file not found"),
     ],

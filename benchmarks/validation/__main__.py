@@ -204,8 +204,15 @@ def table(rows: list[Row]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point: run the chosen parts, print and write the results."""
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.validation", description=__doc__.splitlines()[0])
-    parser.add_argument("-k", action="append", default=[], help="run only cases whose name contains this")
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.validation",
+        description="The validation table, the convergence plot and the hour-long kite run. The whole run rewrites "
+        "benchmarks/validation/results.md, results.json and docs/convergence.svg; exit code 1 when a row misses "
+        "its band without a stated model limit.",
+    )
+    parser.add_argument(
+        "-k", action="append", default=[], help="run only the parts whose name contains this (prints; writes nothing)"
+    )
     parser.add_argument("--list", action="store_true", help="list the parts and exit")
     parser.add_argument("--long-seconds", type=float, default=3600.0, help="simulated time of the long run [s]")
     parser.add_argument("--no-write", action="store_true", help="print only; do not rewrite the results files")
@@ -216,6 +223,10 @@ def main(argv: list[str] | None = None) -> int:
         print("\n".join(parts))
         return 0
     chosen = [p for p in parts if not args.k or any(k in p for k in args.k)]
+    if not chosen:
+        parser.error(f"no part matches {' or '.join(repr(k) for k in args.k)}; the parts: {', '.join(parts)}")
+    # the results files and the convergence picture are the whole run's: a part alone only prints
+    write = not args.no_write and not args.k
     rows: list[Row] = []
     extra: dict = {}
     for name in chosen:
@@ -223,7 +234,7 @@ def main(argv: list[str] | None = None) -> int:
         if name == "convergence":
             data = convergence()
             extra["convergence"] = data
-            if not args.no_write:
+            if write:
                 plot_convergence(data, ROOT / "docs" / "convergence.svg")
             for kind, v in data.items():
                 at55 = v["by_iterations"][ITERATIONS.index(55)]
@@ -257,7 +268,9 @@ def main(argv: list[str] | None = None) -> int:
     machine = f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, Warp {wp.config.version}, cpu"
     print(text)
     print(f"\n{machine}")
-    if not args.no_write and rows:
+    if args.k and not args.no_write:
+        print("(a part alone: results.md, results.json and docs/convergence.svg are left as they are)")
+    if write and rows:
         (HERE / "results.md").write_text(f"{text}\n\n{machine}; `python -m benchmarks.validation`\n", encoding="utf-8")
         payload = {"machine": machine, "rows": [r.as_dict() for r in rows], **extra}
         (HERE / "results.json").write_text(json.dumps(payload, indent=1) + "\n", encoding="utf-8")

@@ -9,7 +9,7 @@ windows, and draws the corner's motion (default ``docs/flag_time_step.png``). Ab
 
 from __future__ import annotations
 
-import sys
+import argparse
 
 import numpy as np
 
@@ -80,8 +80,14 @@ def handed_over(resolution: int, dt_from: float, dt_to: float, before: float, af
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    out = argv[0] if argv else "docs/flag_time_step.png"
+    """Entry point: the three runs and the hand-over, printed and drawn."""
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.validation.flag_time_step",
+        description="The resolution-17 flag's corner at dt 0.01, 0.0025 and 0.000625 s, and handed in mid-flight "
+        "from dt 0.01 to 0.000625: frequencies and rms printed, the motion drawn. About 2 minutes on 2 cores.",
+    )
+    parser.add_argument("out", nargs="?", default="docs/flag_time_step.png", help="the picture (PNG)")
+    out = parser.parse_args(argv).out
     import matplotlib
 
     matplotlib.use("Agg")

@@ -67,14 +67,19 @@ class RunSummary:
 
     def text(self) -> str:
         """Human-readable summary lines."""
-        status = "blew up" if self.blew_up else "interrupted" if self.interrupted else "done"
-        text = (
-            f"{status}: simulated {self.simulated_time:.3f} s in {self.steps} steps, wall {self.wall_time:.2f} s "
-            f"(+ {self.startup_time:.2f} s start-up: model and kernels)\n"
-            f"  {self.steps_per_second:,.0f} steps/s, real-time factor {self.realtime_factor:.1f}x, "
-            f"worst stick stretch {100 * self.worst_stretch:.3f}%"
-            + (" up to the last good frame" if self.blew_up else "")
-        )
+        wall = f"wall {self.wall_time:.2f} s (+ {self.startup_time:.2f} s start-up: model and kernels)"
+        if self.blew_up:  # the steps kept end at the last good frame, before the step that blew up; no rate
+            text = (
+                f"blew up: kept {self.simulated_time:.3f} s ({self.steps} steps) up to the last good frame, {wall}\n"
+                f"  worst stick stretch {100 * self.worst_stretch:.3f}% over the frames kept"
+            )
+        else:
+            status = "interrupted" if self.interrupted else "done"
+            text = (
+                f"{status}: simulated {self.simulated_time:.3f} s in {self.steps} steps, {wall}\n"
+                f"  {self.steps_per_second:,.0f} steps/s, real-time factor {self.realtime_factor:.1f}x, "
+                f"worst stick stretch {100 * self.worst_stretch:.3f}%"
+            )
         contacts = self.ground_contacts
         if 0 < len(contacts) <= 3:
             text += "".join(f"\n  {name} touched the terrain at t = {t:.2f} s" for name, t in contacts)

@@ -170,9 +170,11 @@ def merge(where: str, base: dict, override: dict) -> dict:
             raise DescriptorError(f"{where}: [{section}] must be a table of keys, got {values!r}")
         for key, value in values.items():
             if key not in out[section]:
+                speed = (section, key) == ("wind", "speed")  # a key of sweeps and [worlds] only: it scales velocity
+                hint = "; wind.speed varies only between worlds or sweep cases: set wind.velocity=[8,0,0]"
                 raise DescriptorError(
                     f"{where}: unknown key {section}.{key}{_suggest(key, out[section])}; "
-                    f"[{section}] keys are {', '.join(out[section])}"
+                    f"[{section}] keys are {', '.join(out[section])}" + (hint if speed else "")
                 )
             checked = _check_value(where, section, key, out[section][key], value)
             if (section, key) == ("scene", "object") and checked != out[section][key]:

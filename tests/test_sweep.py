@@ -862,3 +862,17 @@ def test_a_spoiled_table_is_one_line_before_anything_runs(tmp_path, monkeypatch,
         assert f"{out}: row 1 lacks altitude_mean" in err and err.count("\n") == 1 and ran == [], err
     assert main(_quick(out, "--quiet", "--restart")) == 0 and ran == [0, 1, 2]
     assert "altitude_mean" in pq.read_table(out).column_names
+
+
+def test_heat_map_labels_share_their_decimals_and_read_on_their_cells():
+    """A newcomer's tour heat map printed 54 beside 55.5, in white on yellow: every label now has the decimals that
+    give the largest value three significant digits, white on dark cells and black on light ones."""
+    import matplotlib
+
+    from warpsim.sweeps.plot import cell_labels
+
+    cmap, cells = matplotlib.colormaps["viridis"], np.array([[36.9, 54.0], [np.nan, 55.5]])
+    labels = cell_labels(cells, lambda v: cmap((v - 36.9) / (55.5 - 36.9)))
+    assert [(r, c, t) for r, c, t, _ in labels] == [(0, 0, "36.9"), (0, 1, "54.0"), (1, 1, "55.5")]
+    assert [colour for *_, colour in labels] == ["white", "black", "black"]  # viridis: dark purple to yellow
+    assert [t for *_, t, _ in cell_labels(np.array([[0.0123, 0.5]]), lambda v: (0, 0, 0, 1))] == ["0.012", "0.500"]

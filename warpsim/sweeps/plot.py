@@ -77,6 +77,23 @@ def _select(table, where) -> tuple[object, list[str]]:
     return table, chosen
 
 
+def cell_labels(cells: np.ndarray, colour_of) -> list[tuple[int, int, str, str]]:
+    """The heat map's labels: ``(row, column, text, text colour)`` for each finite cell of ``cells``. Every label
+    has the same number of decimals, three significant digits of the largest value, so that 54.0 and 55.5 read
+    alike; the text is white on a dark cell and black on a light one (the luma of ``colour_of(value)``, an RGBA
+    colour in 0-1)."""
+    finite = cells[np.isfinite(cells)]
+    largest = float(np.abs(finite).max()) if finite.size else 0.0
+    decimals = max(0, 2 - int(np.floor(np.log10(largest)))) if largest > 0 else 2
+    labels = []
+    for (row, col), v in np.ndenumerate(cells):
+        if np.isfinite(v):
+            r, g, b = colour_of(v)[:3]
+            colour = "white" if 0.299 * r + 0.587 * g + 0.114 * b < 0.5 else "black"
+            labels.append((row, col, f"{v:.{decimals}f}", colour))
+    return labels
+
+
 def _text(value) -> str:
     return f"{value:g}" if isinstance(value, (float, np.floating)) else str(value)
 
@@ -148,9 +165,8 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
             image = axes.imshow(np.ma.masked_invalid(grid.to_numpy(float)), origin="lower", aspect="auto", cmap=cmap)
             axes.set_xticks(range(len(grid.columns)), [_text(v) for v in grid.columns])
             axes.set_yticks(range(len(grid.index)), [_text(v) for v in grid.index])
-            for (row, col), v in np.ndenumerate(grid.to_numpy(float)):
-                if np.isfinite(v):
-                    axes.text(col, row, f"{v:.3g}", ha="center", va="center", fontsize=7, color="white")
+            for row, col, text, colour in cell_labels(grid.to_numpy(float), lambda v: cmap(image.norm(v))):
+                axes.text(col, row, text, ha="center", va="center", fontsize=8, color=colour)
             figure.colorbar(image, ax=axes, label=label)
             axes.set_xlabel(axis_label(x, key_unit(x)))
             axes.set_ylabel(axis_label(y, key_unit(y)))

@@ -103,7 +103,11 @@ def add_scene_options(parser, worlds: bool = True) -> None:
     parser.add_argument(
         "--dt", type=number_type("--dt"), help="time step [s] (default: the scene's; `warpsim info SCENE` shows it)"
     )
-    parser.add_argument("--iterations", type=iterations_type, help="constraint iterations per step (default 55)")
+    parser.add_argument(
+        "--iterations",
+        type=iterations_type,
+        help="constraint iterations per step (default: the scene's, 55 in every built-in scene)",
+    )
     parser.add_argument("--fps", type=number_type("--fps"), help="output frames per simulated second")
     parser.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
     parser.add_argument(

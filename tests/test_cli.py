@@ -21,7 +21,7 @@ def test_info(capsys):
     assert main(["info", "flag"]) == 0
     out = capsys.readouterr().out
     assert "particles 15, sticks 38, triangles 16, nails 3" in out
-    assert "[solver]" in out and "iterations = 55" in out
+    assert "[solver]" in out and "dt = 0.00125" in out and "iterations = 110" in out
 
 
 def test_run_prints_summary(capsys):
@@ -55,7 +55,7 @@ def test_run_descriptor_file(tmp_path, capsys):
         (["run", "flag", "--set", "solver.method=rk4"], "not one of verlet, euler"),
         (["run", "flag", "--set", "nonsense"], "expected section.key=value"),
         (["run", "flag", "--set", "wind.velocity=3"], "must be a list of 3 numbers"),
-        (["run", "flag", "--set", "wind.speed=8"], "set wind.velocity=[8,0,0]"),
+        (["run", "flag", "--set", "wind.speed=6"], "set wind.velocity=[6,0,0]"),
         (["run", "flag", "--device", "tpu"], "--device tpu is not available"),
         (["info", "missing.toml"], "scene file not found"),
     ],
@@ -74,7 +74,7 @@ def test_console_script_runs_in_a_fresh_process():
         [sys.executable, "-m", "warpsim.cli", "run", "flag", "--seconds", "0.3"], capture_output=True, text=True
     )
     assert result.returncode == 0, result.stderr
-    assert "simulated 0.300 s in 60 steps" in result.stdout  # the flag steps 5 ms
+    assert "simulated 0.300 s in 240 steps" in result.stdout  # the flag steps 1.25 ms
     bad = subprocess.run(
         [sys.executable, "-m", "warpsim.cli", "run", "flag", "--dt", "0"], capture_output=True, text=True
     )

@@ -27,7 +27,12 @@ from warpsim.scene import descriptor
         ("parachute", {}, 3, 1e-6),  # it starts at 400 m: float64 positions keep every step there too
         ("parachute", {"parachute": {"canopy": "paper"}}, 3, 1e-6),  # the paper's per-triangle air
         ("scenes/parachute.toml", {"wind": {"gust_intensity": 0.0}}, 30, 1e-6),  # whole canopy, in a breeze
-        ("flag", {"wind": {"shear_exponent": 0.14}, "solver": {"damping": 0.01}}, 50, 1e-6),
+        (
+            "flag",
+            {"wind": {"shear_exponent": 0.14}, "solver": {"damping": 0.01, "dt": 0.01, "iterations": 55}},
+            50,
+            1e-6,
+        ),
     ],
 )
 def test_numpy_step_agrees_with_warpsim(scene, override, steps, tolerance):

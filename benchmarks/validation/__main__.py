@@ -1,7 +1,8 @@
 """``python -m benchmarks.validation``: the validation table, the convergence plot and the hour-long kite run.
 
-Prints a Markdown table, writes ``benchmarks/validation/results.md`` and ``results.json`` and the plot
-``docs/convergence.svg``. Exit code 1 when a row misses its band without a stated model limit.
+Prints a Markdown table; the whole run (no ``-k``) also writes ``benchmarks/validation/results.md`` and
+``results.json`` and the plot ``docs/convergence.svg``. Exit code 1 when a row misses its band without a stated
+model limit.
 """
 
 from __future__ import annotations
@@ -203,7 +204,7 @@ def table(rows: list[Row]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point: run the chosen parts, print and write the results."""
+    """Entry point: run the chosen parts and print them; a whole run also writes the results."""
     parser = argparse.ArgumentParser(
         prog="python -m benchmarks.validation",
         description="The validation table, the convergence plot and the hour-long kite run. The whole run rewrites "

@@ -171,7 +171,8 @@ def merge(where: str, base: dict, override: dict) -> dict:
         for key, value in values.items():
             if key not in out[section]:
                 speed = (section, key) == ("wind", "speed")  # a key of sweeps and [worlds] only: it scales velocity
-                hint = "; wind.speed varies only between worlds or sweep cases: set wind.velocity=[8,0,0]"
+                example = value if isinstance(value, (int, float)) and not isinstance(value, bool) else 8
+                hint = f"; wind.speed varies only between worlds or sweep cases: set wind.velocity=[{example},0,0]"
                 raise DescriptorError(
                     f"{where}: unknown key {section}.{key}{_suggest(key, out[section])}; "
                     f"[{section}] keys are {', '.join(out[section])}" + (hint if speed else "")

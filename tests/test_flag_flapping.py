@@ -22,5 +22,5 @@ def test_fine_flag_flaps_alike_when_handed_to_a_sixteenth_of_the_time_step():
     0.16 m in the next 5 s and 0.08 m in the 5 s after (benchmarks/validation/flag_time_step.py)."""
     from benchmarks.validation.flag_time_step import handed_over
 
-    hand = handed_over(17, 0.01, 0.000625, 10.0, 10.0)
+    hand = handed_over(17, 0.01, 0.000625, 10.0, 5.0)
     assert hand["rms after"][-1] > 0.5 * hand["rms before"]

@@ -7,6 +7,7 @@ never tuned away). All runs use Warp's ``cpu`` device unless told otherwise.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
@@ -1120,6 +1121,7 @@ def _parachute_descent(dt: float, iterations: int) -> float:
     return float(np.mean(speeds))
 
 
+@functools.lru_cache(maxsize=8)  # the frequency and the amplitude rows share each rung's run
 def _flag_flap(dt: float, iterations: int) -> dict:
     """The default flag's (resolution 5) flapping as ``warpsim run flag --seconds 40`` prints it: the swings of its
     trailing corner over 20-40 s, ``frequency`` [Hz] and ``amplitude`` (half the range) [m]."""

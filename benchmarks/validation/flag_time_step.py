@@ -13,62 +13,19 @@ import argparse
 
 import numpy as np
 
-from benchmarks.validation.cases import FLAG_ITERATIONS_PER_RESOLUTION, FLAG_TIME_STEPS
-from warpsim.run.simulation import Simulation
-from warpsim.scene import descriptor
-
-SAMPLE = 0.02
-"""Seconds between samples of the corner [s]."""
-
-
-def flag_simulation(resolution: int, dt: float) -> Simulation:
-    """The validation's flag (:func:`benchmarks.validation.cases.flag_flapping`): ``28 x resolution`` iterations,
-    Chebyshev 0.995, time step ``dt`` [s]."""
-    d = descriptor.merge(
-        "flag-time-step",
-        descriptor.resolve("flag")[0],
-        {
-            "flag": {"resolution": resolution},
-            "solver": {"dt": dt, "iterations": FLAG_ITERATIONS_PER_RESOLUTION * resolution, "chebyshev": 0.995},
-        },
-    )
-    return Simulation(d)
-
-
-def corner(sim: Simulation) -> int:
-    """The top trailing corner: the cloth particle farthest from the pole, on the top row."""
-    q = sim.state.positions()
-    cloth = sim.model.objects[0].parts["cloth"]
-    return int(cloth[np.argmax(q[cloth, 0] + 1e-3 * q[cloth, 2])])
-
-
-def tip_series(sim: Simulation, seconds: float) -> tuple[np.ndarray, np.ndarray]:
-    """Fly ``sim`` ``seconds`` more; the times [s] and the corner's sideways (y) position [m] every 0.02 s."""
-    tip, steps = corner(sim), max(1, int(round(SAMPLE / sim.dt)))
-    times, ys = [], []
-    for _ in range(int(round(seconds / SAMPLE))):
-        sim.step(steps)
-        times.append(sim.state.time)
-        ys.append(sim.state.positions()[tip, 1])
-    return np.array(times), np.array(ys)
-
-
-def peak_frequency(ys: np.ndarray) -> float:
-    """Frequency [Hz] of the largest peak of the series' spectrum (Hann window, mean removed)."""
-    spectrum = np.abs(np.fft.rfft((ys - ys.mean()) * np.hanning(ys.size)))
-    return float(np.fft.rfftfreq(ys.size, SAMPLE)[np.argmax(spectrum[1:]) + 1])
+from benchmarks.validation.cases import FLAG_TIME_STEPS, flag_corner_series, flag_simulation, peak_frequency
 
 
 def handed_over(resolution: int, dt_from: float, dt_to: float, before: float, after: float) -> dict:
     """Fly the flag ``before`` seconds at ``dt_from``, carry its positions and velocities over to a flag stepping
     ``dt_to`` [s] and fly that ``after`` seconds: the corner's rms sideways motion [m] in each 5 s window after."""
     first = flag_simulation(resolution, dt_from)
-    t0, y0 = tip_series(first, before)
+    t0, y0, _ = flag_corner_series(first, before)
     second = flag_simulation(resolution, dt_to)
     second.state.particle_q.assign(first.state.positions())
     second.state.set_velocity(first.state.velocities(dt_from), dt_to)
     second.state.time = first.state.time
-    t1, y1 = tip_series(second, after)
+    t1, y1, _ = flag_corner_series(second, after)
     windows = [y1[(t1 > t0[-1] + 5.0 * k) & (t1 <= t0[-1] + 5.0 * (k + 1))] for k in range(int(after // 5))]
     return {
         "times": np.concatenate([t0, t1]),
@@ -95,10 +52,9 @@ def main(argv: list[str] | None = None) -> int:
 
     runs = {}
     for dt in FLAG_TIME_STEPS:
-        t, y = tip_series(flag_simulation(17, dt), 30.0)
-        keep = t > 5.0
-        runs[dt] = (t[keep], y[keep])
-        print(f"resolution 17, dt {dt:g} s: {peak_frequency(y[keep]):.2f} Hz, rms {np.std(y[keep]):.2f} m")
+        t, y, _ = flag_corner_series(flag_simulation(17, dt), 30.0, after=5.0)
+        runs[dt] = (t, y)
+        print(f"resolution 17, dt {dt:g} s: {peak_frequency(y):.2f} Hz, rms {np.std(y):.2f} m")
     hand = handed_over(17, FLAG_TIME_STEPS[0], FLAG_TIME_STEPS[-1], 20.0, 20.0)
     print(
         f"handed over at {hand['switch']:.0f} s from dt {FLAG_TIME_STEPS[0]:g} to {FLAG_TIME_STEPS[-1]:g}: rms "

@@ -38,9 +38,7 @@ def imposed_twist(kappa: float, law: str):
     original = glider_flight.billow_rest_lengths
 
     def twisted(rec, roll):
-        extra = np.radians(rec.billow_shift) * roll * -rec.billow_side + np.radians(kappa) * factor["value"]
-        target = rec.billow_points + np.outer(rec.billow_rise * extra, (0.0, 0.0, 1.0))
-        return np.linalg.norm(target - rec.billow_anchors, axis=1)
+        return original(rec, roll, washout=kappa * factor["value"])
 
     def watch(sim, state):
         record = sim.model.objects[0]

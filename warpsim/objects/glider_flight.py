@@ -38,11 +38,12 @@ def apply_controls(record: ObjectRecord, targets: dict, values: dict) -> None:
         targets["stick_rest"][record.billow_sticks] = billow_rest_lengths(record, roll)
 
 
-def billow_rest_lengths(record: ObjectRecord, roll: float) -> np.ndarray:
+def billow_rest_lengths(record: ObjectRecord, roll: float, washout: float = 0.0) -> np.ndarray:
     """Rest lengths [m] of the washout struts' ties at ``roll`` in [-1, 1] (billow shift): the strutted trailing edge
     of the half the pilot moves towards (``roll > 0``: the right) raised as if its washout at the tip were
-    ``billow_shift * |roll|`` degrees more, the other half's lowered as much (to first order in the angle)."""
-    extra = np.radians(record.billow_shift) * roll * -record.billow_side
+    ``billow_shift * |roll|`` degrees more, the other half's lowered as much (to first order in the angle); both
+    raised by a further ``washout`` degrees at the tip (0 in the model; an experiment's imposed twist)."""
+    extra = np.radians(record.billow_shift) * roll * -record.billow_side + np.radians(washout)
     target = record.billow_points + np.outer(record.billow_rise * extra, (0.0, 0.0, 1.0))
     return np.linalg.norm(target - record.billow_anchors, axis=1)
 

@@ -113,7 +113,7 @@ def launched():
 
     runs, iterations = {}, dict(KITE_STEPS)
 
-    def run(wind, dt):  # the validation's rungs: the defaults (5 ms/55), dt halved with the iterations doubled
+    def run(wind, dt):  # the validation's rungs: the defaults (5 ms/55), dt halved with the iterations doubled, ...
         if (wind, dt) not in runs:
             runs[(wind, dt)] = kite_flight(wind, dt, iterations=iterations[dt])
         return runs[(wind, dt)]
@@ -144,6 +144,24 @@ def test_kite_launched_in_its_wind_flies_high_and_steady(launched, wind, dt):
     # (kite.spine_sleeve), 10 m/s at 5 ms swooped 9-32 deg and 23 m to the side.
     r = launched(wind, dt)
     assert r["alpha"] < 20.0, r  # below the sail's stall, not in a deep stall at ~30 deg
+    assert 40.0 <= r["angle_min"] and r["angle_max"] <= 70.0 and r["angle_max"] - r["angle_min"] < 5.0, r
+    assert r["drift"] < 5.0, r
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 35: as the constraints converge (dt 1.25 ms, 220 iterations) the 3 m/s kite's trim tips over the "
+    "sail's stall",
+)
+def test_light_wind_kite_flies_high_and_steady_at_a_quarter_of_the_time_step(launched):
+    # the band above at dt quartered with four times the iterations, the convergence ladder's finest rung. Measured:
+    # 6 and 10 m/s fly there (60.2 / 60.8 deg, 0.0 m, angle of attack 11.2 / 10.1 deg); 3 m/s falls into a deep
+    # stall (23.3 deg, line 39.3-50.8 deg, 11.6 m to the side), where its trim rose 14.9 -> 15.5 deg over the two
+    # coarser rungs. A 100 g kite or a stall angle of 20-22 deg flies here but fails the bands at the defaults
+    # (validation row "kite in 3 m/s, dt 1.25 ms/220").
+    r = launched(3.0, 0.00125)
+    assert r["alpha"] < 20.0, r
     assert 40.0 <= r["angle_min"] and r["angle_max"] <= 70.0 and r["angle_max"] - r["angle_min"] < 5.0, r
     assert r["drift"] < 5.0, r
 

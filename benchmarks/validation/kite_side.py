@@ -1,0 +1,50 @@
+"""Does the kite fly centred as the time step shrinks? (issue 35) The default kite launched in 6 m/s with a 0.5°
+crosswind, at several (dt, iterations): the tow point's sideways offset from the anchor and the line's elevation at
+the anchor every 5 s.
+
+    python -m benchmarks.validation.kite_side [--wind 6] [--crosswind 0.05] [--seconds 30] [DT/ITERATIONS ...]
+
+A laterally stable, symmetric kite follows a 0.5° crosswind by its reach times the wind's angle (about 0.13 m);
+the validation row "kite in 6 m/s, 0.5° crosswind, time step" reports the same runs. About 1.5 minutes on 2 cores
+for the default rungs.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from benchmarks.validation.cases import KITE_CROSSWIND, KITE_CROSSWIND_STEPS, kite_crosswind_offset
+
+
+def _rung(text: str) -> tuple[float, int]:
+    try:
+        dt, iterations = text.split("/")
+        return float(dt), int(iterations)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a rung is DT/ITERATIONS, e.g. 0.005/55, got {text!r}") from None
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point: one line per rung."""
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.validation.kite_side", description=__doc__.split("\n")[0]
+    )
+    parser.add_argument("rungs", nargs="*", type=_rung, help="DT/ITERATIONS (default: the validation row's rungs)")
+    parser.add_argument("--wind", type=float, default=6.0, help="wind along x [m/s] (default 6)")
+    parser.add_argument("--crosswind", type=float, default=KITE_CROSSWIND, help="wind along y [m/s] (default 0.05)")
+    parser.add_argument("--seconds", type=float, default=30.0, help="flight time [s] (default 30)")
+    args = parser.parse_args(argv)
+    expected = None
+    for dt, iterations in args.rungs or KITE_CROSSWIND_STEPS:
+        r = kite_crosswind_offset(args.wind, args.crosswind, dt, iterations, args.seconds)
+        expected = r["expected"] if expected is None else expected  # the first rung's reach: centred, if any is
+        track = " ".join(
+            f"{5 * (k + 1)}s {o:+.2f} m/{a:.0f}°"
+            for k, (o, a) in enumerate(zip(r["offsets"], r["angles"], strict=True))
+        )
+        print(f"dt {dt * 1000:g} ms/{iterations}: {track} (a stable kite: {expected:+.2f} m)", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -750,9 +750,11 @@ def kite_flight_rows() -> list[Row]:
             "unstable there and a 0.5° crosswind picks the side. The kite flies centred at the defaults and the "
             "ladder's finest rung (dt/4 with 4x the iterations), and also at 0.625 ms/110 and 1.25 ms/440, but not "
             "at 0.625 ms/220, 0.625 ms/440 or 0.3125 ms/110: as the step shrinks and the constraints converge it "
-            "goes to one side, so what holds it centred at the defaults is numerical (likely the projection's "
-            "damping, which falls with dt, and the constraints' give), and the model kite's own lateral stability "
-            "in 6 m/s is missing. A heavier tail drag (0.3 m²: 20.7 m) or line drag (C_D d 1.8 mm: 10.5 m at "
+            "goes to one side, so what holds it centred at the defaults is numerical, and the model kite's own "
+            "lateral stability in 6 m/s is missing. Which part of the coarse step holds it is not pinned down; "
+            "a uniform velocity damping does not stand in for it (solver.damping 0.0005 / 0.002 per step at "
+            "0.625 ms/220: 10.5 m to the side / the kite down on the ground). "
+            "A heavier tail drag (0.3 m²: 20.7 m) or line drag (C_D d 1.8 mm: 10.5 m at "
             "0.625 ms/220) did not restore it. python -m benchmarks.validation.kite_side prints the offsets over time",
         )
     )

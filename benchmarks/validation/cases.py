@@ -1250,10 +1250,18 @@ LIMITS: dict[str, str] = {}
 """Figures known not to converge, and why: a row outside its band shows as a model limit with this note."""
 
 
-def convergence_figures(names=None) -> list[Row]:
+BEYOND_NOTES = {
+    "kite line angle at the anchor": "at dt/8 the kite flies to one side of the wind window: its centred flight is "
+    "unstable once the step is fine (row 'kite in 6 m/s, 0.5° crosswind, time step')",
+}
+"""Notes of the rows beyond the ladder, by figure."""
+
+
+def convergence_figures(names=None, beyond: bool = False) -> list[Row]:
     """Each figure of :data:`CONVERGENCE` (or of ``names``) at its default dt and iterations (55 but for the flag's
     110), with the iterations doubled, dt halved with them, and dt quartered with four times the iterations (the
-    finest)."""
+    finest). With ``beyond``, also a row that checks the finest rung against dt/8 with the same iterations: whether
+    the finest rung stands for the limit."""
     rows = []
     for name in names or CONVERGENCE:
         measure, dt, unit, band, iterations = CONVERGENCE[name]
@@ -1277,6 +1285,24 @@ def convergence_figures(names=None) -> list[Row]:
                 + (f"; {limit}" if limit else ""),
             )
         )
+        if beyond:
+            past = (ladder[-1][0] / 2.0, ladder[-1][1])
+            further = measure(*past)
+            moved = further / finest - 1.0
+            rows.append(
+                Row(
+                    f"{name}, beyond the ladder",
+                    f"at dt/8 with four times the iterations ({past[0]:g}/{past[1]}) against the finest rung "
+                    f"({ladder[-1][0]:g}/{ladder[-1][1]})",
+                    f"{finest:.3f}{unit} (the finest)",
+                    "the finest rung stands for the model's limit only if a finer step leaves the figure where it is",
+                    f"{further:.3f}{unit}",
+                    f"within {50 * band:g} % of the finest (half the defaults' band)",
+                    abs(moved) <= band / 2.0,
+                    note=f"{100 * moved:+.1f} % from the finest"
+                    + (f"; {BEYOND_NOTES[name]}" if name in BEYOND_NOTES else ""),
+                )
+            )
     return rows
 
 
@@ -1303,7 +1329,7 @@ CASES: dict[str, Callable[[], list[Row]]] = {
     "flying-glider-intermediate": lambda: flying_glider("scenes/hang_glider_intermediate.toml", "intermediate"),
     "kite-angle": kite_angle,
     "kite-flight": kite_flight_rows,
-    "convergence-glide": lambda: convergence_figures(["glider glide ratio", "glider trim speed"]),
+    "convergence-glide": lambda: convergence_figures(["glider glide ratio", "glider trim speed"], beyond=True),
     "convergence-figures": lambda: convergence_figures(
         [
             "glider turn rate, bank held at 20°",
@@ -1312,6 +1338,7 @@ CASES: dict[str, Callable[[], list[Row]]] = {
             "parachute descent",
             "flag flapping frequency (resolution 5)",
             "flag flapping amplitude (resolution 5)",
-        ]
+        ],
+        beyond=True,
     ),
 }

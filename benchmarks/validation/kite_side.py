@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 
 from benchmarks.validation.cases import KITE_CROSSWIND, KITE_CROSSWIND_STEPS, kite_crosswind_offset
+from warpsim.scene.values import DescriptorError
 
 
 def _rung(text: str) -> tuple[float, int]:
@@ -34,9 +35,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--crosswind", type=float, default=KITE_CROSSWIND, help="wind along y [m/s] (default 0.05)")
     parser.add_argument("--seconds", type=float, default=30.0, help="flight time [s] (default 30)")
     args = parser.parse_args(argv)
+    if not args.seconds >= 5.0:
+        parser.error(f"--seconds must be at least 5 (one sample every 5 s), got {args.seconds:g}")
     expected = None
     for dt, iterations in args.rungs or KITE_CROSSWIND_STEPS:
-        r = kite_crosswind_offset(args.wind, args.crosswind, dt, iterations, args.seconds)
+        try:
+            r = kite_crosswind_offset(args.wind, args.crosswind, dt, iterations, args.seconds)
+        except DescriptorError as error:  # a step, iteration count or wind the scene refuses: one line, no traceback
+            parser.error(str(error))
         expected = r["expected"] if expected is None else expected  # the first rung's reach: centred, if any is
         track = " ".join(
             f"{5 * (k + 1)}s {o:+.2f} m/{a:.0f}°"

@@ -126,6 +126,7 @@ def test_flight_figures_converge():
             "kite line angle at the anchor",
             "flag flapping frequency (resolution 5)",
             "flag flapping amplitude (resolution 5)",
-        ]
+        ],
+        ends_only=True,  # the band compares the defaults with the finest; the validation runs every rung
     )
     assert len(rows) == 6 and all(r.ok and not r.model_limit for r in rows), rows

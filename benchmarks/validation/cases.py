@@ -726,7 +726,9 @@ def kite_flight_rows() -> list[Row]:
                         f"; a deep stall (the sail's stall angle is 18°, its trim in {w:g} m/s at the defaults "
                         f"{runs[(w, *KITE_STEPS[0])]['alpha']:.1f}°): as the constraints converge the weight's moment "
                         "about the tow point (centre of mass at ~2/3 of the chord) tips the light-wind trim over "
-                        "the stall. Tried, not kept: a 100 g kite flies here (15.4°) but lifts C_L 0.597 in 6 m/s at "
+                        "the stall; with Chebyshev rho 0.95 or plain Jacobi instead of the kite's 0.99 the 3 m/s kite "
+                        "flies at 1.25 ms/220 (α 16.8° / 15.6°, line 54°, no drift), so the acceleration tips it. "
+                        "Tried, not kept: a 100 g kite flies here (15.4°) but lifts C_L 0.597 in 6 m/s at "
                         "the defaults, below the band; a stall angle of 20° or 22° flies here (4.8 / 2.9 m to the "
                         "side) but drifts 1.9 / 7.4 m in 6 m/s and 9.0 / 15.8 m in 10 m/s at the defaults"
                         if deep_stall
@@ -756,13 +758,14 @@ def kite_flight_rows() -> list[Row]:
             + f". With {-KITE_CROSSWIND:g} m/s across, the kite goes as far the other way, and with none rounding "
             "picks the side: the centred flight is unstable there. The kite flies centred at the defaults and the "
             "ladder's finest rung (dt/4 with 4x the iterations), and also at 0.625 ms/110 and 1.25 ms/440, but not "
-            "at 0.625 ms/220, 0.625 ms/440 or 0.3125 ms/110: as the step shrinks and the constraints converge it "
-            "goes to one side: the centred flight appears to be unstable as dt -> 0 and the coarse steps hold it "
-            "(nothing finer than 0.3125 ms or above 440 iterations was flown). Which part of the coarse step "
-            "holds it is not pinned down; a uniform velocity damping does not stand in for it (solver.damping "
-            "0.0005 / 0.002 per step at 0.625 ms/220: 10.5 m to the side / the kite down on the ground). "
-            "A heavier tail drag (0.3 m²: 20.7 m) or line drag (C_D d 1.8 mm: 10.5 m at "
-            "0.625 ms/220) did not restore it. python -m benchmarks.validation.kite_side prints the offsets over time",
+            "at 0.625 ms/220, 0.625 ms/440 or 0.3125 ms/110. What sends it there is the constraints' Chebyshev "
+            "acceleration (the kite's rho 0.99), not the kite: with plain Jacobi iterations at those three steps it "
+            "stays centred (+0.12, +0.27, +0.24 m at 30 s) with its sticks as converged (worst 1.23 % against "
+            "1.22 % with rho 0.99 at 0.625 ms/440, 10 s); with rho 0.95 it is centred at 0.625 ms/220 (+0.12 m) and "
+            "+5.3 m at the two others. A uniform velocity damping, a heavier tail or line drag did not hold it at "
+            "rho 0.99 (solver.damping 0.0005 / 0.002 per step at 0.625 ms/220: 10.5 m / the kite on the ground; "
+            "tail drag 0.3 m²: 20.7 m; line C_D d 1.8 mm: 10.5 m). python -m benchmarks.validation.kite_side "
+            "prints the offsets over time",
         )
     )
     rows.append(
@@ -1258,8 +1261,8 @@ LIMITS: dict[str, str] = {}
 
 
 BEYOND_NOTES = {
-    "kite line angle at the anchor": "at dt/8 the kite flies to one side of the wind window: its centred flight is "
-    "unstable once the step is fine (row 'kite in 6 m/s, 0.5° crosswind, time step')",
+    "kite line angle at the anchor": "at dt/8 the kite flies to one side of the wind window, sent there by the "
+    "constraints' Chebyshev acceleration (row 'kite in 6 m/s, 0.5° crosswind, time step')",
 }
 """Notes of the rows beyond the ladder, by figure."""
 

@@ -554,6 +554,19 @@ def kite_line(mass_splitting: bool = False) -> list[Row]:
     ]
 
 
+def kite_scene(wind: float, dt: float, iterations: int | None = None, crosswind: float = 0.0) -> dict:
+    """The default kite's descriptor in a steady ``wind`` [m/s] along x and ``crosswind`` [m/s] along y, stepping
+    ``dt`` [s] with ``iterations`` constraint iterations (the default's when None)."""
+    return descriptor.merge(
+        "validation",
+        descriptor.defaults("kite"),
+        {
+            "wind": {"velocity": [float(wind), float(crosswind), 0.0]},
+            "solver": {"dt": float(dt), **({} if iterations is None else {"iterations": int(iterations)})},
+        },
+    )
+
+
 def kite_flight(wind: float, dt: float = 0.005, seconds: float = 40.0, iterations: int | None = None) -> dict:
     """The default kite launched in a steady ``wind`` [m/s] at the time step ``dt`` [s] (and ``iterations``
     constraint iterations, the default's when None), measured from the particles
@@ -564,14 +577,7 @@ def kite_flight(wind: float, dt: float = 0.005, seconds: float = 40.0, iteration
     line's pull at the anchor from the rope's sag [N] (``pull``, :func:`~warpsim.objects.kite.anchor_pull`) and the
     force balance it must equal in steady flight, ``|air force on every particle - weight of kite and rope|`` [N]
     (``balance``)."""
-    d = descriptor.merge(
-        "validation",
-        descriptor.defaults("kite"),
-        {
-            "wind": {"velocity": [float(wind), 0.0, 0.0]},
-            "solver": {"dt": float(dt), **({} if iterations is None else {"iterations": int(iterations)})},
-        },
-    )
+    d = kite_scene(wind, dt, iterations)
     sim = Simulation(d)
     record, model = sim.model.objects[0], sim.model
     sail = model.tri_indices_np[np.asarray(record.tri_parts["sail"])]
@@ -642,18 +648,10 @@ def kite_crosswind_offset(
     elevation at the anchor [deg] (``angles``) every ``every`` seconds up to ``seconds``, and (``expected``) the
     offset of the kite's centred equilibrium turned with the wind about the anchor, its horizontal distance times the
     wind's angle [m]. A symmetric kite that is laterally stable follows a small crosswind by about that much."""
-    d = descriptor.merge(
-        "validation",
-        descriptor.defaults("kite"),
-        {
-            "wind": {"velocity": [float(wind), float(crosswind), 0.0]},
-            "solver": {"dt": float(dt), "iterations": int(iterations)},
-        },
-    )
     samples = seconds / every
     if not (samples >= 1.0 and abs(samples - round(samples)) < 1e-9):
         raise ValueError(f"seconds must be a whole number of samples of {every:g} s, got {seconds:g}")
-    sim = Simulation(d)
+    sim = Simulation(kite_scene(wind, dt, iterations, crosswind))
     record = sim.model.objects[0]
     offsets, angles, reach = [], [], 0.0
     for _ in range(int(round(samples))):

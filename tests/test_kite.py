@@ -36,6 +36,41 @@ def test_counts_match_info(capsys):
     assert "particles 152, sticks 458, triangles 221" in out
 
 
+def test_frame_mass_moves_the_centre_of_mass_forward_and_keeps_the_total():
+    # kite.frame_mass_fraction puts that share of the kite's mass on its spine's and leading edges' particles (real
+    # spars weigh most of a delta); the cloth keeps what the virtual particles and the frame do not carry
+    from warpsim.scene.values import DescriptorError
+
+    def build(fraction):
+        d = defaults("kite")
+        d["kite"]["frame_mass_fraction"] = fraction
+        m = Simulation(d).model
+        rec = m.objects[0]
+        kite = np.setdiff1d(rec.particles, np.concatenate([rec.parts["rope"], [rec.anchor_particle]]))
+        mass, q = m.particle_free_mass[kite], m.particle_q0[kite]
+        nose, tail = m.particle_q0[rec.spine[0]], m.particle_q0[rec.spine[-1]]
+        axis = (tail - nose) / np.linalg.norm(tail - nose)
+        centre = (mass[:, None] * q).sum(axis=0) / mass.sum()
+        return m, rec, mass.sum(), float((centre - nose) @ axis / d["kite"]["spine"])  # share of the root chord
+
+    m0, _, total0, chord0 = build(0.0)
+    m6, rec, total6, chord6 = build(0.6)
+    assert total0 == pytest.approx(0.12, rel=1e-12) and total6 == pytest.approx(0.12, rel=1e-12)
+    assert 0.63 < chord0 < 0.67 and 0.57 < chord6 < 0.61, (chord0, chord6)  # measured 0.651, 0.587
+    # every particle's cloth share shrinks to 0.3 / 0.9 of itself (the virtual particles keep their 0.1); what is
+    # added lies on the frame's particles, evenly, 0.6 x 0.12 kg in all, a tip and the spine's tail among them
+    added = m6.particle_free_mass - m0.particle_free_mass * np.where(
+        np.isin(np.arange(m0.particle_count), rec.parts["sail"]), 0.3 / 0.9, 1.0
+    )
+    on_frame = added > 1e-9
+    assert added[on_frame].sum() == pytest.approx(0.6 * 0.12, rel=1e-9)
+    assert np.allclose(added[on_frame], added[on_frame][0], rtol=1e-9) and on_frame[[*rec.tips, rec.spine[-1]]].all()
+    d = defaults("kite")
+    with pytest.raises((DescriptorError, ValueError), match="below 1"):
+        d["kite"]["frame_mass_fraction"] = 0.95
+        Simulation(d)
+
+
 def test_kite_climbs_and_line_angle_settles(flight):
     _, elevation, _, _ = flight
     start = defaults("kite")["kite"]["elevation"]

@@ -554,10 +554,13 @@ def kite_line(mass_splitting: bool = False) -> list[Row]:
     ]
 
 
-def kite_scene(wind: float, dt: float, iterations: int | None = None, crosswind: float = 0.0) -> dict:
+def kite_scene(
+    wind: float, dt: float, iterations: int | None = None, crosswind: float = 0.0, overrides: dict | None = None
+) -> dict:
     """The default kite's descriptor in a steady ``wind`` [m/s] along x and ``crosswind`` [m/s] along y, stepping
-    ``dt`` [s] with ``iterations`` constraint iterations (the default's when None)."""
-    return descriptor.merge(
+    ``dt`` [s] with ``iterations`` constraint iterations (the default's when None), with ``overrides`` (a
+    descriptor fragment, e.g. ``{"kite": {"frame_mass_fraction": 0.6}}``) merged last."""
+    d = descriptor.merge(
         "validation",
         descriptor.defaults("kite"),
         {
@@ -565,6 +568,7 @@ def kite_scene(wind: float, dt: float, iterations: int | None = None, crosswind:
             "solver": {"dt": float(dt), **({} if iterations is None else {"iterations": int(iterations)})},
         },
     )
+    return descriptor.merge("overrides", d, overrides) if overrides else d
 
 
 def kite_flight(wind: float, dt: float = 0.005, seconds: float = 40.0, iterations: int | None = None) -> dict:
@@ -641,17 +645,24 @@ def _steps_label(dt: float, iterations: int) -> str:
 
 
 def kite_crosswind_offset(
-    wind: float, crosswind: float, dt: float, iterations: int, seconds: float = 30.0, every: float = 5.0
+    wind: float,
+    crosswind: float,
+    dt: float,
+    iterations: int,
+    seconds: float = 30.0,
+    every: float = 5.0,
+    overrides: dict | None = None,
 ) -> dict:
     """The default kite launched in a steady ``wind`` [m/s] along x with ``crosswind`` [m/s] along y, stepping ``dt``
     [s] with ``iterations``: the tow point's sideways offset from the anchor [m] (``offsets``) and the line's
     elevation at the anchor [deg] (``angles``) every ``every`` seconds up to ``seconds``, and (``expected``) the
     offset of the kite's centred equilibrium turned with the wind about the anchor, its horizontal distance times the
-    wind's angle [m]. A symmetric kite that is laterally stable follows a small crosswind by about that much."""
+    wind's angle [m]. A symmetric kite that is laterally stable follows a small crosswind by about that much.
+    ``overrides``: as for :func:`kite_scene`."""
     samples = seconds / every
     if not (samples >= 1.0 and abs(samples - round(samples)) < 1e-9):
         raise ValueError(f"seconds must be a whole number of samples of {every:g} s, got {seconds:g}")
-    sim = Simulation(kite_scene(wind, dt, iterations, crosswind))
+    sim = Simulation(kite_scene(wind, dt, iterations, crosswind, overrides))
     record = sim.model.objects[0]
     offsets, angles, reach = [], [], 0.0
     for _ in range(int(round(samples))):
@@ -725,7 +736,10 @@ def kite_flight_rows() -> list[Row]:
                         f"{runs[(w, *KITE_STEPS[0])]['alpha']:.1f}°): as the constraints converge the weight's moment "
                         "about the tow point (centre of mass at ~2/3 of the chord) tips the light-wind trim over "
                         "the stall; with Chebyshev rho 0.95 or plain Jacobi instead of the kite's 0.99 the 3 m/s kite "
-                        "flies at 1.25 ms/220 (α 16.8° / 15.6°, line 54°, no drift), so the acceleration tips it. "
+                        "flies at 1.25 ms/220 (α 16.8° / 15.6°, line 54°, no drift), but plain Jacobi stalls it at "
+                        "0.625 ms/440 (21.8°, line 43-53°, 8.3 m to the side): the acceleration only brings it on "
+                        "sooner. With 60 % of its mass on the spars (kite.frame_mass_fraction, centre of mass at 0.59 "
+                        "of the chord instead of 0.65) it flies at 1.25 ms/220 (13.7°) but crashes at the defaults. "
                         "Tried, not kept: a 100 g kite flies here (15.4°) but lifts C_L 0.597 in 6 m/s at "
                         "the defaults, below the band; a stall angle of 20° or 22° flies here (4.8 / 2.9 m to the "
                         "side) but drifts 1.9 / 7.4 m in 6 m/s and 9.0 / 15.8 m in 10 m/s at the defaults"
@@ -754,16 +768,16 @@ def kite_flight_rows() -> list[Row]:
             + " m; line at the anchor "
             + ", ".join(f"{r['angles'][-1]:.1f}°" for r in side.values())
             + f". With {-KITE_CROSSWIND:g} m/s across, the kite goes as far the other way, and with none rounding "
-            "picks the side: the centred flight is unstable there. The kite flies centred at the defaults and the "
-            "ladder's finest rung (dt/4 with 4x the iterations), and also at 0.625 ms/110 and 1.25 ms/440, but not "
-            "at 0.625 ms/220, 0.625 ms/440 or 0.3125 ms/110. What sends it there is the constraints' Chebyshev "
-            "acceleration (the kite's rho 0.99), not the kite: with plain Jacobi iterations at those three steps it "
-            "stays centred (+0.12, +0.27, +0.24 m at 30 s) with its sticks as converged (worst 1.23 % against "
-            "1.22 % with rho 0.99 at 0.625 ms/440, 10 s); with rho 0.95 it is centred at 0.625 ms/220 (+0.12 m) and "
-            "+5.3 m at the two others. A uniform velocity damping, a heavier tail or line drag did not hold it at "
-            "rho 0.99 (solver.damping 0.0005 / 0.002 per step at 0.625 ms/220: 10.5 m / the kite on the ground; "
-            "tail drag 0.3 m²: 20.7 m; line C_D d 1.8 mm: 10.5 m). python -m benchmarks.validation.kite_side "
-            "prints the offsets over time",
+            "picks the side: the centred flight is unstable there (the same with the projection in float64). The "
+            "kite flies centred at the defaults and the ladder's finest rung (dt/4 with 4x the iterations), and also "
+            "at 0.625 ms/110 and 1.25 ms/440, but not at 0.625 ms/220, 0.625 ms/440 or 0.3125 ms/110, where the "
+            "sail's mirror symmetry breaks beside the spine (16 mm within 1 s). The constraints' Chebyshev "
+            "acceleration (the kite's rho 0.99) brings it on sooner, not alone: plain Jacobi stays centred at those "
+            "three steps (+0.12, +0.27, +0.24 m at 30 s) but goes +4.9 m at 0.3125 ms/440; with rho 0.99 it follows "
+            "the Chebyshev iterations per simulated second (centred up to 2.6e5 /s, to one side from 3.2e5 /s). "
+            "Not kept (docs/objects.md): slack-only sail cloth, a taut sail and 60 % of the mass on the spars keep "
+            "it centred at 0.625 ms/220 but fail at the defaults or finer; a uniform velocity damping, a heavier tail "
+            "or line drag. python -m benchmarks.validation.kite_side prints the offsets over time",
         )
     )
     rows.append(
@@ -1259,8 +1273,9 @@ LIMITS: dict[str, str] = {}
 
 
 BEYOND_NOTES = {
-    "kite line angle at the anchor": "at dt/8 the kite flies to one side of the wind window, sent there by the "
-    "constraints' Chebyshev acceleration (row 'kite in 6 m/s, 0.5° crosswind, time step')",
+    "kite line angle at the anchor": "at dt/8 the kite flies to one side of the wind window, where the sail's "
+    "mirror symmetry breaks; the constraints' Chebyshev acceleration brings it on sooner, plain Jacobi at a finer "
+    "step too (row 'kite in 6 m/s, 0.5° crosswind, time step')",
 }
 """Notes of the rows beyond the ladder, by figure."""
 

@@ -2,7 +2,8 @@
 crosswind, at several (dt, iterations): the tow point's sideways offset from the anchor and the line's elevation at
 the anchor every 5 s.
 
-    python -m benchmarks.validation.kite_side [--wind 6] [--crosswind 0.05] [--seconds 30] [DT/ITERATIONS ...]
+    python -m benchmarks.validation.kite_side [--wind 6] [--crosswind 0.05] [--seconds 30] [--set KEY=VALUE ...]
+        [DT/ITERATIONS ...]
 
 A laterally stable, symmetric kite follows a 0.5° crosswind by its reach times the wind's angle (about 0.13 m);
 the validation row "kite in 6 m/s, 0.5° crosswind, time step" reports the same runs. About 40 s on 2 cores for
@@ -14,7 +15,7 @@ from __future__ import annotations
 import argparse
 
 from benchmarks.validation.cases import KITE_CROSSWIND, KITE_CROSSWIND_STEPS, kite_crosswind_offset
-from warpsim.scene.values import DescriptorError
+from warpsim.scene.values import DescriptorError, parse_override
 
 
 def _rung(text: str) -> tuple[float, int]:
@@ -34,13 +35,27 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--wind", type=float, default=6.0, help="wind along x [m/s] (default 6)")
     parser.add_argument("--crosswind", type=float, default=KITE_CROSSWIND, help="wind along y [m/s] (default 0.05)")
     parser.add_argument("--seconds", type=float, default=30.0, help="flight time [s] (default 30)")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a descriptor value of the kite's scene, e.g. --set kite.frame_mass_fraction=0.6 (repeatable)",
+    )
     args = parser.parse_args(argv)
+    overrides: dict = {}  # checked against the kite's scene when the first rung builds it
+    for item in args.set:
+        try:
+            for section, values in parse_override(item).items():
+                overrides.setdefault(section, {}).update(values)
+        except DescriptorError as error:
+            parser.error(str(error))
     if not (args.seconds >= 5.0 and args.seconds % 5.0 == 0.0):
         parser.error(f"--seconds must be a multiple of 5 (one sample every 5 s), got {args.seconds:g}")
     expected = None
     for dt, iterations in args.rungs or KITE_CROSSWIND_STEPS:
         try:
-            r = kite_crosswind_offset(args.wind, args.crosswind, dt, iterations, args.seconds)
+            r = kite_crosswind_offset(args.wind, args.crosswind, dt, iterations, args.seconds, overrides=overrides)
         except DescriptorError as error:  # a step, iteration count or wind the scene refuses: one line, no traceback
             parser.error(str(error))
         expected = r["expected"] if expected is None else expected  # the first rung's reach: centred, if any is

@@ -50,6 +50,15 @@ class KiteConfig(Checked):
         frame_height: distance of the virtual particles from the sail [m].
         spar_mass_fraction: share of ``mass`` carried by the two virtual particles (the spars they stand for);
             the rest is spread evenly over the sail and keel particles.
+        frame_mass_fraction: share of ``mass`` carried by the spine's and the leading edges' own particles, spread
+            evenly over them (0 by default: the cloth carries it). A real delta's spars weigh most of it (ripstop
+            nylon of ~40 g/m^2 makes ~35 g of this 0.81 m^2 sail), and spars along the spine and leading edges put
+            the centre of mass near half the root chord instead of the sail's area centroid at two thirds:
+            0.6 moves it from 0.65 to 0.59 of the spine from the nose. Measured with 0.6 (docs/objects.md, the
+            kite's limits): the kite flies in 3 m/s at 2.5 ms/110 and 1.25 ms/220 (13.5 / 13.7 deg, where the
+            default stalls at 1.25 ms) and centred in 6 m/s at 0.625 ms/220, but crashes at the defaults' 5 ms with
+            55 or 110 iterations, drifts 5.1 m in 10 m/s at 2.5 ms/110 and goes 11.8 m to one side in 6 m/s at
+            0.625 ms/440, so it is not the default.
         frame_weight: weight of the spar and keel sticks in the constraint average (1 = the paper).
         straight_spars: tie every leading-edge particle to the one two rows back, so the leading edges stay
             straight rods (not in the paper; without them they bow and stretch ~1.7 % in steady flight).
@@ -114,6 +123,7 @@ class KiteConfig(Checked):
     mass: float = number(0.12, POSITIVE)
     frame_height: float = number(0.4, POSITIVE)
     spar_mass_fraction: float = number(0.1, Bounds(0.0, 1.0, low_open=True, high_open=True))
+    frame_mass_fraction: float = number(0.0, Bounds(0.0, 1.0, high_open=True))
     frame_weight: float = number(4.0, POSITIVE)
     straight_spars: bool = True
     rope_length: float = number(30.0, POSITIVE)
@@ -217,6 +227,12 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
         raise ValueError(f"keel_divisions = {kd} needs divisions >= {2 + 2 * kd} (the keel spans 2 sail rows each)")
     if cfg.rope_particles < 2:
         raise ValueError(f"rope_particles must be at least 2, got {cfg.rope_particles}")
+    cloth_share = 1.0 - cfg.spar_mass_fraction - cfg.frame_mass_fraction
+    if cloth_share <= 0.0:
+        raise ValueError(
+            f"spar_mass_fraction + frame_mass_fraction must be below 1 (the cloth needs a mass), got "
+            f"{cfg.spar_mass_fraction:g} + {cfg.frame_mass_fraction:g}"
+        )
     fwd, left, up = body_axes(cfg.heading + 180.0, cfg.attack)  # nose into the wind
     ax, ay = cfg.anchor
     anchor = np.array([ax, ay, float(terrain.height(ax, ay))])
@@ -231,7 +247,7 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
 
     sail_count = (n + 1) * (n + 2) // 2
     keel_count = (kd + 1) * (kd + 2) // 2 - (kd + 1)
-    per_particle = cfg.mass * (1.0 - cfg.spar_mass_fraction) / (sail_count + keel_count)
+    per_particle = cfg.mass * cloth_share / (sail_count + keel_count)
     p0 = builder.particle_count
     tan_dihedral = np.tan(np.radians(cfg.dihedral))
 
@@ -293,6 +309,11 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     )
     if cfg.straight_spars:
         spars.sticks.extend(add_spar_braces(builder, rows, cfg.frame_weight))
+    if cfg.frame_mass_fraction > 0.0:
+        # the spars' own mass, spread evenly over the spine's and the leading edges' particles
+        frame = sorted({*spars.keel, *(rows[r][0] for r in range(n + 1)), *(rows[r][r] for r in range(n + 1))})
+        for i in frame:
+            builder.particle_mass[i] += cfg.mass * cfg.frame_mass_fraction / len(frame)
     spine, virtual, ends = set(spars.keel), set(spars.virtual), builder.stick_particles
     for s in spars.sticks:  # the spine spar's ties to the virtual particles
         a, b = ends[s]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import warpsim as ws
-from warpsim.physics.kernels.constraints import chebyshev_weights
+from warpsim.physics.kernels.constraints import chebyshev_weights, jacobi_equivalent_iterations
 
 
 def _mesh(rng, device, double_first: str | None = None, nail_first: bool = False):
@@ -76,6 +76,21 @@ def test_chebyshev_weights():
     assert w[:10] == [1.0] * 10 and w[10] == pytest.approx(2 / (2 - 0.95**2))
     assert all(1.0 < x < 2.0 for x in w[10:])  # over-relaxation that stays below 2
     assert w[-1] == pytest.approx(2 / (1 + np.sqrt(1 - 0.95**2)), rel=1e-3)  # the optimal SOR limit
+
+
+@pytest.mark.parametrize("iterations, rho", [(55, 0.99), (220, 0.99), (880, 0.99), (110, 0.95), (440, 0.95), (55, 0.0)])
+def test_jacobi_equivalent_iterations_match_the_weights_on_slow_modes(iterations, rho):
+    # a mode plain Jacobi shrinks by lam = 1 - eps per iteration, run through the weights' own recurrence
+    # (x_{k+1} = omega lam x_k + (1 - omega) x_{k-1}, the kernels' increment form): the count of plain iterations
+    # that shrink it as much, log P / log lam, against the closed form
+    for eps in (1e-6, 1e-5, 1e-4):
+        lam, prev, cur = 1.0 - eps, 1.0, 1.0
+        for omega in chebyshev_weights(iterations, rho):
+            prev, cur = cur, omega * lam * cur + (1.0 - omega) * prev
+        measured = np.log(cur) / np.log(lam)
+        assert measured == pytest.approx(jacobi_equivalent_iterations(iterations, rho), rel=0.025), (eps, measured)
+    if rho:
+        assert jacobi_equivalent_iterations(iterations, rho) > 2.5 * iterations  # rho 0.95: 3.2 x, 0.99: 7.1 x
 
 
 def test_solver_refuses_bad_chebyshev(device):

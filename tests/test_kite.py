@@ -180,8 +180,8 @@ def test_sail_trims_at_a_real_angle_of_attack_and_lifts_as_a_delta(launched, dt)
                 pytest.mark.xfail(
                     strict=True,
                     raises=AssertionError,
-                    reason="issue 35: at dt 1.25 ms with 220 iterations the Chebyshev acceleration (rho 0.99) tips "
-                    "the 3 m/s kite's trim over the sail's stall",
+                    reason="issue 35: at dt 1.25 ms with 220 iterations the 3 m/s kite's trim tips over the sail's "
+                    "stall (with the kite's Chebyshev rho 0.99; plain Jacobi stalls it at 0.625 ms/440)",
                 ),
             ],
         )
@@ -195,8 +195,10 @@ def test_kite_launched_in_its_wind_flies_high_and_steady(launched, wind, dt):
     # finest rung; only 3 m/s is flown here, 6 and 10 m/s are validation rows: 60.2 / 60.8 deg, 0.0 m) the 3 m/s
     # kite falls into a deep stall (23.3 deg, line 39.3-50.8 deg, 11.6 m to the side), where its trim rose 14.9 ->
     # 15.5 deg over the two coarser rungs; with Chebyshev rho 0.95 or plain Jacobi instead of the kite's 0.99 it
-    # flies there (16.8 / 15.6 deg, line 54 deg, no drift), and a 100 g kite or a stall angle of 20-22 deg flies
-    # there but fails the bands at the defaults (validation row "kite in 3 m/s, dt 1.25 ms/220"). The 150 g kite
+    # flies there (16.8 / 15.6 deg, line 54 deg, no drift), but plain Jacobi stalls it at 0.625 ms/440 (21.8 deg,
+    # 8.3 m to the side); a 100 g kite, a stall angle of 20-22 deg or 60 % of the mass on the spars
+    # (kite.frame_mass_fraction) flies there but fails the bands at the defaults (validation row "kite in 3 m/s,
+    # dt 1.25 ms/220"). The 150 g kite
     # at Chebyshev 0.95 fell into a deep stall in 3 m/s at 2.5 ms/110 (28 deg, line 36.9-44.1 deg); before the keel
     # was cut taut (kite.keel_tension) and the sail sleeved on the spine (kite.spine_sleeve), 10 m/s at 5 ms swooped
     # 9-32 deg and 23 m to the side.
@@ -222,15 +224,16 @@ def test_kite_follows_a_small_crosswind_as_its_geometry_says_and_mirrors_it():
 @pytest.mark.xfail(
     strict=True,
     raises=AssertionError,
-    reason="issue 35: at dt 0.625 ms with 220 iterations the Chebyshev acceleration (rho 0.99) sends the 6 m/s kite "
-    "11 m to the side a 0.5 deg crosswind picks",
+    reason="issue 35: at dt 0.625 ms with 220 iterations the 6 m/s kite goes 11 m to the side a 0.5 deg crosswind "
+    "picks (the sail's mirror symmetry breaks; with the kite's Chebyshev rho 0.99, plain Jacobi at 0.3125 ms/440)",
 )
 def test_kite_follows_a_small_crosswind_at_an_eighth_of_the_time_step():
     # the test above at dt/8 with four times the iterations (5 s of flight). Measured: +5.5 m at 5 s, +10.7 m at
     # 10 s, steady at +10.7 m by 30 s, line 52 deg; the same at 0.625 ms/440 (11.8 m) and 0.3125 ms/110 (7.9 m),
     # centred at 0.625 ms/110, 1.25 ms/220 and 1.25 ms/440; with plain Jacobi instead of Chebyshev rho 0.99 it stays
-    # centred at 0.625 ms/220, 0.625 ms/440 and 0.3125 ms/110 too (+0.12 / +0.27 / +0.24 m: validation row "kite in
-    # 6 m/s, 0.5° crosswind, time step"; python -m benchmarks.validation.kite_side)
+    # centred at 0.625 ms/220, 0.625 ms/440 and 0.3125 ms/110 too (+0.12 / +0.27 / +0.24 m) but goes +4.9 m at
+    # 0.3125 ms/440 (validation row "kite in 6 m/s, 0.5° crosswind, time step"; docs/objects.md;
+    # python -m benchmarks.validation.kite_side --set solver.chebyshev=0 0.0003125/440)
     from benchmarks.validation.cases import kite_crosswind_offset
 
     r = kite_crosswind_offset(6.0, 0.05, 0.000625, 220, seconds=5.0)

@@ -20,6 +20,7 @@ from warpsim.objects.kite import anchor_elevation, anchor_pull
 from warpsim.physics.builder import ModelBuilder
 from warpsim.physics.config import AirConfig
 from warpsim.physics.kernels.aero import AeroModel
+from warpsim.physics.kernels.constraints import jacobi_equivalent_iterations
 from warpsim.physics.model import AIR_DENSITY, GRAVITY
 from warpsim.physics.solver import SolverVerlet
 from warpsim.physics.terrain import Heightfield
@@ -658,7 +659,7 @@ def kite_crosswind_offset(
     elevation at the anchor [deg] (``angles``) every ``every`` seconds up to ``seconds``, and (``expected``) the
     offset of the kite's centred equilibrium turned with the wind about the anchor, its horizontal distance times the
     wind's angle [m]. A symmetric kite that is laterally stable follows a small crosswind by about that much.
-    ``overrides``: as for :func:`kite_scene`."""
+    ``overrides``: as for :func:`kite_scene`. Also the run's :func:`solver_stiffness` [1/s] (``stiffness``)."""
     samples = seconds / every
     if not (samples >= 1.0 and abs(samples - round(samples)) < 1e-9):
         raise ValueError(f"seconds must be a whole number of samples of {every:g} s, got {seconds:g}")
@@ -671,7 +672,20 @@ def kite_crosswind_offset(
         offsets.append(float(q[record.tow, 1] - q[record.anchor_particle, 1]))
         angles.append(anchor_elevation(record, q))
         reach = float(np.hypot(*(q[record.tow, :2] - q[record.anchor_particle, :2])))
-    return {"offsets": offsets, "angles": angles, "expected": reach * math.sin(math.atan2(crosswind, wind))}
+    solver = sim.descriptor["solver"]
+    return {
+        "offsets": offsets,
+        "angles": angles,
+        "expected": reach * math.sin(math.atan2(crosswind, wind)),
+        "stiffness": solver_stiffness(solver["dt"], solver["iterations"], solver["chebyshev"]),
+    }
+
+
+def solver_stiffness(dt: float, iterations: int, rho: float) -> float:
+    """``sqrt(k) / dt`` [1/s], ``k`` the plain Jacobi iterations equivalent to ``iterations`` at Chebyshev ``rho``
+    (:func:`~warpsim.physics.kernels.constraints.jacobi_equivalent_iterations`): how far the sticks' corrections
+    reach across the cloth per second, in sticks. The kite's fine-step misses follow it (docs/objects.md)."""
+    return math.sqrt(jacobi_equivalent_iterations(int(iterations), float(rho))) / float(dt)
 
 
 def kite_flight_rows() -> list[Row]:
@@ -737,8 +751,10 @@ def kite_flight_rows() -> list[Row]:
                         "about the tow point (centre of mass at ~2/3 of the chord) tips the light-wind trim over "
                         "the stall; with Chebyshev rho 0.95 or plain Jacobi instead of the kite's 0.99 the 3 m/s kite "
                         "flies at 1.25 ms/220 (α 16.8° / 15.6°, line 54°, no drift), but plain Jacobi stalls it at "
-                        "0.625 ms/440 (21.8°, line 43-53°, 8.3 m to the side): the acceleration only brings it on "
-                        "sooner. With 60 % of its mass on the spars (kite.frame_mass_fraction, centre of mass at 0.59 "
+                        "0.625 ms/440 (21.8°, line 43-53°, 8.3 m to the side): in 3 m/s the kite flies up to "
+                        "sqrt(k)/dt ~21k /s and stalls from ~25k /s (k: the plain Jacobi iterations the rung's are "
+                        "worth), with or without Chebyshev. With 60 % of its mass on the spars "
+                        "(kite.frame_mass_fraction, centre of mass at 0.59 "
                         "of the chord instead of 0.65) it flies at 1.25 ms/220 (13.7°) but crashes at the defaults. "
                         "Tried, not kept: a 100 g kite flies here (15.4°) but lifts C_L 0.597 in 6 m/s at "
                         "the defaults, below the band; a stall angle of 20° or 22° flies here (4.8 / 2.9 m to the "
@@ -771,10 +787,12 @@ def kite_flight_rows() -> list[Row]:
             "picks the side: the centred flight is unstable there (the same with the projection in float64). The "
             "kite flies centred at the defaults and the ladder's finest rung (dt/4 with 4x the iterations), and also "
             "at 0.625 ms/110 and 1.25 ms/440, but not at 0.625 ms/220, 0.625 ms/440 or 0.3125 ms/110, where the "
-            "sail's mirror symmetry breaks beside the spine (16 mm within 1 s). The constraints' Chebyshev "
-            "acceleration (the kite's rho 0.99) brings it on sooner, not alone: plain Jacobi stays centred at those "
-            "three steps (+0.12, +0.27, +0.24 m at 30 s) but goes +4.9 m at 0.3125 ms/440; with rho 0.99 it follows "
-            "the Chebyshev iterations per simulated second (centred up to 2.6e5 /s, to one side from 3.2e5 /s). "
+            "sail's mirror symmetry breaks beside the spine (16 mm within 1 s). Every run sorts by sqrt(k)/dt, k the "
+            "plain Jacobi iterations the rung's are worth (Chebyshev rho 0.99: 7.1 each): centred up to 55k /s, to one "
+            "side from 58k /s, with or without Chebyshev (plain Jacobi: +0.12, +0.27, +0.24 m at 0.625 ms/220, "
+            "0.625 ms/440, 0.3125 ms/110, +4.9 m at 0.3125 ms/440, 67k /s); this row's rungs: "
+            + ", ".join(f"{r['stiffness'] / 1000:.1f}k" for r in side.values())
+            + " /s. The ladder walks the kite towards rigid sticks. "
             "Not kept (docs/objects.md): slack-only sail cloth, a taut sail and 60 % of the mass on the spars keep "
             "it centred at 0.625 ms/220 but fail at the defaults or finer; a uniform velocity damping, a heavier tail "
             "or line drag. python -m benchmarks.validation.kite_side prints the offsets over time",
@@ -1273,9 +1291,9 @@ LIMITS: dict[str, str] = {}
 
 
 BEYOND_NOTES = {
-    "kite line angle at the anchor": "at dt/8 the kite flies to one side of the wind window, where the sail's "
-    "mirror symmetry breaks; the constraints' Chebyshev acceleration brings it on sooner, plain Jacobi at a finer "
-    "step too (row 'kite in 6 m/s, 0.5° crosswind, time step')",
+    "kite line angle at the anchor": "at dt/8 with 220 iterations (sqrt(k)/dt 62k /s) the kite flies to one side "
+    "of the wind window, as every run above ~57k /s does, with Chebyshev or plain Jacobi (row 'kite in 6 m/s, "
+    "0.5° crosswind, time step')",
 }
 """Notes of the rows beyond the ladder, by figure."""
 

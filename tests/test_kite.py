@@ -310,3 +310,24 @@ def test_an_object_whose_designs_set_different_keys_is_refused():
     with pytest.raises(ValueError, match=r"preset 'paper' leaves out solver\.chebyshev"):
         ObjectSpec(config=kite.KiteConfig, build=kite.build_kite, presets=presets)
     ObjectSpec(config=kite.KiteConfig, build=kite.build_kite, presets=kite.PRESETS)  # the shipped ones agree
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--wind", "-3"], "must be positive"),
+        (["--seconds", "7"], "multiple of 5"),
+        (["0.005"], "DT/ITERATIONS"),
+        (["--set", "kite.frame_mas_fraction=0.6", "0.005/55"], "did you mean 'frame_mass_fraction'"),
+        (["--set", "kite.frame_mass_fraction=0.95", "0.005/55"], "must be below 1"),
+    ],
+)
+def test_kite_side_refuses_bad_input_in_one_line(capsys, argv, message):
+    # python -m benchmarks.validation.kite_side: a bad wind, flight time, rung or --set is a usage error (exit 2)
+    # that names the problem, before any flight
+    from benchmarks.validation.kite_side import main as kite_side
+
+    with pytest.raises(SystemExit) as stop:
+        kite_side(argv)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and message in err and "Traceback" not in err, err

@@ -31,7 +31,7 @@ def _rung(text: str) -> tuple[float, int]:
 def main(argv: list[str] | None = None) -> int:
     """Entry point: one line per rung."""
     parser = argparse.ArgumentParser(
-        prog="python -m benchmarks.validation.kite_side", description=__doc__.split("\n")[0]
+        prog="python -m benchmarks.validation.kite_side", description=__doc__.split("\n\n")[0].replace("\n", " ")
     )
     parser.add_argument("rungs", nargs="*", type=_rung, help="DT/ITERATIONS (default: the validation row's rungs)")
     parser.add_argument("--wind", type=float, default=6.0, help="wind along x [m/s] (default 6)")
@@ -52,6 +52,8 @@ def main(argv: list[str] | None = None) -> int:
                 overrides.setdefault(section, {}).update(values)
         except DescriptorError as error:
             parser.error(str(error))
+    if not args.wind > 0.0:
+        parser.error(f"--wind is the wind along x the kite flies downwind of, and must be positive, got {args.wind:g}")
     if not (args.seconds >= 5.0 and args.seconds % 5.0 == 0.0):
         parser.error(f"--seconds must be a multiple of 5 (one sample every 5 s), got {args.seconds:g}")
     expected = None

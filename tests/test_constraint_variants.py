@@ -140,3 +140,44 @@ def test_graph_captured_fused_solver_matches_scatter_across_the_allowed_range(de
         results[scheme] = s.positions()
     assert np.isfinite(results["fused"]).all()
     np.testing.assert_array_equal(results["fused"], results["scatter"])
+
+
+@pytest.mark.parametrize("scheme", ["fused", "scatter", "gather"])
+@pytest.mark.parametrize("dt", [0.01, 0.0025])
+def test_elastic_sticks_stretch_as_springs_at_every_step(device, scheme, dt):
+    # a 2 kg weight hung from a nail by two elastic sticks in series, a 0.5 kg particle between them, the lower stick
+    # of weight 2 (twice as stiff): at rest each stick stretches its tension times its compliance (Hooke), the
+    # upper (2.5 kg) g c, the lower 2 g c / 2, whatever the step (XPBD's compliance / dt^2); rigid sticks do not
+    g, c = 9.80665, 2e-4  # [m/s^2], [m/N]: 0.5 mm / 0.2 mm, far above float32's resolution of a 0.3 m stick
+    results = {}
+    for compliance in (c, 0.0):
+        b = ws.ModelBuilder()
+        top = b.add_particle((0.0, 0.0, 2.0), 1.0)
+        mid = b.add_particle((0.0, 0.0, 1.7), 0.5)
+        low = b.add_particle((0.0, 0.0, 1.4), 2.0)
+        upper, lower = b.add_stick(top, mid), b.add_stick(mid, low, weight=2.0)
+        b.set_compliance([upper, lower], compliance)
+        b.add_nail(top)
+        m = b.finalize(device)
+        config = ws.SolverConfig(dt=dt, iterations=55, chebyshev=0.0, mass_splitting=True, damping=0.02)
+        solver = ws.SolverVerlet(m, config, constraint_scheme=scheme)
+        state, control = m.state(), m.control()
+        for _ in range(int(round(4.0 / dt))):
+            solver.step(state, control, dt)
+        q = state.positions()
+        results[compliance] = (np.linalg.norm(q[mid] - q[top]) - 0.3, np.linalg.norm(q[low] - q[mid]) - 0.3)
+    assert results[c][0] == pytest.approx(2.5 * g * c, rel=0.01), results
+    assert results[c][1] == pytest.approx(2.0 * g * c / 2.0, rel=0.01), results
+    assert abs(results[0.0][0]) < 0.02 * 2.5 * g * c and abs(results[0.0][1]) < 0.02 * 2.5 * g * c, results
+
+
+def test_elastic_sticks_need_the_step(device, project):
+    b = ws.ModelBuilder()
+    b.add_particle((0.0, 0.0, 1.0), 1.0)
+    b.add_particle((0.0, 0.0, 0.5), 1.0)
+    b.set_compliance([b.add_stick(0, 1)], 1e-3)
+    m = b.finalize(device)
+    with pytest.raises(ValueError, match="dt"):
+        project(m, m.state(), m.control(), 5)
+    with pytest.raises(ValueError, match="compliance"):
+        b.set_compliance([0], -1.0)

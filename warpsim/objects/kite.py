@@ -60,6 +60,15 @@ class KiteConfig(Checked):
             55 or 110 iterations, drifts 5.1 m in 10 m/s at 2.5 ms/110 and goes 11.8 m to one side in 6 m/s at
             0.625 ms/440, so it is not the default.
         frame_weight: weight of the spar and keel sticks in the constraint average (1 = the paper).
+        sail_compliance: stretch [m/N] per newton of tension of each of the sail's cloth sticks (weight 1; a sleeve
+            stick of weight 4 is 4 times as stiff): 0 (the default, the paper's) makes them rigid, so the finer the
+            step and the more the iterations, the nearer the cloth comes to rigid; above 0 the iterations converge
+            to cloth of that stiffness at every step (:meth:`~warpsim.physics.builder.ModelBuilder.set_compliance`).
+            1e-4 m/N (10 kN/m per stick) holds the 6 m/s kite centred at 0.625 ms/220, 0.3125 ms/110 and
+            0.625 ms/440 where the rigid cloth goes 8-12 m to one side, and leaves the defaults' figures as they are;
+            3e-5 holds it too, 1e-5 does not (−5.1 m at 0.625 ms/220), and none keeps the 3 m/s kite out of its stall
+            at 1.25 ms/220 (docs/objects.md, the kite's limits). It is not the default for want of a measured
+            stiffness of kite fabric.
         straight_spars: tie every leading-edge particle to the one two rows back, so the leading edges stay
             straight rods (not in the paper; without them they bow and stretch ~1.7 % in steady flight).
         rope_length: tow point to anchor [m].
@@ -125,6 +134,7 @@ class KiteConfig(Checked):
     spar_mass_fraction: float = number(0.1, Bounds(0.0, 1.0, low_open=True, high_open=True))
     frame_mass_fraction: float = number(0.0, Bounds(0.0, 1.0, high_open=True))
     frame_weight: float = number(4.0, POSITIVE)
+    sail_compliance: float = number(0.0, NON_NEGATIVE)
     straight_spars: bool = True
     rope_length: float = number(30.0, POSITIVE)
     rope_particles: int = number(14, Bounds(2, 4096))
@@ -338,6 +348,8 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
             ]
         )
 
+    if cfg.sail_compliance > 0.0:
+        builder.set_compliance(np.setdiff1d(sail_sticks, spars.sticks), cfg.sail_compliance)
     if cfg.tail_drag > 0.0:
         builder.set_drag_area(spars.keel[-1], cfg.tail_drag)
     if cfg.billow > 0.0:

@@ -45,6 +45,7 @@ class ModelBuilder(MeshShapes):
         self.stick_rest: list[float] = []
         self.stick_weight: list[float] = []
         self.stick_pretension: list[float] = []
+        self.stick_compliance: list[float] = []
         self.tri_indices: list[tuple[int, int, int]] = []
         self.tri_loading: list[float] = []
         self.tri_sail: list[tuple[float, float, float, float]] = []
@@ -120,7 +121,20 @@ class ModelBuilder(MeshShapes):
         self.stick_rest.append(float(rest))
         self.stick_weight.append(float(weight))
         self.stick_pretension.append(0.0)
+        self.stick_compliance.append(0.0)
         return self.stick_count - 1
+
+    def set_compliance(self, sticks, compliance: float) -> None:
+        """Make ``sticks`` elastic instead of rigid: each stretches ``compliance`` [m/N] per newton of tension at
+        weight 1 (a stiffness of ``1 / compliance`` [N/m]); a stick of weight ``k`` counts as ``k`` such sticks side
+        by side, ``k`` times as stiff. 0 makes them rigid again (the paper's sticks). The solver's iterations then
+        converge to the elastic sticks' own stretch, the same at every time step (XPBD,
+        :mod:`warpsim.physics.kernels.constraints`)."""
+        compliance = float(compliance)
+        if not (np.isfinite(compliance) and compliance >= 0.0):
+            raise ValueError(f"stick compliance must be >= 0 and finite, got {compliance}")
+        for st in sticks:
+            self.stick_compliance[int(st)] = compliance
 
     def pretension(self, sticks, share: float) -> None:
         """Make ``sticks`` ``share`` (0 <= share < 1) shorter than they are: a cloth tensioned on its frame pulls
@@ -294,6 +308,8 @@ class ModelBuilder(MeshShapes):
         weight = np.array(self.stick_weight, dtype=np.float32)
         m.stick_weight = wp.array(weight, dtype=wp.float32, device=device)
         m.stick_pretension = np.array(self.stick_pretension, dtype=np.float64)
+        compliance = np.array(self.stick_compliance, dtype=np.float64).reshape(-1) / np.maximum(weight, 1e-30)
+        m.stick_compliance = compliance
         weight_sum = np.zeros(n, dtype=np.float64)
         np.add.at(weight_sum, sticks.reshape(-1), np.repeat(weight.astype(np.float64), 2))
         m.particle_stick_weight = weight_sum

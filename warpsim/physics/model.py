@@ -115,6 +115,10 @@ class Model:
     """Host ``[S]`` float64 share by which a stick's rest length is shorter than it was built (a tensioned sail;
     0 for most sticks). A pretensioned stick anywhere between its rest length and its length as built,
     ``rest / (1 - pretension)``, shows no stretch (:meth:`stick_stretch`)."""
+    stick_compliance: np.ndarray
+    """Host ``[S]`` float64 compliance [m/N] of each stick as a whole (its weight included): 0 for a rigid stick (the
+    paper's), ``c`` for one that stretches ``c`` metres per newton of tension (:meth:`ModelBuilder.set_compliance
+    <warpsim.physics.builder.ModelBuilder.set_compliance>`)."""
     tri_indices: wp.array
     """``[T]`` vec3i triangle vertices; ``tri_indices_np`` is its host ``[T, 3]`` copy."""
     tri_indices_np: np.ndarray

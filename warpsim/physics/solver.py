@@ -168,7 +168,7 @@ class SolverVerlet(_Solver):
         integrate_verlet(m, state, control, self.tri_force, self.particle_air, dt, cfg.damping)
         if self.momentum is not None:
             self.momentum.before(state)
-        self.projector.project(state, control, cfg.iterations)
+        self.projector.project(state, control, cfg.iterations, dt)
         if self.momentum is not None:
             self.momentum.after(state)
         collide_heightfield(m, state, self.ground.collision, self.ground.friction)

@@ -43,6 +43,15 @@ Three schemes, one class each (:class:`FusedProjector`, :class:`ScatterProjector
   run to run, and agrees with the others to float rounding.
   Only the positions need two buffers: a particle's increment, offset and origin are its own thread's.
 
+Elastic sticks (a compliance ``c`` [m/N] > 0, :meth:`~warpsim.physics.builder.ModelBuilder.set_compliance`) are
+solved as XPBD does (Macklin, Müller & Chentanez 2016, "XPBD: position-based simulation of compliant constrained
+dynamics"), with the split masses' factor in place of the inverse mass sum: each keeps, through one projection, the
+sum ``lam`` of its corrections and corrects by ``dlam = c_s (|d| - r - alpha lam) / (1 + alpha c_s)`` with
+``alpha = c / dt^2``, so the iterations converge to the stretch of a spring of stiffness ``1 / c`` under its
+tension, the same at every time step. Rigid sticks (``c = 0``, the paper's) converge to no stretch at all, so the
+finer the step and the more the iterations, the stiffer they are: how far the corrections reach across the cloth
+per second, ``sqrt(k) / dt`` (:func:`jacobi_equivalent_iterations`), grows with every rung of a convergence ladder.
+
 Positions are float64 (``State.particle_q``) and everything measured from them is float32: a stick's
 ends are subtracted in float64 and only the difference, at most a few metres, is rounded to float32, so a
 stick is measured as well 10 km from the origin as next to it (float32 world coordinates would be quantised
@@ -104,6 +113,21 @@ def stick_correction(d: wp.vec3, rest: float, coef: float) -> wp.vec3:
 
 
 @wp.func
+def compliant_correction(d: wp.vec3, rest: float, coef: float, alpha: float, lam: float):
+    """An elastic stick's correction and its new accumulated ``lam`` (XPBD, Macklin et al. 2016, with the split
+    masses' factor ``coef``): ``dlam = coef (|d| - rest - alpha lam) / (1 + alpha coef)``, the correction is
+    ``dlam d / |d|`` and ``lam + dlam`` is kept for the next iteration. ``alpha`` is the stick's compliance over
+    ``dt^2`` [1/kg]; at convergence ``|d| - rest = alpha lam``, the stretch of a spring of stiffness
+    ``1 / compliance`` under the tension ``lam / dt^2`` whatever the step. ``alpha = 0`` is
+    :func:`stick_correction`."""
+    length = wp.length(d)
+    if length == 0.0:
+        return wp.vec3(0.0), lam
+    dlam = coef * ((length - rest) - alpha * lam) / (1.0 + alpha * coef)
+    return d * (dlam / length), lam + dlam
+
+
+@wp.func
 def iterate_increment(total: wp.vec3, step: float, omega: float, last: wp.vec3) -> wp.vec3:
     """How far the next iterate lies from the current one: ``step * total``, Chebyshev-extrapolated by
     ``omega`` from the ``last`` increment when ``omega != 1`` (``older + omega (x + step total - older)``
@@ -162,12 +186,27 @@ def _scatter_corrections(
     stick_particles: wp.array(dtype=wp.vec2i),
     stick_rest: wp.array(dtype=wp.float32),
     stick_coef: wp.array(dtype=wp.float32),
+    stick_compliance: wp.array(dtype=wp.float32),
+    inv_dt2: float,
+    first: int,
     particle_q: wp.array(dtype=wp.vec3d),
     accum_out: wp.array(dtype=wp.vec3),
+    stick_lam_out: wp.array(dtype=wp.float32),
 ):
     s = wp.tid()
     ends = stick_particles[s]
-    c = stick_correction(wp.vec3(particle_q[ends[1]] - particle_q[ends[0]]), stick_rest[s], stick_coef[s])
+    d = wp.vec3(particle_q[ends[1]] - particle_q[ends[0]])
+    alpha = stick_compliance[s] * inv_dt2
+    c = wp.vec3(0.0)
+    if alpha > 0.0:
+        lam = float(0.0)  # noqa: UP018 -- Warp needs float() for a variable a branch may change
+        if first == 0:
+            lam = stick_lam_out[s]
+        elastic, new_lam = compliant_correction(d, stick_rest[s], stick_coef[s], alpha, lam)
+        stick_lam_out[s] = new_lam
+        c = elastic
+    else:
+        c = stick_correction(d, stick_rest[s], stick_coef[s])
     wp.atomic_add(accum_out, ends[0], c)
     wp.atomic_sub(accum_out, ends[1], c)
 
@@ -206,6 +245,8 @@ def _gather_iteration(
     stick_particles: wp.array(dtype=wp.vec2i),
     stick_rest: wp.array(dtype=wp.float32),
     stick_coef: wp.array(dtype=wp.float32),
+    stick_compliance: wp.array(dtype=wp.float32),
+    inv_dt2: float,
     particle_scale: wp.array(dtype=wp.float32),
     particle_nail: wp.array(dtype=wp.int32),
     nail_target: wp.array(dtype=wp.vec3d),
@@ -217,6 +258,7 @@ def _gather_iteration(
     last_inc_out: wp.array(dtype=wp.vec3),
     offset_out: wp.array(dtype=wp.vec3),
     origin_out: wp.array(dtype=wp.vec3d),
+    entry_lam_out: wp.array(dtype=wp.float32),
 ):
     i = wp.tid()
     if pin_to_nail(i, particle_nail, nail_target, q_out):
@@ -234,19 +276,34 @@ def _gather_iteration(
         other = ends[1]
         if (ref & 1) == 1:
             other = ends[0]
-        total += stick_correction(wp.vec3(q_in[other] - x), stick_rest[s], stick_coef[s])
+        d = wp.vec3(q_in[other] - x)
+        alpha = stick_compliance[s] * inv_dt2
+        if alpha > 0.0:
+            # each end keeps its own copy of the stick's lam (entry k): both ends do the same float operations
+            # on the same length, so the copies stay equal without a thread sharing them
+            lam = float(0.0)  # noqa: UP018 -- Warp needs float() for a variable a branch may change
+            if first == 0:
+                lam = entry_lam_out[k]
+            elastic, new_lam = compliant_correction(d, stick_rest[s], stick_coef[s], alpha, lam)
+            entry_lam_out[k] = new_lam
+            total += elastic
+        else:
+            total += stick_correction(d, stick_rest[s], stick_coef[s])
     # only this thread reads and writes its own increment, offset and origin
     q_out[i] = next_position(i, x, total, relaxation * scale, omega, first, last_inc_out, offset_out, origin_out)
 
 
 @wp.struct
 class PackedStick:
-    """One stick as the fused scheme reads it: both ends, rest length [m] and factor ``c_s``, in 16 bytes."""
+    """One stick as the fused scheme reads it: both ends, rest length [m], factor ``c_s``, compliance [m/N] and the
+    projection's accumulated ``lam`` of an elastic stick, in 24 bytes."""
 
     a: wp.int32
     b: wp.int32
     rest: wp.float32
     coef: wp.float32
+    compliance: wp.float32
+    lam: wp.float32
 
 
 @wp.struct
@@ -265,6 +322,7 @@ class ParticleIterate:
 def _pack_sticks(
     stick_particles: wp.array(dtype=wp.vec2i),
     stick_coef: wp.array(dtype=wp.float32),
+    stick_compliance: wp.array(dtype=wp.float32),
     packed_out: wp.array(dtype=PackedStick),
 ):
     s = wp.tid()
@@ -273,6 +331,7 @@ def _pack_sticks(
     p.a = ends[0]
     p.b = ends[1]
     p.coef = stick_coef[s]
+    p.compliance = stick_compliance[s]
     packed_out[s] = p
 
 
@@ -292,6 +351,7 @@ def _fused_projection(
     particle_nail: wp.array(dtype=wp.int32),
     nail_target: wp.array(dtype=wp.vec3d),
     omegas: wp.array(dtype=wp.float32),
+    inv_dt2: float,
     accum_out: wp.array(dtype=wp.vec3),
     particle_q_out: wp.array(dtype=wp.vec3d),
     packed_out: wp.array(dtype=PackedStick),
@@ -317,6 +377,7 @@ def _fused_projection(
     while s < stick_count:
         p = packed_out[s]
         p.rest = stick_rest[s]
+        p.lam = 0.0
         packed_out[s] = p
         s += 1
     # the scatter scheme's two passes per iteration, with the same float operations in the same order
@@ -325,7 +386,15 @@ def _fused_projection(
         s = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
         while s < stick_count:
             p = packed_out[s]
-            c = stick_correction(wp.vec3(particle_q_out[p.b] - particle_q_out[p.a]), p.rest, p.coef)
+            d = wp.vec3(particle_q_out[p.b] - particle_q_out[p.a])
+            c = wp.vec3(0.0)
+            if p.compliance > 0.0:
+                elastic, lam = compliant_correction(d, p.rest, p.coef, p.compliance * inv_dt2, p.lam)
+                p.lam = lam
+                packed_out[s] = p
+                c = elastic
+            else:
+                c = stick_correction(d, p.rest, p.coef)
             accum_out[p.a] = accum_out[p.a] + c
             accum_out[p.b] = accum_out[p.b] - c
             s += 1
@@ -414,21 +483,32 @@ class StickProjector:
         total = share[ends[:, 0]] + share[ends[:, 1]] if len(ends) else np.zeros(0)
         coef = np.divide(model.stick_weight.numpy(), total, out=np.zeros(len(ends)), where=total > 0)
         self.stick_coef = wp.array(coef if len(coef) else np.zeros(1), dtype=wp.float32, device=device)
+        compliance = getattr(model, "stick_compliance", None)
+        compliance = np.zeros(len(ends)) if compliance is None else np.asarray(compliance, dtype=np.float64)
+        self.elastic = bool(np.any(compliance > 0.0))  # then a projection needs the step's dt
+        self.stick_compliance = wp.array(
+            compliance.astype(np.float32) if len(compliance) else np.zeros(1, dtype=np.float32),
+            dtype=wp.float32,
+            device=device,
+        )
 
     def prepare(self, iterations: int):
         """Make what a projection of ``iterations`` needs before a graph capture (see :class:`FusedProjector`)."""
         return None
 
-    def project(self, state, control, iterations: int) -> None:
+    def project(self, state, control, iterations: int, dt: float | None = None) -> None:
         """Run ``iterations`` Jacobi iterations on ``state.particle_q`` in place.
 
         Rest lengths come from ``control.stick_rest`` and nail targets from ``control.nail_target``, so both
-        can change between steps (and a captured graph sees the new values).
+        can change between steps (and a captured graph sees the new values). ``dt`` [s], the step, is needed
+        when the model has elastic sticks (their compliance acts as ``compliance / dt^2``).
         """
+        if self.elastic and not (dt is not None and dt > 0.0):
+            raise ValueError(f"the model has elastic sticks: project needs the step's dt > 0, got {dt}")
         if self.model.stick_count:
-            self._project(state, control, iterations)
+            self._project(state, control, iterations, 1.0 / (dt * dt) if self.elastic else 0.0)
 
-    def _project(self, state, control, iterations: int) -> None:
+    def _project(self, state, control, iterations: int, inv_dt2: float) -> None:
         raise NotImplementedError
 
     def _apply_inputs(self, control) -> tuple:
@@ -456,7 +536,11 @@ class FusedProjector(StickProjector):
         self.iterate = wp.zeros(n, dtype=ParticleIterate, device=device)
         if model.stick_count:
             wp.launch(
-                _pack_sticks, model.stick_count, [model.stick_particles, self.stick_coef], [self.packed], device=device
+                _pack_sticks,
+                model.stick_count,
+                [model.stick_particles, self.stick_coef, self.stick_compliance],
+                [self.packed],
+                device=device,
             )
         wp.launch(_pack_steps, n, [self.particle_scale, self.relaxation], [self.iterate], device=device)
         self._omegas: dict[int, wp.array] = {}  # each iteration count's Chebyshev weights, made once
@@ -471,12 +555,12 @@ class FusedProjector(StickProjector):
             weights = self._omegas[iterations] = wp.array(omegas, dtype=wp.float32, device=self.model.device)
         return weights
 
-    def _project(self, state, control, iterations: int) -> None:
+    def _project(self, state, control, iterations: int, inv_dt2: float) -> None:
         m = self.model
         wp.launch(
             _fused_projection,
             dim=1,
-            inputs=[control.stick_rest, m.particle_nail, control.nail_target, self.prepare(iterations)],
+            inputs=[control.stick_rest, m.particle_nail, control.nail_target, self.prepare(iterations), inv_dt2],
             outputs=[self.accum, state.particle_q, self.packed, self.iterate],
             device=m.device,
         )
@@ -491,17 +575,26 @@ class ScatterProjector(StickProjector):
     def __init__(self, model, config: SolverConfig):
         super().__init__(model, config)
         self.accum = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)
+        self.stick_lam = wp.zeros(max(model.stick_count, 1), dtype=wp.float32, device=model.device)
         self._make_iterate_buffers()
 
-    def _project(self, state, control, iterations: int) -> None:
+    def _project(self, state, control, iterations: int, inv_dt2: float) -> None:
         m = self.model
         apply = self._apply_inputs(control)
         for k, omega in enumerate(chebyshev_weights(iterations, self.chebyshev)):
             wp.launch(
                 _scatter_corrections,
                 dim=m.stick_count,
-                inputs=[m.stick_particles, control.stick_rest, self.stick_coef, state.particle_q],
-                outputs=[self.accum],
+                inputs=[
+                    m.stick_particles,
+                    control.stick_rest,
+                    self.stick_coef,
+                    self.stick_compliance,
+                    inv_dt2,
+                    int(k == 0),
+                    state.particle_q,
+                ],
+                outputs=[self.accum, self.stick_lam],
                 device=m.device,
             )
             wp.launch(
@@ -523,8 +616,10 @@ class GatherProjector(StickProjector):
         super().__init__(model, config)
         self._make_iterate_buffers()
         self.scratch = wp.zeros(model.particle_count, dtype=wp.vec3d, device=model.device)
+        refs = model.particle_stick_refs
+        self.entry_lam = wp.zeros(max(refs.shape[0], 1), dtype=wp.float32, device=model.device)  # lam per stick end
 
-    def _project(self, state, control, iterations: int) -> None:
+    def _project(self, state, control, iterations: int, inv_dt2: float) -> None:
         m = self.model
         apply = self._apply_inputs(control)
         omegas = chebyshev_weights(iterations, self.chebyshev)
@@ -539,12 +634,14 @@ class GatherProjector(StickProjector):
                     m.stick_particles,
                     control.stick_rest,
                     self.stick_coef,
+                    self.stick_compliance,
+                    inv_dt2,
                     *apply,
                     float(omega),
                     int(k == 0),
                     buffers[k % 2],
                 ],
-                outputs=[buffers[(k + 1) % 2], self.last_inc, self.offset, self.origin],
+                outputs=[buffers[(k + 1) % 2], self.last_inc, self.offset, self.origin, self.entry_lam],
                 device=m.device,
             )
         if len(omegas) % 2 == 1:

@@ -792,7 +792,9 @@ def kite_flight_rows() -> list[Row]:
             "side from 58k /s, with or without Chebyshev (plain Jacobi: +0.12, +0.27, +0.24 m at 0.625 ms/220, "
             "0.625 ms/440, 0.3125 ms/110, +4.9 m at 0.3125 ms/440, 67k /s); this row's rungs: "
             + ", ".join(f"{r['stiffness'] / 1000:.1f}k" for r in side.values())
-            + " /s. The ladder walks the kite towards rigid sticks. "
+            + " /s. The ladder walks the kite towards rigid sticks; with the sail's cloth elastic "
+            "(kite.sail_compliance 1e-4 m/N) it stays centred at 0.625 ms/220, 0.3125 ms/110 and 0.625 ms/440 "
+            "(+0.12 m), 3e-5 too, 1e-5 not (-5.1 m): not the default for want of a measured fabric stiffness. "
             "Not kept (docs/objects.md): slack-only sail cloth, a taut sail and 60 % of the mass on the spars keep "
             "it centred at 0.625 ms/220 but fail at the defaults or finer; a uniform velocity damping, a heavier tail "
             "or line drag. python -m benchmarks.validation.kite_side prints the offsets over time",

@@ -128,6 +128,28 @@ def compliant_correction(d: wp.vec3, rest: float, coef: float, alpha: float, lam
 
 
 @wp.func
+def stick_or_spring_correction(
+    d: wp.vec3,
+    rest: float,
+    coef: float,
+    alpha: float,
+    first: int,
+    lam_out: wp.array(dtype=wp.float32),
+    slot: int,
+) -> wp.vec3:
+    """:func:`compliant_correction` for an elastic stick (``alpha > 0``), its ``lam`` kept in ``lam_out[slot]``
+    (read as zero on the ``first`` iteration of a projection), else :func:`stick_correction`."""
+    if alpha > 0.0:
+        lam = float(0.0)  # noqa: UP018 -- Warp needs float() for a variable a branch may change
+        if first == 0:
+            lam = lam_out[slot]
+        elastic, new_lam = compliant_correction(d, rest, coef, alpha, lam)
+        lam_out[slot] = new_lam
+        return elastic
+    return stick_correction(d, rest, coef)
+
+
+@wp.func
 def iterate_increment(total: wp.vec3, step: float, omega: float, last: wp.vec3) -> wp.vec3:
     """How far the next iterate lies from the current one: ``step * total``, Chebyshev-extrapolated by
     ``omega`` from the ``last`` increment when ``omega != 1`` (``older + omega (x + step total - older)``
@@ -197,16 +219,7 @@ def _scatter_corrections(
     ends = stick_particles[s]
     d = wp.vec3(particle_q[ends[1]] - particle_q[ends[0]])
     alpha = stick_compliance[s] * inv_dt2
-    c = wp.vec3(0.0)
-    if alpha > 0.0:
-        lam = float(0.0)  # noqa: UP018 -- Warp needs float() for a variable a branch may change
-        if first == 0:
-            lam = stick_lam_out[s]
-        elastic, new_lam = compliant_correction(d, stick_rest[s], stick_coef[s], alpha, lam)
-        stick_lam_out[s] = new_lam
-        c = elastic
-    else:
-        c = stick_correction(d, stick_rest[s], stick_coef[s])
+    c = stick_or_spring_correction(d, stick_rest[s], stick_coef[s], alpha, first, stick_lam_out, s)
     wp.atomic_add(accum_out, ends[0], c)
     wp.atomic_sub(accum_out, ends[1], c)
 
@@ -278,17 +291,9 @@ def _gather_iteration(
             other = ends[0]
         d = wp.vec3(q_in[other] - x)
         alpha = stick_compliance[s] * inv_dt2
-        if alpha > 0.0:
-            # each end keeps its own copy of the stick's lam (entry k): both ends do the same float operations
-            # on the same length, so the copies stay equal without a thread sharing them
-            lam = float(0.0)  # noqa: UP018 -- Warp needs float() for a variable a branch may change
-            if first == 0:
-                lam = entry_lam_out[k]
-            elastic, new_lam = compliant_correction(d, stick_rest[s], stick_coef[s], alpha, lam)
-            entry_lam_out[k] = new_lam
-            total += elastic
-        else:
-            total += stick_correction(d, stick_rest[s], stick_coef[s])
+        # an elastic stick's lam is kept per stick end (entry k): both ends do the same float operations on the
+        # same length, so the two copies stay equal without a thread sharing them
+        total += stick_or_spring_correction(d, stick_rest[s], stick_coef[s], alpha, first, entry_lam_out, k)
     # only this thread reads and writes its own increment, offset and origin
     q_out[i] = next_position(i, x, total, relaxation * scale, omega, first, last_inc_out, offset_out, origin_out)
 

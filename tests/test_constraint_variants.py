@@ -144,10 +144,12 @@ def test_graph_captured_fused_solver_matches_scatter_across_the_allowed_range(de
 
 @pytest.mark.parametrize("scheme", ["fused", "scatter", "gather"])
 @pytest.mark.parametrize("dt", [0.01, 0.0025])
-def test_elastic_sticks_stretch_as_springs_at_every_step(device, scheme, dt):
+@pytest.mark.parametrize("chebyshev, relaxation", [(0.0, 1.0), (0.99, 1.0), (0.0, 1.5)])
+def test_elastic_sticks_stretch_as_springs_at_every_step(device, scheme, dt, chebyshev, relaxation):
     # a 2 kg weight hung from a nail by two elastic sticks in series, a 0.5 kg particle between them, the lower stick
     # of weight 2 (twice as stiff): at rest each stick stretches its tension times its compliance (Hooke), the
-    # upper (2.5 kg) g c, the lower 2 g c / 2, whatever the step (XPBD's compliance / dt^2); rigid sticks do not
+    # upper (2.5 kg) g c, the lower 2 g c / 2, whatever the step (XPBD's compliance / dt^2), the over-relaxation or
+    # the Chebyshev acceleration (lam is extrapolated as the positions are); rigid sticks do not
     g, c = 9.80665, 2e-4  # [m/s^2], [m/N]: 0.5 mm / 0.2 mm, far above float32's resolution of a 0.3 m stick
     results = {}
     for compliance in (c, 0.0):
@@ -159,7 +161,9 @@ def test_elastic_sticks_stretch_as_springs_at_every_step(device, scheme, dt):
         b.set_compliance([upper, lower], compliance)
         b.add_nail(top)
         m = b.finalize(device)
-        config = ws.SolverConfig(dt=dt, iterations=55, chebyshev=0.0, mass_splitting=True, damping=0.02)
+        config = ws.SolverConfig(
+            dt=dt, iterations=55, chebyshev=chebyshev, relaxation=relaxation, mass_splitting=True, damping=0.02
+        )
         solver = ws.SolverVerlet(m, config, constraint_scheme=scheme)
         state, control = m.state(), m.control()
         for _ in range(int(round(4.0 / dt))):
@@ -178,6 +182,8 @@ def test_elastic_sticks_need_the_step(device, project):
     b.set_compliance([b.add_stick(0, 1)], 1e-3)
     m = b.finalize(device)
     with pytest.raises(ValueError, match="dt"):
-        project(m, m.state(), m.control(), 5)
+        project(m, m.state(), m.control(), 5, mass_splitting=True)
+    with pytest.raises(ValueError, match="mass_splitting"):  # the plain average has no per-stick tension
+        project(m, m.state(), m.control(), 5, mass_splitting=False)
     with pytest.raises(ValueError, match="compliance"):
         b.set_compliance([0], -1.0)

@@ -31,8 +31,8 @@ Three schemes, one class each (:class:`FusedProjector`, :class:`ScatterProjector
 - ``fused`` (the default on the CPU): one thread runs the whole projection, every iteration's stick pass
   (each stick computes its correction once and adds it to its two particles' accumulators, in
   stick-list order) then particle pass (each particle applies and clears its accumulator), with the
-  sticks and the per-particle iterate data packed (once, when the projector is made) into 16- and
-  28-byte records; per step only the rest lengths (a control) are copied in. A CPU launch runs serially
+  sticks and the per-particle iterate data packed (once, when the projector is made) into per-stick and
+  per-particle records; per step only the rest lengths (a control) are copied in. A CPU launch runs serially
   anyway, so this is one launch per step instead of two per iteration.
 - ``scatter``: the same two passes as two launches per iteration, one thread per stick then one per
   particle. It gives bit-identical results to ``fused`` (same float operations in the same order).
@@ -113,18 +113,25 @@ def stick_correction(d: wp.vec3, rest: float, coef: float) -> wp.vec3:
 
 
 @wp.func
-def compliant_correction(d: wp.vec3, rest: float, coef: float, alpha: float, lam: float):
-    """An elastic stick's correction and its new accumulated ``lam`` (XPBD, Macklin et al. 2016, with the split
-    masses' factor ``coef``): ``dlam = coef (|d| - rest - alpha lam) / (1 + alpha coef)``, the correction is
-    ``dlam d / |d|`` and ``lam + dlam`` is kept for the next iteration. ``alpha`` is the stick's compliance over
-    ``dt^2`` [1/kg]; at convergence ``|d| - rest = alpha lam``, the stretch of a spring of stiffness
-    ``1 / compliance`` under the tension ``lam / dt^2`` whatever the step. ``alpha = 0`` is
-    :func:`stick_correction`."""
+def compliant_correction(
+    d: wp.vec3, rest: float, coef: float, alpha: float, lam: wp.vec2, relaxation: float, omega: float
+):
+    """An elastic stick's correction and its new ``lam`` (XPBD, Macklin et al. 2016, with the split masses' factor
+    ``coef``): ``dlam = coef (|d| - rest - alpha lam) / (1 + alpha coef)`` and the correction ``dlam d / |d|``.
+    ``alpha`` is the stick's compliance over ``dt^2`` [1/kg]. ``lam`` holds the stick's accumulated ``lam`` [kg m]
+    and its last increment: ``lam`` moves as the stick's ends do, by ``relaxation dlam``, Chebyshev-extrapolated by
+    ``omega`` from the last increment (:func:`iterate_increment`), so that the ends' displacement stays
+    ``w lam`` and the iterations stop only at ``|d| - rest = alpha lam``: the stretch of a spring of stiffness
+    ``1 / compliance`` under the tension ``lam / dt^2``, whatever the step, the over-relaxation or the
+    acceleration."""
     length = wp.length(d)
     if length == 0.0:
         return wp.vec3(0.0), lam
-    dlam = coef * ((length - rest) - alpha * lam) / (1.0 + alpha * coef)
-    return d * (dlam / length), lam + dlam
+    dlam = coef * ((length - rest) - alpha * lam[0]) / (1.0 + alpha * coef)
+    inc = relaxation * dlam
+    if omega != 1.0:
+        inc = inc * omega + lam[1] * (omega - 1.0)
+    return d * (dlam / length), wp.vec2(lam[0] + inc, inc)
 
 
 @wp.func
@@ -134,16 +141,18 @@ def stick_or_spring_correction(
     coef: float,
     alpha: float,
     first: int,
-    lam_out: wp.array(dtype=wp.float32),
+    relaxation: float,
+    omega: float,
+    lam_out: wp.array(dtype=wp.vec2),
     slot: int,
 ) -> wp.vec3:
-    """:func:`compliant_correction` for an elastic stick (``alpha > 0``), its ``lam`` kept in ``lam_out[slot]``
-    (read as zero on the ``first`` iteration of a projection), else :func:`stick_correction`."""
+    """:func:`compliant_correction` for an elastic stick (``alpha > 0``), its ``lam`` and last increment kept in
+    ``lam_out[slot]`` (read as zero on the ``first`` iteration of a projection), else :func:`stick_correction`."""
     if alpha > 0.0:
-        lam = float(0.0)  # noqa: UP018 -- Warp needs float() for a variable a branch may change
+        lam = wp.vec2(0.0)
         if first == 0:
             lam = lam_out[slot]
-        elastic, new_lam = compliant_correction(d, rest, coef, alpha, lam)
+        elastic, new_lam = compliant_correction(d, rest, coef, alpha, lam, relaxation, omega)
         lam_out[slot] = new_lam
         return elastic
     return stick_correction(d, rest, coef)
@@ -211,15 +220,17 @@ def _scatter_corrections(
     stick_compliance: wp.array(dtype=wp.float32),
     inv_dt2: float,
     first: int,
+    relaxation: float,
+    omega: float,
     particle_q: wp.array(dtype=wp.vec3d),
     accum_out: wp.array(dtype=wp.vec3),
-    stick_lam_out: wp.array(dtype=wp.float32),
+    stick_lam_out: wp.array(dtype=wp.vec2),
 ):
     s = wp.tid()
     ends = stick_particles[s]
     d = wp.vec3(particle_q[ends[1]] - particle_q[ends[0]])
     alpha = stick_compliance[s] * inv_dt2
-    c = stick_or_spring_correction(d, stick_rest[s], stick_coef[s], alpha, first, stick_lam_out, s)
+    c = stick_or_spring_correction(d, stick_rest[s], stick_coef[s], alpha, first, relaxation, omega, stick_lam_out, s)
     wp.atomic_add(accum_out, ends[0], c)
     wp.atomic_sub(accum_out, ends[1], c)
 
@@ -271,7 +282,7 @@ def _gather_iteration(
     last_inc_out: wp.array(dtype=wp.vec3),
     offset_out: wp.array(dtype=wp.vec3),
     origin_out: wp.array(dtype=wp.vec3d),
-    entry_lam_out: wp.array(dtype=wp.float32),
+    entry_lam_out: wp.array(dtype=wp.vec2),
 ):
     i = wp.tid()
     if pin_to_nail(i, particle_nail, nail_target, q_out):
@@ -293,7 +304,9 @@ def _gather_iteration(
         alpha = stick_compliance[s] * inv_dt2
         # an elastic stick's lam is kept per stick end (entry k): both ends do the same float operations on the
         # same length, so the two copies stay equal without a thread sharing them
-        total += stick_or_spring_correction(d, stick_rest[s], stick_coef[s], alpha, first, entry_lam_out, k)
+        total += stick_or_spring_correction(
+            d, stick_rest[s], stick_coef[s], alpha, first, relaxation, omega, entry_lam_out, k
+        )
     # only this thread reads and writes its own increment, offset and origin
     q_out[i] = next_position(i, x, total, relaxation * scale, omega, first, last_inc_out, offset_out, origin_out)
 
@@ -301,14 +314,14 @@ def _gather_iteration(
 @wp.struct
 class PackedStick:
     """One stick as the fused scheme reads it: both ends, rest length [m], factor ``c_s``, compliance [m/N] and the
-    projection's accumulated ``lam`` of an elastic stick, in 24 bytes."""
+    projection's accumulated ``lam`` of an elastic stick with its last increment, in 28 bytes."""
 
     a: wp.int32
     b: wp.int32
     rest: wp.float32
     coef: wp.float32
     compliance: wp.float32
-    lam: wp.float32
+    lam: wp.vec2
 
 
 @wp.struct
@@ -357,6 +370,7 @@ def _fused_projection(
     nail_target: wp.array(dtype=wp.vec3d),
     omegas: wp.array(dtype=wp.float32),
     inv_dt2: float,
+    relaxation: float,
     accum_out: wp.array(dtype=wp.vec3),
     particle_q_out: wp.array(dtype=wp.vec3d),
     packed_out: wp.array(dtype=PackedStick),
@@ -382,19 +396,20 @@ def _fused_projection(
     while s < stick_count:
         p = packed_out[s]
         p.rest = stick_rest[s]
-        p.lam = 0.0
+        p.lam = wp.vec2(0.0)
         packed_out[s] = p
         s += 1
     # the scatter scheme's two passes per iteration, with the same float operations in the same order
     k = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
     while k < omegas.shape[0]:
+        omega = omegas[k]
         s = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
         while s < stick_count:
             p = packed_out[s]
             d = wp.vec3(particle_q_out[p.b] - particle_q_out[p.a])
             c = wp.vec3(0.0)
             if p.compliance > 0.0:
-                elastic, lam = compliant_correction(d, p.rest, p.coef, p.compliance * inv_dt2, p.lam)
+                elastic, lam = compliant_correction(d, p.rest, p.coef, p.compliance * inv_dt2, p.lam, relaxation, omega)
                 p.lam = lam
                 packed_out[s] = p
                 c = elastic
@@ -403,7 +418,6 @@ def _fused_projection(
             accum_out[p.a] = accum_out[p.a] + c
             accum_out[p.b] = accum_out[p.b] - c
             s += 1
-        omega = omegas[k]
         i = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
         while i < particle_count:
             total = accum_out[i]
@@ -491,6 +505,10 @@ class StickProjector:
         compliance = getattr(model, "stick_compliance", None)
         compliance = np.zeros(len(ends)) if compliance is None else np.asarray(compliance, dtype=np.float64)
         self.elastic = bool(np.any(compliance > 0.0))  # then a projection needs the step's dt
+        if self.elastic and not config.mass_splitting:
+            # the plain average moves a stick's two ends by shares that do not follow its masses, so no lam per
+            # stick is its tension: the stretch would come out n times too large, and differ at its two ends
+            raise ValueError("elastic sticks (a compliance > 0) need solver.mass_splitting = true")
         self.stick_compliance = wp.array(
             compliance.astype(np.float32) if len(compliance) else np.zeros(1, dtype=np.float32),
             dtype=wp.float32,
@@ -565,7 +583,14 @@ class FusedProjector(StickProjector):
         wp.launch(
             _fused_projection,
             dim=1,
-            inputs=[control.stick_rest, m.particle_nail, control.nail_target, self.prepare(iterations), inv_dt2],
+            inputs=[
+                control.stick_rest,
+                m.particle_nail,
+                control.nail_target,
+                self.prepare(iterations),
+                inv_dt2,
+                self.relaxation,
+            ],
             outputs=[self.accum, state.particle_q, self.packed, self.iterate],
             device=m.device,
         )
@@ -580,7 +605,7 @@ class ScatterProjector(StickProjector):
     def __init__(self, model, config: SolverConfig):
         super().__init__(model, config)
         self.accum = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)
-        self.stick_lam = wp.zeros(max(model.stick_count, 1), dtype=wp.float32, device=model.device)
+        self.stick_lam = wp.zeros(max(model.stick_count, 1), dtype=wp.vec2, device=model.device)
         self._make_iterate_buffers()
 
     def _project(self, state, control, iterations: int, inv_dt2: float) -> None:
@@ -597,6 +622,8 @@ class ScatterProjector(StickProjector):
                     self.stick_compliance,
                     inv_dt2,
                     int(k == 0),
+                    self.relaxation,
+                    float(omega),
                     state.particle_q,
                 ],
                 outputs=[self.accum, self.stick_lam],
@@ -622,7 +649,7 @@ class GatherProjector(StickProjector):
         self._make_iterate_buffers()
         self.scratch = wp.zeros(model.particle_count, dtype=wp.vec3d, device=model.device)
         refs = model.particle_stick_refs
-        self.entry_lam = wp.zeros(max(refs.shape[0], 1), dtype=wp.float32, device=model.device)  # lam per stick end
+        self.entry_lam = wp.zeros(max(refs.shape[0], 1), dtype=wp.vec2, device=model.device)  # lam per stick end
 
     def _project(self, state, control, iterations: int, inv_dt2: float) -> None:
         m = self.model

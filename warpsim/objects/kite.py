@@ -61,14 +61,17 @@ class KiteConfig(Checked):
             0.625 ms/440, so it is not the default.
         frame_weight: weight of the spar and keel sticks in the constraint average (1 = the paper).
         sail_compliance: stretch [m/N] per newton of tension of each of the sail's cloth sticks (weight 1; a sleeve
-            stick of weight 4 is 4 times as stiff): 0 (the default, the paper's) makes them rigid, so the finer the
-            step and the more the iterations, the nearer the cloth comes to rigid; above 0 the iterations converge
-            to cloth of that stiffness at every step (:meth:`~warpsim.physics.builder.ModelBuilder.set_compliance`).
-            1e-4 m/N (10 kN/m per stick) holds the 6 m/s kite centred at 0.625 ms/220, 0.3125 ms/110 and
-            0.625 ms/440 where the rigid cloth goes 8-12 m to one side, and leaves the defaults' figures as they are;
-            3e-5 holds it too, 1e-5 does not (−5.1 m at 0.625 ms/220), and none keeps the 3 m/s kite out of its stall
-            at 1.25 ms/220 (docs/objects.md, the kite's limits). It is not the default for want of a measured
-            stiffness of kite fabric.
+            stick of weight 4 is 4 times as stiff), so that the iterations converge to cloth of that stiffness at
+            every step (:meth:`~warpsim.physics.builder.ModelBuilder.set_compliance`); 0 makes them rigid (the
+            paper's, and the ``paper`` design's), and then the finer the step and the more the iterations, the
+            nearer the cloth comes to rigid. Default 2e-5 m/N (50 kN/m per stick): an estimate, not a measurement,
+            of ripstop along its yarns, the stiffest way (3/4 oz ripstop weighs about 47 g/m^2, as 41 um of solid
+            nylon; at a fibre modulus of ~3 GPa, half the yarns each way, about 60 kN/m of sheet, and a stick of
+            a triangle lattice carries ~0.87 of that); crimp and the bias make real cloth softer. Measured
+            (docs/objects.md, the kite's limits): from 1e-6 to 3e-4 the 6 m/s kite stays centred at 0.625 ms/220
+            where rigid cloth goes 10.7 m to one side, and the defaults' figures do not move; the 3 m/s kite at
+            1.25 ms/220 flies at 1e-4 (16.3 deg) but stalls at 1e-5 (26.1 deg), so a measured stiffness decides
+            that one.
         straight_spars: tie every leading-edge particle to the one two rows back, so the leading edges stay
             straight rods (not in the paper; without them they bow and stretch ~1.7 % in steady flight).
         rope_length: tow point to anchor [m].
@@ -134,7 +137,7 @@ class KiteConfig(Checked):
     spar_mass_fraction: float = number(0.1, Bounds(0.0, 1.0, low_open=True, high_open=True))
     frame_mass_fraction: float = number(0.0, Bounds(0.0, 1.0, high_open=True))
     frame_weight: float = number(4.0, POSITIVE)
-    sail_compliance: float = number(0.0, NON_NEGATIVE)
+    sail_compliance: float = number(2e-5, NON_NEGATIVE)
     straight_spars: bool = True
     rope_length: float = number(30.0, POSITIVE)
     rope_particles: int = number(14, Bounds(2, 4096))
@@ -179,6 +182,7 @@ PRESETS = {
                 "tail_drag",
                 "dihedral",
                 "mass",
+                "sail_compliance",
             )
         },
     },
@@ -197,6 +201,7 @@ PRESETS = {
             "tail_drag": 0.0,
             "dihedral": 20.0,
             "mass": 0.2,
+            "sail_compliance": 0.0,  # the paper's rigid sticks
         },
     },
 }

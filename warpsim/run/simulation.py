@@ -97,9 +97,12 @@ class Simulation:
         load_modules((*SOLVERS[cfg.solver.method].modules, frame_kernels), device)
         self.model = build_model(descriptor, device, where, terrain)
         self.dt = cfg.solver.dt
-        self.solver = make_solver(
-            self.model, cfg.solver, air=cfg.air, wind=cfg.wind, ground=cfg.ground, use_graph=use_graph
-        )
+        try:
+            self.solver = make_solver(
+                self.model, cfg.solver, air=cfg.air, wind=cfg.wind, ground=cfg.ground, use_graph=use_graph
+            )
+        except ValueError as err:  # a solver setting the model cannot take (elastic sticks without mass splitting)
+            raise DescriptorError(f"{where}: [solver]: {err}") from None
         self.state = self.model.state(self.dt)
         self.control = self.model.control()
         self.steps_taken = 0

@@ -313,15 +313,14 @@ def _gather_iteration(
 
 @wp.struct
 class PackedStick:
-    """One stick as the fused scheme reads it: both ends, rest length [m], factor ``c_s``, compliance [m/N] and the
-    projection's accumulated ``lam`` of an elastic stick with its last increment, in 28 bytes."""
+    """One stick as the fused scheme reads it: both ends, rest length [m], factor ``c_s`` and compliance [m/N], in 20
+    bytes (an elastic stick's ``lam`` lives apart, so that only it is written back each iteration)."""
 
     a: wp.int32
     b: wp.int32
     rest: wp.float32
     coef: wp.float32
     compliance: wp.float32
-    lam: wp.vec2
 
 
 @wp.struct
@@ -375,6 +374,7 @@ def _fused_projection(
     particle_q_out: wp.array(dtype=wp.vec3d),
     packed_out: wp.array(dtype=PackedStick),
     iterate_out: wp.array(dtype=ParticleIterate),
+    stick_lam_out: wp.array(dtype=wp.vec2),
 ):
     if wp.tid() != 0:  # one thread; reading tid also lets Warp compile constant array strides on the CPU
         return
@@ -396,25 +396,22 @@ def _fused_projection(
     while s < stick_count:
         p = packed_out[s]
         p.rest = stick_rest[s]
-        p.lam = wp.vec2(0.0)
         packed_out[s] = p
         s += 1
     # the scatter scheme's two passes per iteration, with the same float operations in the same order
     k = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
     while k < omegas.shape[0]:
         omega = omegas[k]
+        first = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
+        if k == 0:
+            first = 1
         s = int(0)  # noqa: UP018 -- Warp needs int() to make a variable a loop may change
         while s < stick_count:
             p = packed_out[s]
             d = wp.vec3(particle_q_out[p.b] - particle_q_out[p.a])
-            c = wp.vec3(0.0)
-            if p.compliance > 0.0:
-                elastic, lam = compliant_correction(d, p.rest, p.coef, p.compliance * inv_dt2, p.lam, relaxation, omega)
-                p.lam = lam
-                packed_out[s] = p
-                c = elastic
-            else:
-                c = stick_correction(d, p.rest, p.coef)
+            c = stick_or_spring_correction(
+                d, p.rest, p.coef, p.compliance * inv_dt2, first, relaxation, omega, stick_lam_out, s
+            )
             accum_out[p.a] = accum_out[p.a] + c
             accum_out[p.b] = accum_out[p.b] - c
             s += 1
@@ -561,6 +558,7 @@ class FusedProjector(StickProjector):
         self.accum = wp.zeros(n, dtype=wp.vec3, device=device)
         self.packed = wp.zeros(model.stick_count, dtype=PackedStick, device=device)
         self.iterate = wp.zeros(n, dtype=ParticleIterate, device=device)
+        self.stick_lam = wp.zeros(max(model.stick_count, 1), dtype=wp.vec2, device=device)
         if model.stick_count:
             wp.launch(
                 _pack_sticks,
@@ -595,7 +593,7 @@ class FusedProjector(StickProjector):
                 inv_dt2,
                 self.relaxation,
             ],
-            outputs=[self.accum, state.particle_q, self.packed, self.iterate],
+            outputs=[self.accum, state.particle_q, self.packed, self.iterate, self.stick_lam],
             device=m.device,
         )
 

@@ -732,7 +732,7 @@ def kite_flight_rows() -> list[Row]:
     for w in KITE_WINDS:
         for dt, its in KITE_STEPS:
             r = runs[(w, dt, its)]
-            deep_stall = r["alpha"] > 22.0  # beyond the sail's stall: the kite flies flat to the wind
+            deep_stall = r["alpha"] > 18.0  # beyond the sail's stall angle
             rows.append(
                 Row(
                     f"kite in {w:g} m/s, {_steps_label(dt, its)}",
@@ -747,19 +747,16 @@ def kite_flight_rows() -> list[Row]:
                     and r["drift"] < 5.0,
                     note=f"angle of attack {r['alpha']:.1f}°, C_L {r['lift']:.2f}"
                     + (
-                        f"; a deep stall (the sail's stall angle is 18°, its trim in {w:g} m/s at the defaults "
+                        f"; a stall (the sail's stall angle is 18°, its trim in {w:g} m/s at the defaults "
                         f"{runs[(w, *KITE_STEPS[0])]['alpha']:.1f}°): as the constraints converge the weight's moment "
                         "about the tow point (centre of mass at ~2/3 of the chord) tips the light-wind trim over "
-                        "the stall; with Chebyshev rho 0.95 or plain Jacobi instead of the kite's 0.99 the 3 m/s kite "
-                        "flies at 1.25 ms/220 (α 16.8° / 15.6°, line 54°, no drift), but plain Jacobi stalls it at "
-                        "0.625 ms/440 (21.8°, line 43-53°, 8.3 m to the side): in 3 m/s the kite flies up to "
-                        "sqrt(k)/dt ~21k /s and stalls from ~25k /s (k: the plain Jacobi iterations the rung's are "
-                        "worth), with or without Chebyshev. With 60 % of its mass on the spars "
-                        "(kite.frame_mass_fraction, centre of mass at 0.59 "
-                        "of the chord instead of 0.65) it flies at 1.25 ms/220 (13.7°) but crashes at the defaults. "
-                        "Tried, not kept: a 100 g kite flies here (15.4°) but lifts C_L 0.597 in 6 m/s at "
-                        "the defaults, below the band; a stall angle of 20° or 22° flies here (4.8 / 2.9 m to the "
-                        "side) but drifts 1.9 / 7.4 m in 6 m/s and 9.0 / 15.8 m in 10 m/s at the defaults"
+                        "the stall. How far depends on the sail's stiffness, which is an estimate: with the cloth "
+                        "at 1e-4 m/N (kite.sail_compliance; the default 2e-5 is ripstop along its yarns, the stiff "
+                        "end) the kite flies here (α 16.3°, line 54.2-54.4°, 1.0 m aside; 16.4° at 0.625 ms/440), "
+                        "at 1e-5 it stalls (26.1°); with rigid cloth too (23.3°), and plain Jacobi stalls rigid "
+                        "cloth at 0.625 ms/440. A measured stiffness of kite fabric decides this row. Tried, not "
+                        "kept: a 100 g kite, a stall angle of 20-22° (both fail bands at the defaults), 60 % of the "
+                        "mass on the spars (kite.frame_mass_fraction: flies here, comes down at 5 ms)"
                         if deep_stall
                         else ""
                     ),
@@ -784,21 +781,16 @@ def kite_flight_rows() -> list[Row]:
             + ", ".join(f"{w:.2f}" for w in worst)
             + " m; line at the anchor "
             + ", ".join(f"{r['angles'][-1]:.1f}°" for r in side.values())
-            + f". With {-KITE_CROSSWIND:g} m/s across, the kite goes as far the other way, and with none rounding "
-            "picks the side: the centred flight is unstable there (the same with the projection in float64). The "
-            "kite flies centred at the defaults and the ladder's finest rung (dt/4 with 4x the iterations), and also "
-            "at 0.625 ms/110 and 1.25 ms/440, but not at 0.625 ms/220, 0.625 ms/440 or 0.3125 ms/110, where the "
-            "sail's mirror symmetry breaks beside the spine (16 mm within 1 s). Every run sorts by sqrt(k)/dt, k the "
-            "plain Jacobi iterations the rung's are worth (Chebyshev rho 0.99: 7.1 each): centred up to 55k /s, to one "
-            "side from 58k /s, with or without Chebyshev (plain Jacobi: +0.12, +0.27, +0.24 m at 0.625 ms/220, "
-            "0.625 ms/440, 0.3125 ms/110, +4.9 m at 0.3125 ms/440, 67k /s); this row's rungs: "
+            + ". The sail's cloth is elastic (kite.sail_compliance, 2e-5 m/N by default), so the iterations "
+            "converge to cloth of that stiffness at every step; from 1e-6 to 3e-4 m/N the kite stays centred at "
+            "0.625 ms/220. With rigid cloth (0, the paper's sticks) it goes to one side at the finest steps "
+            "(+10.71 m at 0.625 ms/220, +7.88 m at 0.3125 ms/110; as far the other way with the crosswind "
+            "reversed): rigid sticks grow stiffer with every rung, and every rigid run sorts by sqrt(k)/dt (k the"
+            " plain Jacobi iterations the rung's are worth), centred up to 55k /s and to one side from 58k /s, "
+            "with or without Chebyshev; this row's rungs: "
             + ", ".join(f"{r['stiffness'] / 1000:.1f}k" for r in side.values())
-            + " /s. The ladder walks the kite towards rigid sticks; with the sail's cloth elastic "
-            "(kite.sail_compliance 1e-4 m/N) it stays centred at 0.625 ms/220, 0.3125 ms/110 and 0.625 ms/440 "
-            "(+0.12 m), 3e-5 too, 1e-5 not (-5.1 m): not the default for want of a measured fabric stiffness. "
-            "Not kept (docs/objects.md): slack-only sail cloth, a taut sail and 60 % of the mass on the spars keep "
-            "it centred at 0.625 ms/220 but fail at the defaults or finer; a uniform velocity damping, a heavier tail "
-            "or line drag. python -m benchmarks.validation.kite_side prints the offsets over time",
+            + " /s (docs/objects.md, the kite's limits; python -m benchmarks.validation.kite_side prints the offsets "
+            "over time)",
         )
     )
     rows.append(
@@ -1294,9 +1286,9 @@ LIMITS: dict[str, str] = {}
 
 
 BEYOND_NOTES = {
-    "kite line angle at the anchor": "at dt/8 with 220 iterations (sqrt(k)/dt 62k /s) the kite flies to one side "
-    "of the wind window, as every run above ~57k /s does, with Chebyshev or plain Jacobi (row 'kite in 6 m/s, "
-    "0.5° crosswind, time step')",
+    "kite line angle at the anchor": "with the sail's cloth elastic (the default); with rigid cloth the kite flies "
+    "to one side of the wind window at dt/8 (52.4°), as every rigid run above sqrt(k)/dt ~57k /s does (row 'kite "
+    "in 6 m/s, 0.5° crosswind, time step')",
 }
 """Notes of the rows beyond the ladder, by figure."""
 

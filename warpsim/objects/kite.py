@@ -51,14 +51,15 @@ class KiteConfig(Checked):
         spar_mass_fraction: share of ``mass`` carried by the two virtual particles (the spars they stand for);
             the rest is spread evenly over the sail and keel particles.
         frame_mass_fraction: share of ``mass`` carried by the spine's and the leading edges' own particles, spread
-            evenly over them (0 by default: the cloth carries it). A real delta's spars weigh most of it (ripstop
-            nylon of ~40 g/m^2 makes ~35 g of this 0.81 m^2 sail), and spars along the spine and leading edges put
+            evenly over them (0 by default: the cloth carries it). A real delta's spars weigh most of it (3/4 oz
+            ripstop of ~47 g/m^2 makes ~38 g of this 0.81 m^2 sail), and spars along the spine and leading edges put
             the centre of mass near half the root chord instead of the sail's area centroid at two thirds:
-            0.6 moves it from 0.65 to 0.59 of the spine from the nose. Measured with 0.6 (docs/objects.md, the
-            kite's limits): the kite flies in 3 m/s at 2.5 ms/110 and 1.25 ms/220 (13.5 / 13.7 deg, where the
-            default stalls at 1.25 ms) and centred in 6 m/s at 0.625 ms/220, but crashes at the defaults' 5 ms with
-            55 or 110 iterations, drifts 5.1 m in 10 m/s at 2.5 ms/110 and goes 11.8 m to one side in 6 m/s at
-            0.625 ms/440, so it is not the default.
+            0.6 moves it from 0.65 to 0.59 of the spine from the nose. Measured with 0.6 and rigid cloth
+            (``sail_compliance = 0``; docs/objects.md, the kite's limits): the kite flies in 3 m/s at 2.5 ms/110 and
+            1.25 ms/220 (13.5 / 13.7 deg, where the rigid default stalls at 1.25 ms) and centred in 6 m/s at
+            0.625 ms/220, but crashes at the defaults' 5 ms with 55 or 110 iterations, drifts 5.1 m in 10 m/s at
+            2.5 ms/110 and goes 11.8 m to one side in 6 m/s at 0.625 ms/440; with cloth at 1e-4 m/N it flies in
+            3 m/s at every rung (13.5-13.6 deg) but drifts 15 m in 10 m/s at 2.5 ms/110. So it is not the default.
         frame_weight: weight of the spar and keel sticks in the constraint average (1 = the paper).
         sail_compliance: stretch [m/N] per newton of tension of each of the sail's cloth sticks (weight 1; a sleeve
             stick of weight 4 is 4 times as stiff), so that the iterations converge to cloth of that stiffness at
@@ -353,12 +354,13 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
             ]
         )
 
+    cloth = np.setdiff1d(sail_sticks, spars.sticks)  # the sail's own cloth sticks, without the frame's
     if cfg.sail_compliance > 0.0:
-        builder.set_compliance(np.setdiff1d(sail_sticks, spars.sticks), cfg.sail_compliance)
+        builder.set_compliance(cloth, cfg.sail_compliance)
     if cfg.tail_drag > 0.0:
         builder.set_drag_area(spars.keel[-1], cfg.tail_drag)
     if cfg.billow > 0.0:
-        builder.pretension(np.setdiff1d(sail_sticks, spars.sticks), -cfg.billow)
+        builder.pretension(cloth, -cfg.billow)
     # rope: from the tow point down to the anchor; the first sticks count double
     count = int(cfg.rope_particles)
     rope, rope_sticks = builder.add_rope(tow, anchor, count, cfg.rope_mass, first=tow_particle)
@@ -379,7 +381,7 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
             },
             tri_parts={"sail": sail_tris, "keel": keel_tris},
             stick_groups={
-                "sail": np.setdiff1d(sail_sticks, spars.sticks),
+                "sail": cloth,
                 "frame": np.array(spars.sticks),
                 "keel": keel_sticks,
                 "rope": rope_sticks,

@@ -308,8 +308,7 @@ class ModelBuilder(MeshShapes):
         weight = np.array(self.stick_weight, dtype=np.float32)
         m.stick_weight = wp.array(weight, dtype=wp.float32, device=device)
         m.stick_pretension = np.array(self.stick_pretension, dtype=np.float64)
-        compliance = np.array(self.stick_compliance, dtype=np.float64).reshape(-1) / np.maximum(weight, 1e-30)
-        m.stick_compliance = compliance
+        m.stick_compliance = np.array(self.stick_compliance, dtype=np.float64) / weight  # weight k: k in parallel
         weight_sum = np.zeros(n, dtype=np.float64)
         np.add.at(weight_sum, sticks.reshape(-1), np.repeat(weight.astype(np.float64), 2))
         m.particle_stick_weight = weight_sum

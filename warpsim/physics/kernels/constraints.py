@@ -500,8 +500,7 @@ class StickProjector:
         total = share[ends[:, 0]] + share[ends[:, 1]] if len(ends) else np.zeros(0)
         coef = np.divide(model.stick_weight.numpy(), total, out=np.zeros(len(ends)), where=total > 0)
         self.stick_coef = wp.array(coef if len(coef) else np.zeros(1), dtype=wp.float32, device=device)
-        compliance = getattr(model, "stick_compliance", None)
-        compliance = np.zeros(len(ends)) if compliance is None else np.asarray(compliance, dtype=np.float64)
+        compliance = model.stick_compliance
         self.elastic = bool(np.any(compliance > 0.0))  # then a projection needs the step's dt
         if self.elastic and not config.mass_splitting:
             # the plain average moves a stick's two ends by shares that do not follow its masses, so no lam per

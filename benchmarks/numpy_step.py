@@ -1,8 +1,8 @@
 """A plain, vectorised NumPy version of warpsim's Verlet step: the benchmark's "no Warp" baseline.
 
 Same algorithm, same order and precision as :class:`warpsim.SolverVerlet` (air force per triangle, Verlet,
-Jacobi iterations with averaged mass-weighted corrections and Chebyshev weights, the momentum of free worlds
-kept, heightfield collision):
+Jacobi iterations with averaged mass-weighted corrections and Chebyshev weights, elastic sticks as XPBD, the
+momentum of free worlds kept, heightfield collision):
 positions, previous positions, nail targets and the projection's origins are float64; everything measured
 from positions (stick vectors, triangle edges, velocities, heights above the terrain) is a float64 difference
 rounded to float32, and the rest is float32. It is written the way a careful NumPy programmer would:
@@ -91,6 +91,10 @@ class NumpyVerlet:
         self.scale = solver.projector.particle_scale.numpy()
         cfg = solver.config
         self.relaxation = F32(cfg.relaxation)
+        # elastic sticks (XPBD): compliance over dt^2 [1/kg], as the projector computes it (zero for rigid sticks)
+        compliance = solver.projector.stick_compliance.numpy()[: m.stick_count]
+        self.alpha = compliance * F32(1.0 / (sim.dt * sim.dt)) if np.any(compliance > 0) else compliance * F32(0)
+        self.elastic = self.alpha > 0
         self.damping = F32(cfg.damping)
         self.omegas = [F32(w) for w in chebyshev_weights(cfg.iterations, cfg.chebyshev)]
         self.rest = sim.control.stick_rest.numpy()[: m.stick_count]
@@ -301,12 +305,26 @@ class NumpyVerlet:
         last = np.zeros(self.q.shape, dtype=F32)
         offset = np.zeros(self.q.shape, dtype=F32)
         origin = self.q
+        # an elastic stick's accumulated lam [kg m] and its last increment (compliant_correction)
+        lam = np.zeros(len(self.ends), dtype=F32)
+        lam_last = np.zeros(len(self.ends), dtype=F32)
         for omega in self.omegas:
             x = self.q
             d = _f32(x[b] - x[a])
             length = _length(d)
             safe = np.where(length > 0, length, F32(1.0))
-            c = d * np.where(length > 0, self.coef * (length - self.rest) / safe, F32(0.0))[:, None]
+            factor = self.coef * (length - self.rest) / safe
+            if self.elastic.any():
+                stretch = length - self.rest
+                dlam = self.coef * (stretch - self.alpha * lam) / (F32(1.0) + self.alpha * self.coef)
+                factor = np.where(self.elastic, dlam / safe, factor)
+                step_lam = self.relaxation * dlam
+                if omega != 1.0:
+                    step_lam = step_lam * omega + lam_last * (omega - F32(1.0))
+                moves = self.elastic & (length > 0)
+                lam = np.where(moves, lam + step_lam, lam)
+                lam_last = np.where(moves, step_lam, lam_last)
+            c = d * np.where(length > 0, factor, F32(0.0))[:, None]
             total = self._sum_per_particle(np.concatenate([a, b]), np.concatenate([c, -c]))
             inc = total * step
             if omega != 1.0:

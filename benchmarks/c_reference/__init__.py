@@ -77,6 +77,7 @@ def export(sim: Simulation, path: Path) -> None:
         (ref.ends, i32),
         (ref.coef, f32),
         (ref.rest, f32),
+        (ref.alpha, f32),
         (ref.scale, f32),
         (ref.omegas, f32),
         (ref.tris, i32),

@@ -3,7 +3,8 @@
  * It does the work of benchmarks/numpy_step.py (and of warpsim's CPU step): the air force per triangle (paper,
  * plate or sail law, and drag bodies), Verlet with damping, K Jacobi iterations of the averaged stick corrections
  * (with the model's per-stick coefficients and per-particle scales, so mass splitting and stick weights are the
- * model's; Chebyshev weights per iteration; the increments carried apart from the starting positions), nails,
+ * model's; Chebyshev weights per iteration; elastic sticks as XPBD; the increments carried apart from the starting
+ * positions), nails,
  * the momentum the projection moved given back to each free world (warpsim.physics.kernels.momentum; solver.keep_momentum),
  * and the terrain (bilinear heightfield, normal push-out with friction, or a clamp).
  *
@@ -34,6 +35,7 @@ typedef struct {
     float dt, density, air_scale, relaxation, damping, gx, gy, gz, friction, ox, oy, cx, cy, stall_sharpness;
     double *q, *q_prev, *nail_target; /* positions [m], as warpsim's State and Control */
     float *inv_mass, *coef, *rest, *scale, *omega, *loading, *sail, *tri_wind;
+    float *alpha, *lam, *lam_last; /* elastic sticks: compliance / dt^2 [1/kg] (0: rigid), lam and its last step */
     float *drag_area, *drag_wind, *heights;
     int32_t *nail_of, *ends, *tris, *span, *drag;
     int32_t *world_start, *world_particles, *world_free; /* the momentum keeper's worlds (none: keep_momentum off) */
@@ -70,6 +72,8 @@ static void load(const char *path, Model *m) {
     m->ends = read_array(f, 2 * s, 4);
     m->coef = read_array(f, s, 4);
     m->rest = read_array(f, s, 4);
+    m->alpha = read_array(f, s, 4);
+    m->lam = malloc(s * sizeof(float) + 1), m->lam_last = malloc(s * sizeof(float) + 1);
     m->scale = read_array(f, n, 4);
     m->omega = read_array(f, (size_t)m->k, 4);
     m->tris = read_array(f, 3 * t, 4);
@@ -229,6 +233,8 @@ static void project(Model *m, double *origin, float *offset, float *last, float 
     memcpy(origin, m->q, n3 * sizeof(double));
     memset(offset, 0, n3 * sizeof(float));
     memset(last, 0, n3 * sizeof(float));
+    memset(m->lam, 0, (size_t)m->s * sizeof(float));
+    memset(m->lam_last, 0, (size_t)m->s * sizeof(float));
     for (int it = 0; it < m->k; it++) {
         float omega = m->omega[it];
         memset(total, 0, n3 * sizeof(float));
@@ -237,7 +243,16 @@ static void project(Model *m, double *origin, float *offset, float *last, float 
             const double *qa = m->q + 3 * a, *qb = m->q + 3 * b;
             float d[3] = {(float)(qb[0] - qa[0]), (float)(qb[1] - qa[1]), (float)(qb[2] - qa[2])};
             float len = sqrtf(dot3(d, d));
-            float k = len > 0.0f ? m->coef[s] * (len - m->rest[s]) / len : 0.0f;
+            float k = 0.0f, alpha = m->alpha[s];
+            if (len > 0.0f && alpha > 0.0f) { /* XPBD, as warpsim's compliant_correction */
+                float dlam = m->coef[s] * ((len - m->rest[s]) - alpha * m->lam[s]) / (1.0f + alpha * m->coef[s]);
+                float inc = m->relaxation * dlam;
+                if (omega != 1.0f) inc = inc * omega + m->lam_last[s] * (omega - 1.0f);
+                m->lam[s] += inc, m->lam_last[s] = inc;
+                k = dlam / len;
+            } else if (len > 0.0f) {
+                k = m->coef[s] * (len - m->rest[s]) / len;
+            }
             for (int i = 0; i < 3; i++) total[3 * a + i] += d[i] * k, total[3 * b + i] -= d[i] * k;
         }
         for (int p = 0; p < m->n; p++) {

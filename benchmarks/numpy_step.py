@@ -93,7 +93,7 @@ class NumpyVerlet:
         self.relaxation = F32(cfg.relaxation)
         # elastic sticks (XPBD): compliance over dt^2 [1/kg], as the projector computes it (zero for rigid sticks)
         compliance = solver.projector.stick_compliance.numpy()[: m.stick_count]
-        self.alpha = compliance * F32(1.0 / (sim.dt * sim.dt)) if np.any(compliance > 0) else compliance * F32(0)
+        self.alpha = compliance * F32(1.0 / (sim.dt * sim.dt))
         self.elastic = self.alpha > 0
         self.damping = F32(cfg.damping)
         self.omegas = [F32(w) for w in chebyshev_weights(cfg.iterations, cfg.chebyshev)]

@@ -26,6 +26,7 @@ from warpsim.scene import descriptor
         ("kite", {}, 3, 1e-6),  # its sail's cloth sticks are elastic (XPBD)
         ("kite", {"kite": {"sail_compliance": 0.0}}, 3, 1e-6),  # rigid cloth
         ("kite", {"solver": {"chebyshev": 0.0, "relaxation": 1.5}}, 30, 1e-6),  # elastic, over-relaxed
+        ("kite", {"solver": {"relaxation": 1.5}}, 30, 1e-6),  # elastic, over-relaxed and Chebyshev-accelerated
         ("kite", {"kite": {"design": "paper"}}, 3, 1e-6),
         ("parachute", {}, 3, 1e-6),  # it starts at 400 m: float64 positions keep every step there too
         ("parachute", {"parachute": {"canopy": "paper"}}, 3, 1e-6),  # the paper's per-triangle air

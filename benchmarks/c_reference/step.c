@@ -4,8 +4,8 @@
  * plate or sail law, and drag bodies), Verlet with damping, K Jacobi iterations of the averaged stick corrections
  * (with the model's per-stick coefficients and per-particle scales, so mass splitting and stick weights are the
  * model's; Chebyshev weights per iteration; elastic sticks as XPBD; the increments carried apart from the starting
- * positions), nails,
- * the momentum the projection moved given back to each free world (warpsim.physics.kernels.momentum; solver.keep_momentum),
+ * positions), nails, the momentum the projection moved given back to each free world
+ * (warpsim.physics.kernels.momentum; solver.keep_momentum),
  * and the terrain (bilinear heightfield, normal push-out with friction, or a clamp).
  *
  * Precision, as warpsim's kernels: positions, previous positions, nail targets and the projection's origins are

@@ -689,6 +689,24 @@ def solver_stiffness(dt: float, iterations: int, rho: float) -> float:
     return math.sqrt(jacobi_equivalent_iterations(int(iterations), float(rho))) / float(dt)
 
 
+def _kite_flight_row(case: str, what: str, r: dict, note: str) -> Row:
+    """A row of issue 35's kite flight band for the flight ``r`` (:func:`kite_flight`): line 40-70° at the anchor,
+    steady within 5°, less than 5 m to the side."""
+    return Row(
+        case,
+        what,
+        "line 40-70°, drift under 5 m, steady",
+        "single-line deltas fly high and steady across roughly 3-10 m/s (issue 35's band)",
+        f"{r['angle_min']:.1f}-{r['angle_max']:.1f}°, drift {r['drift']:.1f} m",
+        "40-70°, within 5° of itself, drift < 5 m",
+        40.0 <= r["angle_min"]
+        and r["angle_max"] <= 70.0
+        and r["angle_max"] - r["angle_min"] < 5.0
+        and r["drift"] < 5.0,
+        note=f"angle of attack {r['alpha']:.1f}°, C_L {r['lift']:.2f}{note}",
+    )
+
+
 def kite_flight_rows() -> list[Row]:
     """Issue 35: the kite's sail trim and lift at 6 m/s, its line and drift launched in 3, 6 and 10 m/s at the
     defaults, at dt halved with the iterations doubled and at dt quartered with four times the iterations
@@ -734,45 +752,28 @@ def kite_flight_rows() -> list[Row]:
             r = runs[(w, dt, its)]
             deep_stall = r["alpha"] > 18.0  # beyond the sail's stall angle
             rows.append(
-                Row(
+                _kite_flight_row(
                     f"kite in {w:g} m/s, {_steps_label(dt, its)}",
                     "launched in that wind: line elevation at the anchor and the largest sideways drift, 20-40 s",
-                    "line 40-70°, drift under 5 m, steady",
-                    "single-line deltas fly high and steady across roughly 3-10 m/s (issue 35's band)",
-                    f"{r['angle_min']:.1f}-{r['angle_max']:.1f}°, drift {r['drift']:.1f} m",
-                    "40-70°, within 5° of itself, drift < 5 m",
-                    40.0 <= r["angle_min"]
-                    and r["angle_max"] <= 70.0
-                    and r["angle_max"] - r["angle_min"] < 5.0
-                    and r["drift"] < 5.0,
-                    note=f"angle of attack {r['alpha']:.1f}°, C_L {r['lift']:.2f}"
-                    + (
-                        f"; a stall (the sail's stall angle is 18°, its trim in {w:g} m/s at the defaults "
-                        f"{runs[(w, *KITE_STEPS[0])]['alpha']:.1f}°): as the constraints converge the weight's moment "
-                        "about the tow point (centre of mass at ~2/3 of the chord) tips the light-wind trim over "
-                        "the stall (row 'kite in 3 m/s, beyond the ladder')"
-                        if deep_stall
-                        else ""
-                    ),
+                    r,
+                    f"; a stall (the sail's stall angle is 18°, its trim in {w:g} m/s at the defaults "
+                    f"{runs[(w, *KITE_STEPS[0])]['alpha']:.1f}°): as the constraints converge the weight's moment "
+                    "about the tow point (centre of mass at ~2/3 of the chord) tips the light-wind trim over "
+                    "the stall (row 'kite in 3 m/s, beyond the ladder')"
+                    if deep_stall
+                    else "",
                 )
             )
     past = (KITE_STEPS[-1][0] / 2.0, KITE_STEPS[-1][1])  # dt/8 with four times the iterations
     r = kite_flight(3.0, past[0], iterations=past[1])
     trims = ", ".join(f"{runs[(3.0, *step)]['alpha']:.1f}" for step in KITE_STEPS)
     rows.append(
-        Row(
+        _kite_flight_row(
             "kite in 3 m/s, beyond the ladder",
             f"the row 'kite in 3 m/s, {_steps_label(*KITE_STEPS[-1])}' at {_steps_label(*past)}: whether the finest "
             "rung stands for the limit",
-            "line 40-70°, drift under 5 m, steady",
-            "single-line deltas fly high and steady across roughly 3-10 m/s (issue 35's band)",
-            f"{r['angle_min']:.1f}-{r['angle_max']:.1f}°, drift {r['drift']:.1f} m",
-            "40-70°, within 5° of itself, drift < 5 m",
-            40.0 <= r["angle_min"]
-            and r["angle_max"] <= 70.0
-            and r["angle_max"] - r["angle_min"] < 5.0
-            and r["drift"] < 5.0,
-            note=f"angle of attack {r['alpha']:.1f}°, C_L {r['lift']:.2f}; over the ladder the light-wind trim rises "
+            r,
+            "; over the ladder the light-wind trim rises "
             f"{trims}° towards the sail's 18° stall, and here it is over it. The cloth stretches only 0.01-0.02 % "
             "on average in flight, yet its stiffness (kite.sail_compliance) tips the trim: here 3e-5 and 4e-5 m/N "
             "stall too (24.3°, 24.0°), 6e-5 flies 1° under the stall (17.1°), all within nylon ripstop's cited "

@@ -14,6 +14,22 @@ if os.environ.get("CI"):
 wp.config.log_level = wp.LOG_WARNING
 
 
+def pytest_configure(config):
+    """With worker processes (``-n auto``, pytest-xdist), the controller compiles every kernel module into Warp's
+    cache before the workers start: on a cold cache the workers would otherwise compile the same modules side by
+    side, inside tests that time a simulation's start-up."""
+    if getattr(config, "workerinput", None) is not None or not config.getoption("numprocesses", default=None):
+        return
+    import importlib
+    import pkgutil
+
+    from warpsim.physics import kernels
+    from warpsim.physics.solver import load_modules
+
+    modules = [importlib.import_module(f"{kernels.__name__}.{m.name}") for m in pkgutil.iter_modules(kernels.__path__)]
+    load_modules(modules, "cpu")
+
+
 DEVICES = ["cpu"] + (["cuda"] if wp.is_cuda_available() else [])
 """Every Warp device of this machine: tests taking ``device`` run on each (CUDA runs the gather scheme and graph
 capture on a GPU)."""

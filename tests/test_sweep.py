@@ -208,7 +208,10 @@ def test_a_case_that_blows_up_is_a_row_and_leaves_its_chunk_mates_alone():
     calm, storm = together
     assert not calm["blew_up"] and math.isnan(calm["blowup_time"]) and calm["blowup_reason"] == ""
     assert storm["blew_up"] and 0 < storm["blowup_time"] <= 1.0
-    assert "stretched" in storm["blowup_reason"] and "max_stretch" in storm["blowup_reason"]
+    # the storm tears the kite within its first frames: a stick past solver.max_stretch, or, when the first frame
+    # already finds the positions overflowed (60 m/s with the default elastic cloth), a non-finite particle
+    reason = storm["blowup_reason"]
+    assert ("stretched" in reason and "max_stretch" in reason) or "non-finite" in reason, reason
     assert math.isnan(storm["altitude_mean"]) and storm["window_frames"] == 0
     alone = [sweeps.run_chunk(task)[0] for task in plan.chunks(1)]
     _same(pd.DataFrame([alone[0]]), pd.DataFrame([calm]))  # the storm's world did not disturb its neighbour

@@ -20,14 +20,11 @@ def pytest_configure(config):
     side, inside tests that time a simulation's start-up."""
     if getattr(config, "workerinput", None) is not None or not config.getoption("numprocesses", default=None):
         return
-    import importlib
-    import pkgutil
-
     from warpsim.physics import kernels
+    from warpsim.physics.kernels import frame
     from warpsim.physics.solver import load_modules
 
-    modules = [importlib.import_module(f"{kernels.__name__}.{m.name}") for m in pkgutil.iter_modules(kernels.__path__)]
-    load_modules(modules, "cpu")
+    load_modules((*kernels.MODULES, frame), "cpu")
 
 
 DEVICES = ["cpu"] + (["cuda"] if wp.is_cuda_available() else [])

@@ -774,7 +774,8 @@ def kite_flight_rows() -> list[Row]:
             "rung stands for the limit",
             r,
             "; over the ladder the light-wind trim rises "
-            f"{trims}° towards the sail's 18° stall, and here it is over it. The cloth stretches only 0.01-0.02 % "
+            f"{trims}° towards the sail's 18° stall{', and here it is over it' if r['alpha'] > 18.0 else ''}. The "
+            "cloth stretches only 0.01-0.02 % "
             "on average in flight, yet its stiffness (kite.sail_compliance) tips the trim: here 3e-5 and 4e-5 m/N "
             "stall too (24.3°, 24.0°), 6e-5 flies 1° under the stall (17.1°), all within nylon ripstop's cited "
             "range (about 2.7e-5 to 6.3e-5 per stick, docs/objects.md); 1e-4 flies at 0.625 ms/440 (16.4°), and "

@@ -78,8 +78,8 @@ class KiteConfig(Checked):
             3 m/s kite flies at 1.25 ms/220 (16.9 deg) but stalls at 0.625 ms/220 (24 deg): its trim rises towards
             the 18 deg stall as the steps are refined; there 3e-5 and 4e-5 stall too, 6e-5 flies 1 deg under the
             stall (17.1 deg), and 1e-5 and 2e-5 stall at 1.25 ms/220 already. With a 0.5 deg crosswind in 6 m/s at
-            0.625 ms/220 the kite settles 1.9 m to one side after ~15 s, where 2e-5, 4e-5, 6e-5 and the other
-            values tried from 1e-6 to 3e-4 stay centred (rigid cloth: 10.7 m to one side).
+            0.625 ms/220 the kite settles 1.9 m to one side after ~15 s, where 2e-5, 4e-5, 4.5e-5, 5.5e-5 and
+            6e-5 stay centred (rigid cloth: 10.7 m to one side).
         straight_spars: tie every leading-edge particle to the one two rows back, so the leading edges stay
             straight rods (not in the paper; without them they bow and stretch ~1.7 % in steady flight).
         rope_length: tow point to anchor [m].

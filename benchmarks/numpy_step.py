@@ -313,9 +313,9 @@ class NumpyVerlet:
             d = _f32(x[b] - x[a])
             length = _length(d)
             safe = np.where(length > 0, length, F32(1.0))
-            factor = self.coef * (length - self.rest) / safe
+            stretch = length - self.rest
+            factor = self.coef * stretch / safe
             if self.elastic.any():
-                stretch = length - self.rest
                 dlam = self.coef * (stretch - self.alpha * lam) / (F32(1.0) + self.alpha * self.coef)
                 factor = np.where(self.elastic, dlam / safe, factor)
                 step_lam = self.relaxation * dlam

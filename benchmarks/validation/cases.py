@@ -712,6 +712,9 @@ def kite_flight_rows() -> list[Row]:
     defaults, at dt halved with the iterations doubled and at dt quartered with four times the iterations
     (:data:`KITE_STEPS`), and the line's pull at the anchor against the force balance."""
     rows = []
+    kite = descriptor.defaults("kite")["kite"]
+    stall = kite["stall_angle"]  # [deg] the sail's
+    compliance = f"{kite['sail_compliance']:.0e}".replace("e-0", "e-")  # [m/N], as the docs write it: 5e-5
     runs = {(w, dt, its): kite_flight(w, dt, iterations=its) for w in KITE_WINDS for dt, its in KITE_STEPS}
     six = runs[(6.0, *KITE_STEPS[0])]
     fine, finest = (runs[(6.0, *step)] for step in KITE_STEPS[1:])
@@ -750,13 +753,13 @@ def kite_flight_rows() -> list[Row]:
     for w in KITE_WINDS:
         for dt, its in KITE_STEPS:
             r = runs[(w, dt, its)]
-            deep_stall = r["alpha"] > 18.0  # beyond the sail's stall angle
+            deep_stall = r["alpha"] > stall
             rows.append(
                 _kite_flight_row(
                     f"kite in {w:g} m/s, {_steps_label(dt, its)}",
                     "launched in that wind: line elevation at the anchor and the largest sideways drift, 20-40 s",
                     r,
-                    f"; a stall (the sail's stall angle is 18°, its trim in {w:g} m/s at the defaults "
+                    f"; a stall (the sail's stall angle is {stall:g}°, its trim in {w:g} m/s at the defaults "
                     f"{runs[(w, *KITE_STEPS[0])]['alpha']:.1f}°): as the constraints converge the weight's moment "
                     "about the tow point (centre of mass at ~2/3 of the chord) tips the light-wind trim over "
                     "the stall (row 'kite in 3 m/s, beyond the ladder')"
@@ -773,9 +776,9 @@ def kite_flight_rows() -> list[Row]:
             f"the row 'kite in 3 m/s, {_steps_label(*KITE_STEPS[-1])}' at {_steps_label(*past)}: whether the finest "
             "rung stands for the limit",
             r,
-            "; over the ladder the light-wind trim rises "
-            f"{trims}° towards the sail's 18° stall{', and here it is over it' if r['alpha'] > 18.0 else ''}. The "
-            "cloth stretches only 0.01-0.02 % "
+            f"; over the ladder the light-wind trim rises {trims}° towards the sail's {stall:g}° stall"
+            + (", and here it is over it" if r["alpha"] > stall else "")
+            + ". The cloth stretches only 0.01-0.02 % "
             "on average in flight, yet its stiffness (kite.sail_compliance) tips the trim: here 3e-5 and 4e-5 m/N "
             "stall too (24.3°, 24.0°), 6e-5 flies 1° under the stall (17.1°), all within nylon ripstop's cited "
             "range (about 2.7e-5 to 6.3e-5 per stick, docs/objects.md); 1e-4 flies at 0.625 ms/440 (16.4°), and "
@@ -804,7 +807,7 @@ def kite_flight_rows() -> list[Row]:
             + ", ".join(f"{w:.2f}" for w in worst)
             + " m; line at the anchor "
             + ", ".join(f"{r['angles'][-1]:.1f}°" for r in side.values())
-            + ". The sail's cloth is elastic (kite.sail_compliance, 5e-5 m/N by default), so the iterations "
+            + f". The sail's cloth is elastic (kite.sail_compliance, {compliance} m/N by default), so the iterations "
             "converge to cloth of that stiffness at every step. At the default the two finest rungs leave the "
             "centre after ~15 s for a steady flight 1.9 m to one side (+1.90 m at 0.625 ms/220 to 60 s; -1.64 m "
             "at 0.3125 ms/110, against the crosswind: the side is the rounding's), a second, lopsided steady "

@@ -101,8 +101,10 @@ def test_solver_refuses_bad_chebyshev(device):
 
 @pytest.mark.parametrize("iterations", [1, 20, 55])
 def test_schemes_agree_and_repeat_bit_for_bit(device, iterations, project):
-    """fused and scatter do the same float operations in the same order (bit-identical); gather differs
-    only in the order of float additions. Each repeats itself exactly. A moved nail is honoured by all."""
+    """On the CPU fused and scatter do the same float operations in the same order (bit-identical); gather differs
+    only in the order of float additions. On CUDA scatter's atomics add in the order the threads arrive, so there it
+    agrees with the others to float rounding (seen on an H200: 2e-8 m) and need not repeat itself; fused (one thread)
+    and gather (no atomics) repeat themselves exactly on every device. A moved nail is honoured by all."""
     m = _mesh(np.random.default_rng(11), device, nail_first=True)
     results = {}
     for scheme in ("fused", "scatter", "gather"):
@@ -112,10 +114,13 @@ def test_schemes_agree_and_repeat_bit_for_bit(device, iterations, project):
             c.nail_target.assign(np.array([m.nail_target0[0] + (0.3, -0.2, 0.1)], dtype=np.float32))
             project(m, s, c, iterations, mass_splitting=True, chebyshev=0.9, scheme=scheme)
             runs.append(s.positions())
-        np.testing.assert_array_equal(runs[0], runs[1])
+        if device == "cpu" or scheme != "scatter":
+            np.testing.assert_array_equal(runs[0], runs[1])
         np.testing.assert_allclose(runs[0][0], m.nail_target0[0] + (0.3, -0.2, 0.1), atol=1e-6)  # on its nail
         results[scheme] = runs[0]
-    np.testing.assert_array_equal(results["fused"], results["scatter"])
+    if device == "cpu":
+        np.testing.assert_array_equal(results["fused"], results["scatter"])
+    np.testing.assert_allclose(results["fused"], results["scatter"], atol=2e-6)
     np.testing.assert_allclose(results["scatter"], results["gather"], atol=2e-6)
     assert np.abs(results["scatter"] - m.particle_q0).max() > 1e-3  # it did move
 
@@ -129,17 +134,24 @@ def test_unknown_scheme_is_refused(device):
 def test_graph_captured_fused_solver_matches_scatter_across_the_allowed_range(device, iterations):
     """The whole allowed range of ``solver.iterations`` (1..10000): the captured fused step (the CPU default) gives
     the positions of the scatter scheme launched kernel by kernel, bit for bit (at 256 and more the fused scheme
-    once read Chebyshev weights made during the capture and turned every position to NaN at step 3)."""
+    once read Chebyshev weights made during the capture and turned every position to NaN at step 3). On CUDA,
+    where scatter's atomics add in a varying order, the captured fused step gives the fused step launched without a
+    graph bit for bit, and scatter's to float rounding (seen on an H200: 1.2e-6 m after 4 steps of 10000 iterations,
+    2.4 float32 steps of a 5 m coordinate)."""
     results = {}
-    for scheme, use_graph in (("fused", True), ("scatter", False)):
+    for scheme, use_graph in (("fused", True), ("scatter", False), ("fused", False)):
         m = _mesh(np.random.default_rng(5), device, nail_first=True)
         solver = ws.SolverVerlet(m, iterations=iterations, use_graph=use_graph, constraint_scheme=scheme)
         s, c = m.state(), m.control()
         for _ in range(4):
             solver.step(s, c, 0.01)
-        results[scheme] = s.positions()
-    assert np.isfinite(results["fused"]).all()
-    np.testing.assert_array_equal(results["fused"], results["scatter"])
+        results[scheme, use_graph] = s.positions()
+    captured = results["fused", True]
+    assert np.isfinite(captured).all()
+    if device == "cpu":
+        np.testing.assert_array_equal(captured, results["scatter", False])
+    np.testing.assert_allclose(captured, results["scatter", False], atol=5e-6)
+    np.testing.assert_array_equal(captured, results["fused", False])
 
 
 @pytest.mark.parametrize("scheme", ["fused", "scatter", "gather"])

@@ -35,7 +35,9 @@ Three schemes, one class each (:class:`FusedProjector`, :class:`ScatterProjector
   per-particle records; per step only the rest lengths (a control) are copied in. A CPU launch runs serially
   anyway, so this is one launch per step instead of two per iteration.
 - ``scatter``: the same two passes as two launches per iteration, one thread per stick then one per
-  particle. It gives bit-identical results to ``fused`` (same float operations in the same order).
+  particle. On the CPU it gives bit-identical results to ``fused`` (same float operations in the same order); on
+  CUDA its atomics add in the order the threads arrive, so it agrees with ``fused`` to float rounding and may
+  differ from run to run in the last bits.
 - ``gather`` (the default on CUDA, where concurrent float atomics would add in a varying order): one
   thread per particle walks its sticks through a CSR adjacency (no atomics), measuring each stick from
   its own end, and writes the next iterate into a second buffer (ping-pong). Each stick is

@@ -40,7 +40,7 @@ GROUND = {"terrain": {"kind": "procedural", "amplitude": 5.0}, "flag": {"pole_he
         ("kite", {}, 3),  # a nail (the rope's anchor), the sail's elastic cloth sticks (XPBD)
         ("kite", {}, 30),
         ("kite", {"solver": {"relaxation": 1.5}}, 30),  # elastic, over-relaxed and Chebyshev-accelerated
-        ("kite", {"kite": {"sail_compliance": 0.0}}, 30),  # rigid cloth, the paper's sticks
+        ("kite", {"kite": {"sail_compliance": 0.0, "frame_compliance": 0.0}}, 30),  # rigid, the paper's sticks
         ("parachute", PAPER_CANOPY, 3),  # 400 m up
         ("parachute", PAPER_CANOPY, 30),
         ("flag", GROUND, 3),  # 6 particles on sloped terrain: normal push-out with friction

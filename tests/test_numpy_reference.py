@@ -24,7 +24,7 @@ from warpsim.scene import descriptor
         ("hang-glider", {"hang_glider": {"design": "paper"}}, 3, 1e-6),
         ("hang-glider", {"solver": {"keep_momentum": False}}, 3, 1e-6),
         ("kite", {}, 3, 1e-6),  # its sail's cloth sticks are elastic (XPBD)
-        ("kite", {"kite": {"sail_compliance": 0.0}}, 3, 1e-6),  # rigid cloth
+        ("kite", {"kite": {"sail_compliance": 0.0, "frame_compliance": 0.0}}, 3, 1e-6),  # rigid sticks
         ("kite", {"solver": {"chebyshev": 0.0, "relaxation": 1.5}}, 30, 1e-6),  # elastic, over-relaxed
         ("kite", {"solver": {"relaxation": 1.5}}, 30, 1e-6),  # elastic, over-relaxed and Chebyshev-accelerated
         ("kite", {"kite": {"design": "paper"}}, 3, 1e-6),

@@ -8,10 +8,12 @@ the anchor every 5 s.
 A laterally stable, symmetric kite follows a 0.5° crosswind by its reach times the wind's angle (about 0.13 m);
 the validation row "kite in 6 m/s, 0.5° crosswind, time step" reports the same runs. About 40 s on 2 cores for
 the default rungs. Each line also gives the rung's ``sqrt(k) / dt``, ``k`` the plain Jacobi iterations its
-iterations are worth (``cases.solver_stiffness``): with rigid cloth (``--set kite.sail_compliance=0``) the 6 m/s
-kite stays centred up to about 55k /s and goes to one side from about 58k /s, with or without Chebyshev acceleration;
-with elastic cloth it stays centred at these steps for every stiffness tried but those near the default (4.999e-5
-to 5.001e-5 m/N), which settle 1.6-1.9 m to one side after ~15 s at 0.625 ms/220 and 0.3125 ms/110 (docs/objects.md).
+iterations are worth (``cases.solver_stiffness``): with rigid sticks (``--set kite.sail_compliance=0 --set
+kite.frame_compliance=0``, the paper's) the 6 m/s kite stays centred up to about 55k /s and goes to one side from about
+58k /s, with or without Chebyshev acceleration; with elastic cloth on a rigid frame it stayed centred at these steps
+for every cloth stiffness tried but those near 5e-5 m/N (4.999e-5 to 5.001e-5), which settled 1.6-1.9 m to one side
+after ~15 s at 0.625 ms/220 and 0.3125 ms/110; with the frame elastic too (the defaults) it stays centred at every
+rung (docs/objects.md).
 """
 
 from __future__ import annotations

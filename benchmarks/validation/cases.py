@@ -716,7 +716,7 @@ def kite_flight_rows() -> list[Row]:
     kite = descriptor.defaults("kite")["kite"]
     stall = kite["stall_angle"]  # [deg] the sail's
     compliance = f"{kite['sail_compliance']:.0e}".replace("e-0", "e-")  # [m/N], as the docs write it: 5e-5
-    frame = f"{kite['frame_compliance']:.0e}".replace("e-0", "e-")  # [m/N]: 1e-5
+    frame = f"{kite['frame_compliance']:.0e}".replace("e-0", "e-")  # [m/N]: 1e-4
     runs = {(w, dt, its): kite_flight(w, dt, iterations=its) for w in KITE_WINDS for dt, its in KITE_STEPS}
     six = runs[(6.0, *KITE_STEPS[0])]
     fine, finest = (runs[(6.0, *step)] for step in KITE_STEPS[1:])

@@ -574,9 +574,12 @@ def kite_scene(
     return descriptor.merge("overrides", d, overrides) if overrides else d
 
 
-def kite_flight(wind: float, dt: float = 0.005, seconds: float = 40.0, iterations: int | None = None) -> dict:
-    """The default kite launched in a steady ``wind`` [m/s] at the time step ``dt`` [s] (and ``iterations``
-    constraint iterations, the default's when None), measured from the particles
+def kite_flight(
+    wind: float, dt: float = 0.005, seconds: float = 40.0, iterations: int | None = None, overrides: dict | None = None
+) -> dict:
+    """The default kite (with ``overrides``, a descriptor fragment, merged last) launched in a steady ``wind`` [m/s]
+    at the time step ``dt`` [s] (and ``iterations`` constraint iterations, the default's when None), measured from
+    the particles
     over the second half of ``seconds``: line elevation at the anchor [deg] (``angle_min``, ``angle_max``), the tow
     point's sideways drift from the anchor's downwind line [m] (``drift``: the largest), the sail's angle of attack
     [deg] (``alpha``: of its area-weighted mean normal to the wind), its lift and drag coefficients on the flat sail
@@ -584,7 +587,7 @@ def kite_flight(wind: float, dt: float = 0.005, seconds: float = 40.0, iteration
     line's pull at the anchor from the rope's sag [N] (``pull``, :func:`~warpsim.objects.kite.anchor_pull`) and the
     force balance it must equal in steady flight, ``|air force on every particle - weight of kite and rope|`` [N]
     (``balance``)."""
-    d = kite_scene(wind, dt, iterations)
+    d = kite_scene(wind, dt, iterations, overrides=overrides)
     sim = Simulation(d)
     record, model = sim.model.objects[0], sim.model
     sail = model.tri_indices_np[np.asarray(record.tri_parts["sail"])]
@@ -708,6 +711,10 @@ def _kite_flight_row(case: str, what: str, r: dict, note: str) -> Row:
     )
 
 
+CLOTH_RANGE = (2.7e-5, 6.3e-5)
+"""The sail's cloth stiffness [m/N per stick] at either end of what its sources allow (``sail_compliance``)."""
+
+
 def kite_flight_rows() -> list[Row]:
     """Issue 35: the kite's sail trim and lift at 6 m/s, its line and drift launched in 3, 6 and 10 m/s at the
     defaults, at dt halved with the iterations doubled and at dt quartered with four times the iterations
@@ -786,6 +793,36 @@ def kite_flight_rows() -> list[Row]:
             "2e-6 stalls (22.1°). The kite's cloth is elastic too (kite.sail_compliance), with a stiffness its "
             "sources give to within a factor of two: with this frame, cloth of 2e-5 to 6e-5 m/N flies here at "
             "15.9-16.7°; with a frame of 1e-5, 2e-5 to 4e-5 stall (docs/objects.md, the kite's limits)",
+        )
+    )
+    # the same flight with the sail's cloth at either end of the stiffness its sources allow (docs/objects.md, the
+    # kite's limits: 18-37 kN/m of sheet, about 2.7e-5 to 6.3e-5 m/N per stick)
+    ends = {
+        c: kite_flight(3.0, past[0], iterations=past[1], overrides={"kite": {"sail_compliance": c}})
+        for c in CLOTH_RANGE
+    }
+    rows.append(
+        Row(
+            "kite in 3 m/s, beyond the ladder, cloth range",
+            "the row 'kite in 3 m/s, beyond the ladder' with the sail's cloth at "
+            + " and ".join(f"{c:g}" for c in CLOTH_RANGE)
+            + " m/N, the ends of the stiffness its sources allow",
+            "line 40-70°, drift under 5 m, steady",
+            "single-line deltas fly high and steady across roughly 3-10 m/s (issue 35's band); nylon ripstop's secant "
+            "to break, 18-37 kN/m of sheet (MIL-C-7020H Type I's strength, 20-40 % elongation: docs/objects.md)",
+            "; ".join(f"{r['angle_min']:.1f}-{r['angle_max']:.1f}°, drift {r['drift']:.1f} m" for r in ends.values()),
+            "40-70°, within 5° of itself, drift < 5 m, at both",
+            all(
+                40.0 <= r["angle_min"]
+                and r["angle_max"] <= 70.0
+                and r["angle_max"] - r["angle_min"] < 5.0
+                and r["drift"] < 5.0
+                for r in ends.values()
+            ),
+            note="angle of attack "
+            + ", ".join(f"{r['alpha']:.1f}°" for r in ends.values())
+            + f" (the sail stalls at {stall:g}°); with a frame of 1e-5 m/N instead of the default {frame}, cloth of "
+            "2e-5 to 4e-5 m/N stalled the kite here (docs/objects.md)",
         )
     )
     side = {step: kite_crosswind_offset(6.0, KITE_CROSSWIND, *step) for step in KITE_CROSSWIND_STEPS}

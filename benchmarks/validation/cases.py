@@ -693,22 +693,36 @@ def solver_stiffness(dt: float, iterations: int, rho: float) -> float:
     return math.sqrt(jacobi_equivalent_iterations(int(iterations), float(rho))) / float(dt)
 
 
+def _in_flight_band(r: dict) -> bool:
+    """Issue 35's kite flight band for the flight ``r`` (:func:`kite_flight`): line 40-70° at the anchor, steady
+    within 5°, less than 5 m to the side."""
+    return (
+        40.0 <= r["angle_min"] and r["angle_max"] <= 70.0 and r["angle_max"] - r["angle_min"] < 5.0 and r["drift"] < 5.0
+    )
+
+
+def _flight_measured(r: dict) -> str:
+    """The flight ``r``'s line and drift as its row writes them."""
+    return f"{r['angle_min']:.1f}-{r['angle_max']:.1f}°, drift {r['drift']:.1f} m"
+
+
 def _kite_flight_row(case: str, what: str, r: dict, note: str) -> Row:
-    """A row of issue 35's kite flight band for the flight ``r`` (:func:`kite_flight`): line 40-70° at the anchor,
-    steady within 5°, less than 5 m to the side."""
+    """A row of issue 35's kite flight band (:func:`_in_flight_band`) for the flight ``r``."""
     return Row(
         case,
         what,
         "line 40-70°, drift under 5 m, steady",
         "single-line deltas fly high and steady across roughly 3-10 m/s (issue 35's band)",
-        f"{r['angle_min']:.1f}-{r['angle_max']:.1f}°, drift {r['drift']:.1f} m",
+        _flight_measured(r),
         "40-70°, within 5° of itself, drift < 5 m",
-        40.0 <= r["angle_min"]
-        and r["angle_max"] <= 70.0
-        and r["angle_max"] - r["angle_min"] < 5.0
-        and r["drift"] < 5.0,
+        _in_flight_band(r),
         note=f"angle of attack {r['alpha']:.1f}°, C_L {r['lift']:.2f}{note}",
     )
+
+
+def _compliance_label(compliance: float) -> str:
+    """A compliance [m/N] as the docs write it: 5e-5."""
+    return f"{compliance:.0e}".replace("e-0", "e-")
 
 
 CLOTH_RANGE = (2.7e-5, 6.3e-5)
@@ -722,8 +736,7 @@ def kite_flight_rows() -> list[Row]:
     rows = []
     kite = descriptor.defaults("kite")["kite"]
     stall = kite["stall_angle"]  # [deg] the sail's
-    compliance = f"{kite['sail_compliance']:.0e}".replace("e-0", "e-")  # [m/N], as the docs write it: 5e-5
-    frame = f"{kite['frame_compliance']:.0e}".replace("e-0", "e-")  # [m/N]: 1e-4
+    compliance, frame = _compliance_label(kite["sail_compliance"]), _compliance_label(kite["frame_compliance"])
     runs = {(w, dt, its): kite_flight(w, dt, iterations=its) for w in KITE_WINDS for dt, its in KITE_STEPS}
     six = runs[(6.0, *KITE_STEPS[0])]
     fine, finest = (runs[(6.0, *step)] for step in KITE_STEPS[1:])
@@ -810,15 +823,9 @@ def kite_flight_rows() -> list[Row]:
             "line 40-70°, drift under 5 m, steady",
             "single-line deltas fly high and steady across roughly 3-10 m/s (issue 35's band); nylon ripstop's secant "
             "to break, 18-37 kN/m of sheet (MIL-C-7020H Type I's strength, 20-40 % elongation: docs/objects.md)",
-            "; ".join(f"{r['angle_min']:.1f}-{r['angle_max']:.1f}°, drift {r['drift']:.1f} m" for r in ends.values()),
+            "; ".join(_flight_measured(r) for r in ends.values()),
             "40-70°, within 5° of itself, drift < 5 m, at both",
-            all(
-                40.0 <= r["angle_min"]
-                and r["angle_max"] <= 70.0
-                and r["angle_max"] - r["angle_min"] < 5.0
-                and r["drift"] < 5.0
-                for r in ends.values()
-            ),
+            all(_in_flight_band(r) for r in ends.values()),
             note="angle of attack "
             + ", ".join(f"{r['alpha']:.1f}°" for r in ends.values())
             + f" (the sail stalls at {stall:g}°); with a frame of 1e-5 m/N instead of the default {frame}, cloth of "

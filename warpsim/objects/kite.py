@@ -382,6 +382,9 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     cloth = np.setdiff1d(sail_sticks, spars.sticks)  # the sail's own cloth sticks, without the frame's
     if cfg.sail_compliance > 0.0:
         builder.set_compliance(cloth, cfg.sail_compliance)
+    if cfg.frame_compliance > 0.0:
+        # the spars and the keel elastic: with rigid ties every finer step would fly a stiffer kite
+        builder.set_compliance([*spars.sticks, *keel_sticks], cfg.frame_compliance)
     if cfg.tail_drag > 0.0:
         builder.set_drag_area(spars.keel[-1], cfg.tail_drag)
     if cfg.billow > 0.0:
@@ -392,9 +395,6 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     for s in rope_sticks[: cfg.rope_doubled]:
         builder.stick_weight[s] = 2.0
     nail = builder.add_nail(rope[-1], anchor)
-    if cfg.frame_compliance > 0.0:
-        # the spars and the keel elastic: with rigid ties every finer step would fly a stiffer kite
-        builder.set_compliance([*spars.sticks, *keel_sticks], cfg.frame_compliance)
 
     return builder.add_object(
         KiteRecord(

@@ -80,6 +80,17 @@ def test_run_prints_the_flap_and_sweeps_have_its_frequency():
     with contextlib.redirect_stdout(text):
         assert main(["run", "flag", "--seconds", "10"]) == 0
     assert re.search(r"flag: .*flap ±[0-9.]+ m at [0-9.]+ Hz", text.getvalue()), text.getvalue()
+    # the figure is said to be the mesh's, naming the resolution it was run at (the validation's rows: 5 and 9
+    # converged in dt flap at f L/U 0.96 and 1.36)
+    assert "note: the flap's frequency and size are those of this mesh (resolution 5)" in text.getvalue()
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text):
+        assert main(["run", "flag", "--seconds", "6", "--set", "flag.resolution=9"]) == 0
+    assert "(resolution 9), not a real flag's" in text.getvalue(), text.getvalue()
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text):
+        assert main(["run", "parachute", "--seconds", "1"]) == 0
+    assert "note:" not in text.getvalue(), text.getvalue()
     assert "flap_frequency" in metrics_of("flag") and METRICS["flap_frequency"][0] == "Hz"
     assert "flap_frequency" not in metrics_of("kite")
 

@@ -38,6 +38,8 @@ class ObjectSpec:
         oscillations: those of its figures that swing about a mean, whose frequency over a window is measured too
             (``NAME_frequency`` [Hz], :class:`warpsim.run.figures.FigureWindow`), each with the least half-range
             (in the figure's unit) that counts as a swing.
+        caveat: ``caveat(descriptor) -> str | None``: what the run's closing figures are not, said under them
+            (e.g. a figure set by the mesh rather than by the object's physics); None when there is nothing to say.
     """
 
     config: type
@@ -52,6 +54,7 @@ class ObjectSpec:
     figures_need_air_force: bool = False
     hud: Callable | None = None
     oscillations: dict[str, float] = field(default_factory=dict)
+    caveat: Callable | None = None
 
     def __post_init__(self) -> None:
         # a design is applied on top of the default design's values: one that leaves out a key another design sets
@@ -76,6 +79,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         measure_figures=figures.flag_figures,
         hud=figures.flag_hud,
         oscillations={"flap": 0.01},  # a flap under 1 cm is jitter
+        caveat=figures.flag_caveat,
     ),
     "hang-glider": ObjectSpec(
         config=hang_glider.HangGliderConfig,

@@ -232,7 +232,9 @@ class FlightFigures:
             head = f"  {self.sim.model.objects[0].name}"
         else:
             head = f"  {count} worlds (mean, lowest to highest world)"
-        return [f"{head}: {', '.join(parts)} ({where})"]
+        caveat = registry.OBJECTS[self.kind].caveat
+        note = caveat(self.sim.descriptor) if caveat is not None else None
+        return [f"{head}: {', '.join(parts)} ({where})"] + ([f"  {note}"] if note else [])
 
 
 def swing_frequency(times: np.ndarray, values: np.ndarray, hysteresis: float = 0.25, least: float = 0.0) -> float:

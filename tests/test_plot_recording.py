@@ -53,7 +53,9 @@ def test_plot_png_has_a_line_per_panel(recording, tmp_path, capsys):
 
 def test_plot_recording_errors_are_one_line(recording, tmp_path, capsys):
     assert main(["plot", str(recording), str(tmp_path / "x.png"), "--metric", "glide"]) == 2
-    assert "a parachute recording has altitude, airspeed, sink, radius" in capsys.readouterr().err
+    assert "a parachute recording has no such figure; it has altitude, airspeed, sink" in capsys.readouterr().err
+    assert main(["plot", str(recording), str(tmp_path / "x.png"), "--metric", "radus"]) == 2
+    assert "(did you mean 'radius'?)" in capsys.readouterr().err
     assert main(["plot", str(recording), str(tmp_path / "x.png"), "--metric", "sink", "--x", "wind.speed"]) == 2
     assert "drawn against time" in capsys.readouterr().err
     assert main(["plot", str(tmp_path / "t.csv"), str(tmp_path / "x.png"), "--metric", "sink"]) == 2

@@ -352,7 +352,7 @@ def _picture(path: Path) -> np.ndarray:
         return np.asarray(image.convert("RGB")).astype(int)
 
 
-def test_plot_line_and_heat_map_from_the_table(tmp_path, reference):
+def test_plot_line_and_heat_map_from_the_table(tmp_path, reference, capsys):
     table = tmp_path / "s.parquet"
     reference.to_parquet(table)
     line, heat = tmp_path / "line.png", tmp_path / "heat.png"
@@ -373,6 +373,9 @@ def test_plot_line_and_heat_map_from_the_table(tmp_path, reference):
     assert main([*heat_map, "--metric", "altitude_mean"]) == 2
     assert main([*heat_map, "--metric", "altitude_mean", "--where", "wind.speed=8"]) == 0
     assert main(["plot", str(table), str(line), "--x", "kite.tow_point", "--metric", "glide_mean"]) == 2
+    # a mistyped metric is named back with the closest the table has, as mistyped scene keys are
+    assert main(["plot", str(table), str(line), "--x", "kite.tow_point", "--metric", "line_angel_mean"]) == 2
+    assert "(did you mean 'line_angle_mean'?)" in capsys.readouterr().err
 
 
 def test_the_api_is_exported():

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.builder import ModelBuilder, check_memory
-from ..physics.config import POSITIVE, Bounds, Checked, number
+from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, number
 from ..physics.model import ObjectRecord
 from ..physics.terrain import Heightfield
 
@@ -24,6 +24,13 @@ class FlagConfig(Checked):
             keeps every stick within 1% of its rest length (the scene steps finer, 1.25 ms with 110 iterations,
             so that its flapping does not depend on the step); finer cloth stretches more (see README).
         mass_per_area: fabric areal density [kg/m^2] (flag nylon ~0.1-0.2).
+        bending_stiffness: the cloth's bending stiffness ``B`` [N m] (per metre of width: ``E t^3 / 12`` for a
+            sheet of Young's modulus ``E`` and thickness ``t``), as hinges along the grid's rows and columns
+            (:mod:`warpsim.physics.kernels.bending`). 0, the default, is the paper's cloth, which folds freely;
+            its flapping is then set by the mesh (docs/objects.md). A flag's fabric has ~1e-5 to 1e-3, which
+            sets waves of centimetres, finer than these meshes; a stiffer sheet (0.03-0.1, a card or a 1 mm
+            plastic sheet) sets its waves at the flag's length, and its flapping converges as the mesh is
+            refined. Explicit: dt must stay under ``kernels.bending.stable_dt`` (a scene past it is refused).
         pole_height: height of the flag's top edge above the terrain at the pole's foot [m].
         position: (x, y) of the pole [m].
     """
@@ -32,11 +39,28 @@ class FlagConfig(Checked):
     height: float = number(1.2, POSITIVE)
     resolution: int = number(5, Bounds(2, 4096))
     mass_per_area: float = number(0.15, POSITIVE)
+    bending_stiffness: float = number(0.0, NON_NEGATIVE)
     pole_height: float = number(5.0, POSITIVE)
     position: tuple[float, float] = (0.0, 0.0)
 
 
 MAX_PARTICLES = 2048 * 2048  # a larger flag takes minutes to build and gigabytes to hold
+
+
+def add_plate_hinges(builder: ModelBuilder, ids: np.ndarray, du: float, dv: float, bending: float) -> None:
+    """Give a grid of particles ``ids`` (``[rows, columns]``, spacing ``du`` [m] along a row, ``dv`` [m] along a
+    column) a plate's bending stiffness ``bending`` [N m]: a hinge on every three particles in a row or a column,
+    of stiffness ``B w / h^3`` with ``h`` its spacing and ``w`` the width of the strip it stands for (half a
+    spacing on the grid's edges)."""
+    rows, columns = ids.shape
+    for j in range(rows):
+        width = dv * (0.5 if j in (0, rows - 1) else 1.0)
+        for i in range(1, columns - 1):
+            builder.add_hinge(ids[j, i - 1], ids[j, i], ids[j, i + 1], bending * width / du**3)
+    for i in range(columns):
+        width = du * (0.5 if i in (0, columns - 1) else 1.0)
+        for j in range(1, rows - 1):
+            builder.add_hinge(ids[j - 1, i], ids[j, i], ids[j + 1, i], bending * width / dv**3)
 
 
 def build_flag(builder: ModelBuilder, cfg: FlagConfig, terrain: Heightfield) -> ObjectRecord:
@@ -66,6 +90,8 @@ def build_flag(builder: ModelBuilder, cfg: FlagConfig, terrain: Heightfield) -> 
     )
     for j in range(count_v):
         builder.add_nail(int(ids[j, 0]))
+    if cfg.bending_stiffness > 0.0:
+        add_plate_hinges(builder, ids, cfg.width / (count_u - 1), cfg.height / (count_v - 1), cfg.bending_stiffness)
     particles = np.arange(p0, builder.particle_count)
     return builder.add_object(
         ObjectRecord(

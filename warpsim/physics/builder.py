@@ -10,6 +10,7 @@ import warp as wp
 
 from .config import AIR_DENSITY, GRAVITY
 from .kernels.aero import sail_coefficients
+from .kernels.bending import stable_dt
 from .memory import check_memory  # noqa: F401 - the objects' builders import it from here
 from .model import Model, ObjectRecord
 from .shapes import MeshShapes
@@ -47,6 +48,8 @@ class ModelBuilder(MeshShapes):
         self.stick_pretension: list[float] = []
         self.stick_compliance: list[float] = []
         self.tri_indices: list[tuple[int, int, int]] = []
+        self.hinge_particles: list[tuple[int, int, int]] = []
+        self.hinge_stiffness: list[float] = []
         self.tri_loading: list[float] = []
         self.tri_sail: list[tuple[float, float, float, float]] = []
         self.tri_span: list[tuple[int, int]] = []
@@ -241,6 +244,22 @@ class ModelBuilder(MeshShapes):
                 raise ValueError(f"triangle {t} does not exist")
             self.tri_loading[t] = _check_loading(value)
 
+    def add_hinge(self, a: int, m: int, b: int, stiffness: float) -> int:
+        """Add a bending hinge: particles ``a``, ``m``, ``b`` in a row, resisting their second difference
+        ``x_a - 2 x_m + x_b`` with ``stiffness`` [N/m] (``B w / h^3`` for a plate of bending stiffness ``B``
+        [N m], spacing ``h`` [m] and strip width ``w`` [m]; :mod:`warpsim.physics.kernels.bending`). Returns its
+        index."""
+        n = self.particle_count
+        ids = (int(a), int(m), int(b))
+        if not all(0 <= i < n for i in ids) or len(set(ids)) != 3:
+            raise ValueError(f"hinge {ids} needs three distinct particles among 0..{n - 1}")
+        stiffness = float(stiffness)
+        if not (np.isfinite(stiffness) and stiffness > 0.0):
+            raise ValueError(f"hinge {ids} stiffness must be positive and finite, got {stiffness}")
+        self.hinge_particles.append(ids)
+        self.hinge_stiffness.append(stiffness)
+        return len(self.hinge_particles) - 1
+
     def add_nail(self, i: int, target=None) -> int:
         """Fix particle ``i`` at ``target`` [m] (default: where it is); returns the nail index.
 
@@ -345,6 +364,17 @@ class ModelBuilder(MeshShapes):
         m.canopy_tri_owner = wp.array(owner, dtype=wp.int32, device=device)
         m.canopy_table = wp.array(table, dtype=wp.vec2, device=device)
         m.canopy_params = wp.array(params, dtype=wp.vec4, device=device)
+        hinges = np.array(self.hinge_particles, dtype=np.int32).reshape(-1, 3)
+        stiffness = np.array(self.hinge_stiffness, dtype=np.float32)
+        m.hinge_count = len(hinges)
+        m.hinge_particles_np = hinges
+        some = len(hinges) > 0  # a device array of at least one, as for the canopies
+        m.hinge_particles = wp.array(hinges if some else np.zeros((1, 3), np.int32), dtype=wp.vec3i, device=device)
+        m.hinge_stiffness = wp.array(stiffness if some else np.zeros(1, np.float32), device=device)
+        start, refs = _csr(hinges.reshape(-1), np.arange(hinges.size, dtype=np.int32), n)
+        m.particle_hinge_start = wp.array(start, dtype=wp.int32, device=device)
+        m.particle_hinge_refs = wp.array(refs if len(refs) else np.zeros(1, np.int32), dtype=wp.int32, device=device)
+        m.bending_dt = stable_dt(hinges, stiffness, m.particle_mass)
         start, ids = _csr(tris.reshape(-1), np.repeat(np.arange(len(tris), dtype=np.int32), 3), n)
         m.particle_tri_start = wp.array(start, dtype=wp.int32, device=device)
         m.particle_tri_ids = wp.array(ids, dtype=wp.int32, device=device)

@@ -100,6 +100,20 @@ class Model:
     """``[P + 1]`` int32 CSR offsets into ``particle_stick_refs``."""
     particle_stick_refs: wp.array
     """int32 ``2 * stick + end`` (end 0 = a, 1 = b) of each particle's sticks, in stick order."""
+    hinge_count: int
+    """``H``, bending hinges (:mod:`warpsim.physics.kernels.bending`); 0 for cloth without bending stiffness."""
+    hinge_particles: wp.array
+    """``[H]`` vec3i the three particles of each hinge, end, middle, end; ``hinge_particles_np`` its host copy."""
+    hinge_particles_np: np.ndarray
+    hinge_stiffness: wp.array
+    """``[H]`` float32 stiffness ``k = B w / h^3`` [N/m] of each hinge against its second difference."""
+    particle_hinge_start: wp.array
+    """``[P + 1]`` int32 CSR offsets into ``particle_hinge_refs``."""
+    particle_hinge_refs: wp.array
+    """int32 ``3 * hinge + role`` (0, 2 an end, 1 the middle) of each particle's hinges, in hinge order."""
+    bending_dt: float
+    """The largest time step [s] at which the hinges' explicit forces are stable
+    (:func:`~warpsim.physics.kernels.bending.stable_dt`); ``inf`` without hinges."""
     particle_tri_start: wp.array
     """``[P + 1]`` int32 CSR offsets into ``particle_tri_ids``."""
     particle_tri_ids: wp.array

@@ -16,8 +16,9 @@ import numpy as np
 import warp as wp
 
 from .config import AirConfig, GroundConfig, SolverConfig, WindConfig
-from .kernels import MODULES, aero, canopy, collision, constraints, controls, momentum, springs, verlet
+from .kernels import MODULES, aero, bending, canopy, collision, constraints, controls, momentum, springs, verlet
 from .kernels.aero import body_drag, triangle_air_force
+from .kernels.bending import bending_force
 from .kernels.canopy import canopy_air_force
 from .kernels.collision import collide_heightfield
 from .kernels.constraints import make_projector
@@ -81,6 +82,10 @@ class _Solver:
         self.use_graph = bool(use_graph)
         self.tri_force = wp.zeros(max(model.tri_count, 1), dtype=wp.vec3, device=model.device)
         self.particle_air = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)  # drag bodies' drag
+        # with hinges: each particle's own force, its drag and its bending (kernels.bending), else particle_air itself
+        self.particle_force = self.particle_air
+        if model.hinge_count:
+            self.particle_force = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)
         self.canopy_load = wp.zeros(max(model.canopy_count, 1), dtype=wp.vec4, device=model.device)
         self.canopy_side = wp.zeros(max(model.canopy_count, 1), dtype=wp.vec3, device=model.device)
         sticks = np.unique(np.concatenate([np.zeros(0, np.int32), *(r.controlled_sticks() for r in model.objects)]))
@@ -94,6 +99,25 @@ class _Solver:
     def _launch(self, state: State, control: Control, dt: float) -> None:
         raise NotImplementedError
 
+    def _particle_forces(self, state: State) -> wp.array:
+        """Each particle's own force [N] this step: the drag bodies' drag, plus the bending hinges' force when the
+        model has hinges."""
+        if self.model.hinge_count:
+            bending_force(self.model, state, self.particle_air, self.particle_force)
+        return self.particle_force
+
+    def check_dt(self, dt: float) -> float:
+        """``dt`` [s] as a float, or ValueError for one this solver cannot step: not a positive number, or past the
+        explicit limit of the model's bending hinges (``Model.bending_dt``)."""
+        dt = _check_dt(dt)
+        if dt > self.model.bending_dt:
+            raise ValueError(
+                f"dt {dt:g} s is too long for the cloth's bending stiffness at this mesh: its explicit forces need "
+                f"dt <= {self.model.bending_dt:.3g} s (kernels.bending.stable_dt); lower dt, the bending "
+                "stiffness or the resolution"
+            )
+        return dt
+
     def _ramp_controls(self, control: Control, dt: float) -> None:
         """Move the control sticks' rest lengths toward their targets, at most ``control_rate * dt`` [m], and the
         controlled nails toward theirs, at most ``nail_rate * dt`` [m]."""
@@ -103,7 +127,7 @@ class _Solver:
     def launch(self, state: State, control: Control, dt: float) -> None:
         """Launch one step's kernels on ``state`` (no graph, ``state.time`` left alone): what a caller records
         when it captures several steps, with kernels of its own, in one graph (see :meth:`load_kernels`)."""
-        self._launch(state, control, _check_dt(dt))
+        self._launch(state, control, self.check_dt(dt))
 
     modules: tuple = MODULES
     """The kernel modules this solver launches (:meth:`load_kernels` loads only these)."""
@@ -116,7 +140,7 @@ class _Solver:
         """Load the kernels and, with ``use_graph``, capture the step for ``(state, control, dt)`` without
         running it, so that the next :meth:`step` only replays; the capture reads the model's values (gravity)
         as they are now. Returns the graph entry (None without graphs)."""
-        dt = _check_dt(dt)
+        dt = self.check_dt(dt)
         self.load_kernels()
         if not self.use_graph:
             return None
@@ -133,7 +157,7 @@ class _Solver:
 
     def step(self, state: State, control: Control, dt: float) -> None:
         """Advance ``state`` by ``dt`` seconds (in place) under ``control``."""
-        dt = _check_dt(dt)
+        dt = self.check_dt(dt)
         if not self.use_graph:
             self._launch(state, control, dt)
         else:
@@ -151,7 +175,7 @@ class SolverVerlet(_Solver):
     None = fused on the CPU, gather on CUDA.
     """
 
-    modules = (aero, canopy, collision, constraints, controls, momentum, verlet)
+    modules = (aero, bending, canopy, collision, constraints, controls, momentum, verlet)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, *, constraint_scheme=None, **kwargs):
         super().__init__(model, config, **kwargs)
@@ -165,7 +189,8 @@ class SolverVerlet(_Solver):
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
         canopy_air_force(m, state, control, dt, self.air, self.wind, self.canopy_side, self.canopy_load, self.tri_force)
         body_drag(m, state, control, dt, self.air, self.wind, self.particle_air)
-        integrate_verlet(m, state, control, self.tri_force, self.particle_air, dt, cfg.damping)
+        forces = self._particle_forces(state)
+        integrate_verlet(m, state, control, self.tri_force, forces, dt, cfg.damping)
         if self.momentum is not None:
             self.momentum.before(state)
         self.projector.project(state, control, cfg.iterations, dt)
@@ -179,7 +204,7 @@ class SolverEuler(_Solver):
     ``spring_stiffness`` [N/m] and ``spring_damping`` [N s/m] from its :class:`~warpsim.physics.config.SolverConfig`;
     arguments as for :class:`SolverVerlet`, without a constraint scheme)."""
 
-    modules = (aero, canopy, collision, controls, springs)
+    modules = (aero, bending, canopy, collision, controls, springs)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, **kwargs):
         super().__init__(model, config, **kwargs)
@@ -191,12 +216,13 @@ class SolverEuler(_Solver):
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
         canopy_air_force(m, state, control, dt, self.air, self.wind, self.canopy_side, self.canopy_load, self.tri_force)
         body_drag(m, state, control, dt, self.air, self.wind, self.particle_air)
+        forces = self._particle_forces(state)
         integrate_euler_springs(
             m,
             state,
             control,
             self.tri_force,
-            self.particle_air,
+            forces,
             self.spring_force,
             dt,
             cfg.spring_stiffness,

@@ -101,6 +101,7 @@ class Simulation:
             self.solver = make_solver(
                 self.model, cfg.solver, air=cfg.air, wind=cfg.wind, ground=cfg.ground, use_graph=use_graph
             )
+            self.solver.check_dt(self.dt)
         except ValueError as err:  # a solver setting the model cannot take (elastic sticks without mass splitting)
             raise DescriptorError(f"{where}: [solver]: {err}") from None
         self.state = self.model.state(self.dt)

@@ -5,14 +5,15 @@ shared math lives in ``@wp.func`` helpers. Launch parameters are grouped as mode
 scalars, then outputs (``_out``).
 """
 
-from . import aero, canopy, collision, constraints, controls, frame, momentum, springs, verlet
+from . import aero, bending, canopy, collision, constraints, controls, frame, momentum, springs, verlet
 
-MODULES = (aero, canopy, collision, constraints, controls, momentum, springs, verlet)
+MODULES = (aero, bending, canopy, collision, constraints, controls, momentum, springs, verlet)
 """The solvers' kernel modules (``frame`` is the runner's)."""
 
 __all__ = [
     "MODULES",
     "aero",
+    "bending",
     "canopy",
     "collision",
     "constraints",

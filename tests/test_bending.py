@@ -118,3 +118,47 @@ def test_a_step_past_the_bending_limit_is_refused_in_one_line():
     assert code == 2, (text.getvalue(), errors.getvalue())
     line = errors.getvalue().strip()
     assert "\n" not in line and "too long for the cloth's bending stiffness" in line and "dt <=" in line, line
+
+
+def test_the_flags_note_says_what_its_flapping_is_not():
+    """The run's note under the flap figure, per what the flag is built with (objects.figures.flag_caveat)."""
+    from warpsim.objects.figures import flag_caveat
+    from warpsim.scene import descriptor
+
+    def note(**flag):
+        mass_splitting = flag.pop("mass_splitting", True)
+        d = descriptor.merge("t", descriptor.resolve("flag")[0], {"flag": flag})
+        d["solver"]["mass_splitting"] = mass_splitting
+        return flag_caveat(d)
+
+    assert "those of this mesh (resolution 5)" in note()
+    assert "rigid sticks" in note(bending_stiffness=0.1, resolution=17)
+    assert "rigid sticks" in note(bending_stiffness=0.1, resolution=17, cloth_compliance=1e-3, mass_splitting=False)
+    # the bending length (0.1 / (1.294 * 4.03^2))^(1/3) = 0.17 m: resolution 9's 0.25 m spacing is coarser
+    assert "at resolution 9 (spacing 0.25 m against a bending length of 0.17 m)" in note(
+        bending_stiffness=0.1, resolution=9, cloth_compliance=1e-3
+    )
+    assert note(bending_stiffness=0.1, resolution=17, cloth_compliance=1e-3) is None
+    # a fabric's stiffness: centimetre waves, finer than resolution 33's 6 cm spacing
+    assert "resolution 33 (spacing 0.062 m" in note(bending_stiffness=1e-4, resolution=33, cloth_compliance=1e-3)
+
+
+@pytest.mark.slow
+def test_the_sheet_flag_flaps_with_waves_running_to_its_tip():
+    """scenes/flag_sheet.toml at resolution 9 (coarse, for speed; 17 and 33 flap 10-13 % faster in the validation):
+    the corner flaps steadily at f L/U 0.41 (0.835 Hz in 4.03 m/s, 10-35 s), and the phase of the middle row's
+    sideways motion lags along it: a wave running from the pole to the tip at c/U 1.03, lambda/L 2.5 (measured
+    2026-11-27; the validation's 'sheet flag' rows). Without the bending stiffness the same cloth flaps otherwise
+    (resolution 9: 0.96 Hz, 17: 1.33 Hz: the mesh's)."""
+    from benchmarks.validation.cases import flag_wave
+    from warpsim.scene import descriptor
+
+    sheet = descriptor.resolve("scenes/flag_sheet.toml")[0]
+    overrides = {
+        "flag": {key: sheet["flag"][key] for key in ("bending_stiffness", "cloth_compliance")},
+        "solver": {"mass_splitting": True, "iterations": 126},
+    }
+    wave = flag_wave(9, 0.000625, overrides, seconds=35.0, after=10.0)
+    assert 0.37 < wave["fL/U"] < 0.46, wave
+    assert 0.8 < wave["c/U"] < 1.25 and 1.8 < wave["λ/L"] < 3.2, wave
+    assert wave["rms"] > 0.2, wave  # a flap, not a ripple

@@ -9,10 +9,9 @@ windows, and draws the corner's motion (default ``docs/flag_time_step.png``). Ab
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
 
+from benchmarks.validation import picture_command, save_picture
 from benchmarks.validation.cases import FLAG_TIME_STEPS, flag_corner_series, flag_simulation, peak_frequency
 
 
@@ -38,17 +37,13 @@ def handed_over(resolution: int, dt_from: float, dt_to: float, before: float, af
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point: the three runs and the hand-over, printed and drawn."""
-    parser = argparse.ArgumentParser(
-        prog="python -m benchmarks.validation.flag_time_step",
-        description="The resolution-17 flag's corner at dt 0.01, 0.0025 and 0.000625 s, and handed in mid-flight "
+    out, plt = picture_command(
+        "python -m benchmarks.validation.flag_time_step",
+        "The resolution-17 flag's corner at dt 0.01, 0.0025 and 0.000625 s, and handed in mid-flight "
         "from dt 0.01 to 0.000625: frequencies and rms printed, the motion drawn. About 2 minutes on 2 cores.",
+        "docs/flag_time_step.png",
+        argv,
     )
-    parser.add_argument("out", nargs="?", default="docs/flag_time_step.png", help="the picture (PNG)")
-    out = parser.parse_args(argv).out
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     runs = {}
     for dt in FLAG_TIME_STEPS:
@@ -71,11 +66,7 @@ def main(argv: list[str] | None = None) -> int:
     ax.set_xlabel("time [s]")
     for ax in axes:
         ax.set_ylabel("corner y [m]")
-    fig.suptitle("The validation's flag at resolution 17: its trailing corner's sideways motion", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(out, dpi=80)
-    print(f"wrote {out}")
-    return 0
+    return save_picture(fig, "The validation's flag at resolution 17: its trailing corner's sideways motion", out)
 
 
 if __name__ == "__main__":

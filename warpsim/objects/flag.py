@@ -31,6 +31,10 @@ class FlagConfig(Checked):
             sets waves of centimetres, finer than these meshes; a stiffer sheet (0.03-0.1, a card or a 1 mm
             plastic sheet) sets its waves at the flag's length, and its flapping converges as the mesh is
             refined. Explicit: dt must stay under ``kernels.bending.stable_dt`` (a scene past it is refused).
+        cloth_compliance: stretch [m/N] per newton of tension of each of the cloth's sticks (XPBD; needs
+            ``solver.mass_splitting``). A square grid's sticks give the cloth an in-plane stiffness of about
+            ``1 / cloth_compliance`` [N/m] at any resolution. 0, the default, is the paper's rigid sticks, which the
+            iterations only approach: finer cloth then stretches more and answers to the iteration count.
         pole_height: height of the flag's top edge above the terrain at the pole's foot [m].
         position: (x, y) of the pole [m].
     """
@@ -40,6 +44,7 @@ class FlagConfig(Checked):
     resolution: int = number(5, Bounds(2, 4096))
     mass_per_area: float = number(0.15, POSITIVE)
     bending_stiffness: float = number(0.0, NON_NEGATIVE)
+    cloth_compliance: float = number(0.0, NON_NEGATIVE)
     pole_height: float = number(5.0, POSITIVE)
     position: tuple[float, float] = (0.0, 0.0)
 
@@ -90,6 +95,8 @@ def build_flag(builder: ModelBuilder, cfg: FlagConfig, terrain: Heightfield) -> 
     )
     for j in range(count_v):
         builder.add_nail(int(ids[j, 0]))
+    if cfg.cloth_compliance > 0.0:
+        builder.set_compliance(sticks, cfg.cloth_compliance)
     if cfg.bending_stiffness > 0.0:
         add_plate_hinges(builder, ids, cfg.width / (count_u - 1), cfg.height / (count_v - 1), cfg.bending_stiffness)
     particles = np.arange(p0, builder.particle_count)

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.numpy_step import NumpyVerlet
+from warpsim.objects.figures import SHEET_ITERATIONS
 from warpsim.objects.kite import anchor_elevation, anchor_pull
 from warpsim.physics.builder import ModelBuilder
 from warpsim.physics.config import AirConfig
@@ -1432,7 +1433,8 @@ def convergence_figures(names=None, beyond: bool = False, ends_only: bool = Fals
 def refined_peak_frequency(ys: np.ndarray, sample: float = FLAG_SAMPLE) -> float:
     """Frequency [Hz] of the largest spectral peak of ``ys`` sampled every ``sample`` seconds (Hann window, mean
     removed), refined between the bins by a parabola through the log magnitudes of the peak and its neighbours
-    (a Gaussian peak's exact centre), so that two runs' frequencies compare to better than a bin (1/30 Hz here)."""
+    (a Gaussian peak's exact centre), so that two runs' frequencies compare to better than a bin (1/35 Hz for the
+    sheet flag's 35 s)."""
     spectrum = np.abs(np.fft.rfft((ys - ys.mean()) * np.hanning(ys.size)))
     k = int(np.argmax(spectrum[1:-1])) + 1
     a, b, c = np.log(spectrum[k - 1 : k + 2] + 1e-300)
@@ -1483,12 +1485,14 @@ def flag_wave(resolution: int, dt: float, overrides: dict, seconds: float = 35.0
 
 SHEET_FLAG = {"flag": {"bending_stiffness": 0.1, "cloth_compliance": 1e-3}, "solver": {"mass_splitting": True}}
 """The sheet flag: the validation's flag (2 m x 1.2 m, 0.15 kg/m^2, 4 m/s) with a bending stiffness of 0.1 N m
-(a sheet's, not a fabric's) and elastic cloth of 1e-3 m/N a stick (about 1,000 N/m in the plane, so it stretches
-under 1 %), whose iterations converge (mass splitting)."""
+(a sheet's, not a fabric's) and elastic cloth of 1e-3 m/N a stick (about 1,500 N/m in the plane; its sticks
+stretch up to 3.5 % as the tip snaps at resolution 17), whose iterations converge (mass splitting)."""
 
-SHEET_ITERATIONS_PER_RESOLUTION = 14
+SHEET_ITERATIONS_PER_RESOLUTION = SHEET_ITERATIONS
+"""Iterations per particle along the sheet flag (``warpsim.objects.figures.SHEET_ITERATIONS``, which its run's note
+checks): twice as many flap the same."""
 
-WAVE_NOTE = (
+WAVE_NOTE = (  # the sheet flag's wave-speed row: why its waves miss the reference's, and what the band does not say
     "the waves run a little faster than the wind and are longer than the paper flags' (λ/L about 2.4 against 1.87), "
     "so that f L/U = (c/U)/(λ/L) still falls in the band. The paper's air law feels only each triangle's own "
     "normal wind: a wave running at the wind's speed feels no force, and nothing in it slows the wave as the "
@@ -1558,7 +1562,7 @@ def flag_sheet() -> list[Row]:
             max(abs(coarse_dt["fL/U"] / mid["fL/U"] - 1.0), abs(more["fL/U"] / mid["fL/U"] - 1.0)) <= 0.05,
             note="the cloth's in-plane stiffness is the flag's, not the numerics': four times stiffer cloth "
             "(2.5e-4 m/N a stick, 476 iterations) flapped at 0.433 against 0.458 at resolution 17 (-5 %, a scratch "
-            "run); a real sheet is stiffer still (0.8 mm of polycarbonate: ~2e6 N/m in the plane, against ~1e3 here)",
+            "run); a real sheet is stiffer still (0.8 mm of polycarbonate: ~2e6 N/m in the plane, against ~1.5e3 here)",
         ),
         Row(
             "sheet flag frequency, measured band",

@@ -43,7 +43,10 @@ def middle_row(resolution: int, sheet: bool, seconds: float = 25.0, after: float
     for _, p in flag_samples(sim, seconds, after):
         shapes.append(p[row, :2] - p[row[0], :2])
         corner.append(p[tip, 1])
-    return {"shapes": np.array(shapes), "f": refined_peak_frequency(np.array(corner))}
+    d = sim.descriptor
+    speed = float(np.linalg.norm(d["wind"]["velocity"]))
+    f = refined_peak_frequency(np.array(corner))
+    return {"shapes": np.array(shapes), "f": f, "fL/U": f * float(d["flag"]["width"]) / speed}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -66,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
         for k, shape in enumerate(last[:: max(1, count // 12)]):
             ax.plot(shape[:, 0], shape[:, 1], color=plt.cm.viridis(k / 12), lw=1.2)
         label = "sheet flag (B 0.1 N m)" if sheet else "paper's cloth (no bending)"
-        fL_U = run["f"] * 2.0 / float(np.hypot(4.0, 0.5))
+        fL_U = run["fL/U"]
         ax.set_title(f"{label}\nresolution {res}: {run['f']:.2f} Hz, f L/U {fL_U:.2f}", fontsize=9)
         print(f"{label}, resolution {res}: {run['f']:.3f} Hz, f L/U {fL_U:.3f}")
         ax.set_aspect("equal")

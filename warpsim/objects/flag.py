@@ -32,8 +32,9 @@ class FlagConfig(Checked):
             plastic sheet) sets its waves at the flag's length, and its flapping converges as the mesh is
             refined. Explicit: dt must stay under ``kernels.bending.stable_dt`` (a scene past it is refused).
         cloth_compliance: stretch [m/N] per newton of tension of each of the cloth's sticks (XPBD; needs
-            ``solver.mass_splitting``). A square grid's sticks give the cloth an in-plane stiffness of about
-            ``1 / cloth_compliance`` [N/m] at any resolution. 0, the default, is the paper's rigid sticks, which the
+            ``solver.mass_splitting``). A square grid's sticks, with both diagonals in every cell, give the cloth an
+            in-plane stiffness of about ``1.5 / cloth_compliance`` [N/m] under a pull one way (``2 /`` held
+            sideways) at any resolution. 0, the default, is the paper's rigid sticks, which the
             iterations only approach: finer cloth then stretches more and answers to the iteration count.
         pole_height: height of the flag's top edge above the terrain at the pole's foot [m].
         position: (x, y) of the pole [m].

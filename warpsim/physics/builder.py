@@ -247,8 +247,8 @@ class ModelBuilder(MeshShapes):
     def add_hinge(self, a: int, m: int, b: int, stiffness: float) -> int:
         """Add a bending hinge: particles ``a``, ``m``, ``b`` in a row, resisting their second difference
         ``x_a - 2 x_m + x_b`` with ``stiffness`` [N/m] (``B w / h^3`` for a plate of bending stiffness ``B``
-        [N m], spacing ``h`` [m] and strip width ``w`` [m]; :mod:`warpsim.physics.kernels.bending`). Returns its
-        index."""
+        [N m], spacing ``h`` [m] and strip width ``w`` [m]; :mod:`warpsim.physics.kernels.bending`). Its rest shape
+        is straight with ``m`` halfway between ``a`` and ``b``. Returns its index."""
         n = self.particle_count
         ids = (int(a), int(m), int(b))
         if not all(0 <= i < n for i in ids) or len(set(ids)) != 3:

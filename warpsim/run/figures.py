@@ -12,6 +12,7 @@ import numpy as np
 from ..objects import registry
 from ..objects.figures import FigureView
 from ..physics.model import Model
+from ..scene.descriptor import world_descriptor
 from .diagnostics import Frame, GroundContacts, object_metrics
 
 COMMON_FIGURES = {
@@ -233,8 +234,14 @@ class FlightFigures:
         else:
             head = f"  {count} worlds (mean, lowest to highest world)"
         caveat = registry.OBJECTS[self.kind].caveat
-        note = caveat(self.sim.descriptor) if caveat is not None else None
-        return [f"{head}: {', '.join(parts)} ({where})"] + ([f"  {note}"] if note else [])
+        notes: list[str] = []
+        if caveat is not None:  # each world's own, once (a sweep of --vary may give its worlds different cloth)
+            for k in range(count):
+                note = caveat(world_descriptor(self.sim.descriptor, k))
+                if note and note not in notes:
+                    notes.append(note)
+        some = "some worlds: " if count > 1 and len(notes) > 1 else ""
+        return [f"{head}: {', '.join(parts)} ({where})"] + [f"  {some}{note}" for note in notes]
 
 
 def swing_frequency(times: np.ndarray, values: np.ndarray, hysteresis: float = 0.25, least: float = 0.0) -> float:

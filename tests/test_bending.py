@@ -51,9 +51,10 @@ def test_the_force_is_the_gradient_of_the_plate_energy():
     rng = np.random.default_rng(3)
     q = m.particle_q0 + rng.normal(scale=0.05, size=m.particle_q0.shape)
     hinges, k = m.hinge_particles_np, m.hinge_stiffness.numpy().astype(np.float64)
+    weights = m.hinge_weights_np.astype(np.float64)
 
     def energy(x):
-        bend = x[hinges[:, 0]] - 2.0 * x[hinges[:, 1]] + x[hinges[:, 2]]
+        bend = np.einsum("hj,hjd->hd", weights, x[hinges])
         return 0.5 * float(np.sum(k * np.sum(bend * bend, axis=1)))
 
     state = m.state()
@@ -78,6 +79,28 @@ def test_the_force_is_the_gradient_of_the_plate_energy():
     state.particle_q.assign(m.particle_q0 @ turn.T + np.array([1e3, -2e3, 50.0]))
     bending_force(m, state, zero, out)
     assert np.abs(out.numpy()).max() < 1e-6 * np.abs(force).max()
+
+
+def test_a_bend_and_a_saddle_cost_what_a_plate_does():
+    """A plate of Poisson's ratio 0 stores B/2 (w_xx^2 + w_yy^2 + 2 w_xy^2) per area: bent into w = a x^2 / 2
+    (curvature a) it stores B a^2 A / 2, twisted into the saddle w = a x y it stores B a^2 A. The hinges and twists
+    of a 1 m x 0.6 m grid hold both: the bend to the first order of its edges' half strips, the saddle exactly."""
+    bending, a = 0.3, 0.02
+    m, _ = _strip(11, 7, 1.0, 0.6, 0.2, bending, clamp=0)
+    q0 = m.particle_q0
+    hinges, k, weights = m.hinge_particles_np, m.hinge_stiffness.numpy().astype(np.float64), m.hinge_weights_np
+
+    def energy(w):
+        x = q0.copy()
+        x[:, 2] += w(q0[:, 0], q0[:, 1])
+        bend = np.einsum("hj,hjd->hd", weights.astype(np.float64), x[hinges])
+        return 0.5 * float(np.sum(k * np.sum(bend * bend, axis=1)))
+
+    area = 1.0 * 0.6
+    assert energy(lambda x, y: a * x * y) == pytest.approx(bending * a**2 * area, rel=1e-6)
+    # the bend: each row's hinges stand for its 8 inner segments' curvature over 9 of its 10 (the two end halves
+    # carry none), so 0.9 of the whole
+    assert energy(lambda x, y: 0.5 * a * x**2) == pytest.approx(0.9 * 0.5 * bending * a**2 * area, rel=1e-6)
 
 
 def test_a_cantilever_sags_as_euler_bernoulli_says():
@@ -110,8 +133,9 @@ def test_no_bending_stiffness_is_the_papers_cloth():
     sim = ws.Simulation(descriptor.resolve("flag")[0])
     assert sim.model.hinge_count == 0 and sim.solver.particle_force is sim.solver.particle_air
     stiff = ws.Simulation(descriptor.merge("t", descriptor.resolve("flag")[0], {"flag": {"bending_stiffness": 0.1}}))
-    # 5 particles from the pole out, 3 up it: a hinge per three in a row (3 rows x 3), per three in a column (5 x 1)
-    assert stiff.model.hinge_count == 3 * 3 + 5 * 1
+    # 5 particles from the pole out, 3 up it: a hinge per three in a row (3 rows x 3), per three in a column (5 x 1),
+    # a twist per cell (4 x 2)
+    assert stiff.model.hinge_count == 3 * 3 + 5 * 1 + 4 * 2
 
 
 def test_a_step_past_the_bending_limit_is_refused_in_one_line():
@@ -153,11 +177,11 @@ def test_the_flags_note_says_what_its_flapping_is_not():
 
 @pytest.mark.slow
 def test_the_sheet_flag_flaps_with_waves_running_to_its_tip():
-    """scenes/flag_sheet.toml at resolution 9 (coarse, for speed; 17 and 33 flap 10-13 % faster in the validation):
-    the corner flaps steadily at f L/U 0.41 (0.835 Hz in 4.03 m/s, 10-35 s), and the phase of the middle row's
-    sideways motion lags along it: a wave running from the pole to the tip at c/U 1.03, lambda/L 2.5 (measured
+    """scenes/flag_sheet.toml at resolution 9 (coarse, for speed; 17 and 33 flap 7-10 % faster in the validation):
+    the corner flaps steadily at f L/U 0.40 (0.80 Hz in 4.03 m/s, 10-35 s), and the phase of the middle row's
+    sideways motion lags along it: a wave running from the pole to the tip at c/U 1.01, lambda/L 2.5 (measured
     2026-11-27; the validation's 'sheet flag' rows). Without the bending stiffness the same cloth flaps otherwise
-    (resolution 9: 0.96 Hz, 17: 1.33 Hz: the mesh's)."""
+    (resolution 9: 0.94 Hz, 17: 1.32 Hz: the mesh's)."""
     from benchmarks.validation.cases import flag_wave
     from warpsim.scene import descriptor
 

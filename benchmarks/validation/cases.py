@@ -1493,15 +1493,16 @@ SHEET_ITERATIONS_PER_RESOLUTION = SHEET_ITERATIONS
 checks): twice as many flap the same."""
 
 WAVE_NOTE = (  # the sheet flag's wave-speed row: why its waves miss the reference's, and what the band does not say
-    "the waves run a little faster than the wind and are longer than the paper flags' (λ/L about 2.4 against 1.87), "
+    "the waves run a little faster than the wind and are longer than the paper flags' (λ/L about 2.6 against 1.87), "
     "so that f L/U = (c/U)/(λ/L) still falls in the band. The paper's air law feels only each triangle's own "
     "normal wind: a wave running at the wind's speed feels no force, and nothing in it slows the wave as the "
     "reference's air does (its dynamic pressure sets the waves' speed, lower for the lower aspect ratios). The "
     "reference's paper flags' mass ratio and stiffness are not in the stored excerpts, so the wavelength is "
     "compared in kind"
 )
-SHEET_DT = 0.000625
-"""[s]: resolution 33's bending needs dt <= 0.00082 s (Model.bending_dt); the same step at every resolution."""
+SHEET_DT = 0.0005
+"""[s]: resolution 33's bending (its hinges and twists) needs dt <= 0.00058 s (Model.bending_dt); the same step at
+every resolution."""
 
 
 def _sheet(resolution: int, dt: float = SHEET_DT, iterations: int | None = None) -> dict:
@@ -1536,8 +1537,8 @@ def flag_sheet() -> list[Row]:
             spread <= 0.10,
             note=f"spread {100 * spread:.1f} %: resolution 9 flaps slower, 17 and 33 agree (row below). The coarse "
             "grid spreads the cloth's mass evenly over its particles, so that its edges carry twice their share: "
-            "spread by each particle's area instead, resolution 9 flapped 3 % faster (0.428 against 0.414, a "
-            "scratch run), which is part of it, not all",
+            "spread by each particle's area instead, resolution 9 flapped 3 % faster (0.428 against 0.414 in a "
+            "scratch run of the hinges without the twists), which is part of it, not all",
         ),
         Row(
             "sheet flag frequency, fine resolutions",
@@ -1561,7 +1562,7 @@ def flag_sheet() -> list[Row]:
             "each within 5 %",
             max(abs(coarse_dt["fL/U"] / mid["fL/U"] - 1.0), abs(more["fL/U"] / mid["fL/U"] - 1.0)) <= 0.05,
             note="the cloth's in-plane stiffness is the flag's, not the numerics': four times stiffer cloth "
-            "(2.5e-4 m/N a stick, 476 iterations) flapped at 0.433 against 0.458 at resolution 17 (-5 %, a scratch "
+            "(2.5e-4 m/N a stick, 476 iterations) flapped at 0.398 against 0.427 at resolution 17 (-7 %, a scratch "
             "run); a real sheet is stiffer still (0.8 mm of polycarbonate: ~2e6 N/m in the plane, against ~1.5e3 here)",
         ),
         Row(

@@ -4,7 +4,7 @@ resolutions 9, 17 and 33, beside the paper's cloth (no bending stiffness) at res
     python -m benchmarks.validation.flag_sheet_plot [OUT.png]
 
 Each panel draws the middle row's sideways offset against its distance from the pole over the last period of a
-25 s run (dt 0.000625 s, :data:`~benchmarks.validation.cases.SHEET_FLAG`); the sheet flag's rows keep one shape
+25 s run (dt ``SHEET_DT``, :data:`~benchmarks.validation.cases.SHEET_FLAG`); the sheet flag's rows keep one shape
 of wave as the mesh is refined, the paper's cloth does not. About 6 minutes on 2 cores (resolution 33's 2 minutes
 of them, if the machine is quiet).
 """
@@ -88,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
         ax.set_xlabel("distance from the pole [m]")
     for ax in axes[:, 0]:
         ax.set_ylabel("sideways [m]")
-    return save_picture(fig, "The flag's middle row over one flapping period (dt 0.000625 s, elastic cloth)", out)
+    return save_picture(fig, f"The flag's middle row over one flapping period (dt {SHEET_DT:g} s, elastic cloth)", out)
 
 
 if __name__ == "__main__":

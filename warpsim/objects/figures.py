@@ -146,7 +146,7 @@ def flag_caveat(descriptor: dict) -> str | None:
     Without a bending stiffness they are the mesh's: the paper's air law is local and its cloth folds freely, so
     nothing but the mesh picks a wavelength (converged in the time step, resolution 5 flaps at f L/U 0.96 and
     resolution 9 at 1.36; docs/objects.md, "The flag at fine resolution"). With one, the validation's sheet flag
-    (B 0.1 N m, elastic sticks) flaps within 2 % at resolutions 17 and 33 and 11 % slower at 9: its figures are
+    (B 0.1 N m, elastic sticks) flaps within 2.5 % at resolutions 17 and 33 and 9 % slower at 9: its figures are
     its own on a mesh finer than resolution 17 and than the bending length ``(B / (rho U^2))^(1/3)``, with elastic
     sticks and at least :data:`SHEET_ITERATIONS` iterations per particle along it (the rigid sticks' iterations never
     converge on a fine mesh, and the flapping follows their count). The Euler mass-spring comparison's flapping is

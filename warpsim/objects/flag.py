@@ -25,12 +25,13 @@ class FlagConfig(Checked):
             so that its flapping does not depend on the step); finer cloth stretches more (see README).
         mass_per_area: fabric areal density [kg/m^2] (flag nylon ~0.1-0.2).
         bending_stiffness: the cloth's bending stiffness ``B`` [N m] (per metre of width: ``E t^3 / 12`` for a
-            sheet of Young's modulus ``E`` and thickness ``t``), as hinges along the grid's rows and columns
-            (:mod:`warpsim.physics.kernels.bending`). 0, the default, is the paper's cloth, which folds freely;
-            its flapping is then set by the mesh (docs/objects.md). A flag's fabric has ~1e-5 to 1e-3, which
-            sets waves of centimetres, finer than these meshes; a stiffer sheet (0.03-0.1, a card or a 1 mm
-            plastic sheet) sets its waves at the flag's length, and its flapping converges as the mesh is
-            refined. Explicit: dt must stay under ``kernels.bending.stable_dt`` (a scene past it is refused).
+            sheet of Young's modulus ``E`` and thickness ``t``; Poisson's ratio 0), as hinges along the grid's rows
+            and columns and a twist in every cell (:func:`add_plate_hinges`, :mod:`warpsim.physics.kernels.bending`).
+            0, the default, is the paper's cloth, which folds freely; its flapping is then set by the mesh
+            (docs/objects.md). A flag's fabric has ~1e-5 to 1e-3, which sets waves of centimetres, finer than these
+            meshes; a stiffer sheet (0.1, a card or a thin plastic sheet: scenes/flag_sheet.toml) sets its waves at
+            the flag's length, and its flapping converges as the mesh is refined. Explicit: dt must stay under
+            ``Model.bending_dt`` (a scene past it is refused).
         cloth_compliance: stretch [m/N] per newton of tension of each of the cloth's sticks (XPBD; needs
             ``solver.mass_splitting``). A square grid's sticks, with both diagonals in every cell, give the cloth an
             in-plane stiffness of about ``1.5 / cloth_compliance`` [N/m] under a pull one way (``2 /`` held
@@ -55,9 +56,10 @@ MAX_PARTICLES = 2048 * 2048  # a larger flag takes minutes to build and gigabyte
 
 def add_plate_hinges(builder: ModelBuilder, ids: np.ndarray, du: float, dv: float, bending: float) -> None:
     """Give a grid of particles ``ids`` (``[rows, columns]``, spacing ``du`` [m] along a row, ``dv`` [m] along a
-    column) a plate's bending stiffness ``bending`` [N m]: a hinge on every three particles in a row or a column,
-    of stiffness ``B w / h^3`` with ``h`` its spacing and ``w`` the width of the strip it stands for (half a
-    spacing on the grid's edges)."""
+    column) a plate's bending stiffness ``bending`` [N m] with Poisson's ratio 0, whose energy per area is
+    ``B/2 (w_xx^2 + w_yy^2 + 2 w_xy^2)``: a hinge on every three particles in a row or a column, of stiffness
+    ``B w / h^3`` with ``h`` its spacing and ``w`` the width of the strip it stands for (half a spacing on the grid's
+    edges), and a twist on every cell, of stiffness ``2 B / (du dv)``."""
     rows, columns = ids.shape
     for j in range(rows):
         width = dv * (0.5 if j in (0, rows - 1) else 1.0)
@@ -67,6 +69,9 @@ def add_plate_hinges(builder: ModelBuilder, ids: np.ndarray, du: float, dv: floa
         width = du * (0.5 if i in (0, columns - 1) else 1.0)
         for j in range(1, rows - 1):
             builder.add_hinge(ids[j - 1, i], ids[j, i], ids[j + 1, i], bending * width / dv**3)
+    for j in range(rows - 1):
+        for i in range(columns - 1):
+            builder.add_twist(ids[j, i], ids[j, i + 1], ids[j + 1, i], ids[j + 1, i + 1], 2.0 * bending / (du * dv))
 
 
 def build_flag(builder: ModelBuilder, cfg: FlagConfig, terrain: Heightfield) -> ObjectRecord:

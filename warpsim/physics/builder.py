@@ -48,7 +48,8 @@ class ModelBuilder(MeshShapes):
         self.stick_pretension: list[float] = []
         self.stick_compliance: list[float] = []
         self.tri_indices: list[tuple[int, int, int]] = []
-        self.hinge_particles: list[tuple[int, int, int]] = []
+        self.hinge_particles: list[tuple[int, int, int, int]] = []
+        self.hinge_weights: list[tuple[float, float, float, float]] = []
         self.hinge_stiffness: list[float] = []
         self.tri_loading: list[float] = []
         self.tri_sail: list[tuple[float, float, float, float]] = []
@@ -249,14 +250,26 @@ class ModelBuilder(MeshShapes):
         ``x_a - 2 x_m + x_b`` with ``stiffness`` [N/m] (``B w / h^3`` for a plate of bending stiffness ``B``
         [N m], spacing ``h`` [m] and strip width ``w`` [m]; :mod:`warpsim.physics.kernels.bending`). Its rest shape
         is straight with ``m`` halfway between ``a`` and ``b``. Returns its index."""
+        return self._add_stencil((a, m, b, m), (1.0, -2.0, 1.0, 0.0), stiffness, "hinge")
+
+    def add_twist(self, a: int, b: int, c: int, d: int, stiffness: float) -> int:
+        """Add a twist of a grid cell: corners ``a``, ``b`` along one side, ``c``, ``d`` beside them, resisting
+        ``x_a - x_b - x_c + x_d`` (the cell's twist times its two sides) with ``stiffness`` [N/m] (``2 B / (h_u h_v)``
+        for a plate of bending stiffness ``B`` [N m] and Poisson's ratio 0; :mod:`warpsim.physics.kernels.bending`).
+        Its rest shape is a parallelogram. Returns its index (among the hinges)."""
+        return self._add_stencil((a, b, c, d), (1.0, -1.0, -1.0, 1.0), stiffness, "twist")
+
+    def _add_stencil(self, ids, weights, stiffness: float, what: str) -> int:
         n = self.particle_count
-        ids = (int(a), int(m), int(b))
-        if not all(0 <= i < n for i in ids) or len(set(ids)) != 3:
-            raise ValueError(f"hinge {ids} needs three distinct particles among 0..{n - 1}")
+        ids = tuple(int(i) for i in ids)
+        used = {i for i, w in zip(ids, weights, strict=True) if w != 0.0}
+        if not all(0 <= i < n for i in ids) or len(used) != sum(w != 0.0 for w in weights):
+            raise ValueError(f"{what} {ids} needs distinct particles among 0..{n - 1}")
         stiffness = float(stiffness)
         if not (np.isfinite(stiffness) and stiffness > 0.0):
-            raise ValueError(f"hinge {ids} stiffness must be positive and finite, got {stiffness}")
+            raise ValueError(f"{what} {ids} stiffness must be positive and finite, got {stiffness}")
         self.hinge_particles.append(ids)
+        self.hinge_weights.append(tuple(float(w) for w in weights))
         self.hinge_stiffness.append(stiffness)
         return len(self.hinge_particles) - 1
 
@@ -364,17 +377,21 @@ class ModelBuilder(MeshShapes):
         m.canopy_tri_owner = wp.array(owner, dtype=wp.int32, device=device)
         m.canopy_table = wp.array(table, dtype=wp.vec2, device=device)
         m.canopy_params = wp.array(params, dtype=wp.vec4, device=device)
-        hinges = np.array(self.hinge_particles, dtype=np.int32).reshape(-1, 3)
+        hinges = np.array(self.hinge_particles, dtype=np.int32).reshape(-1, 4)
+        weights = np.array(self.hinge_weights, dtype=np.float32).reshape(-1, 4)
         stiffness = np.array(self.hinge_stiffness, dtype=np.float32)
         m.hinge_count = len(hinges)
-        m.hinge_particles_np = hinges
+        m.hinge_particles_np, m.hinge_weights_np = hinges, weights
         some = len(hinges) > 0  # a device array of at least one, as for the canopies
-        m.hinge_particles = wp.array(hinges if some else np.zeros((1, 3), np.int32), dtype=wp.vec3i, device=device)
+        m.hinge_particles = wp.array(hinges if some else np.zeros((1, 4), np.int32), dtype=wp.vec4i, device=device)
+        m.hinge_weights = wp.array(weights if some else np.zeros((1, 4), np.float32), dtype=wp.vec4, device=device)
         m.hinge_stiffness = wp.array(stiffness if some else np.zeros(1, np.float32), device=device)
-        start, refs = _csr(hinges.reshape(-1), np.arange(hinges.size, dtype=np.int32), n)
+        used = weights.reshape(-1) != 0.0  # a hinge's padding slot (weight 0) is nobody's
+        slots = np.arange(hinges.size, dtype=np.int32)[used]
+        start, refs = _csr(hinges.reshape(-1)[used], slots, n)
         m.particle_hinge_start = wp.array(start, dtype=wp.int32, device=device)
         m.particle_hinge_refs = wp.array(refs if len(refs) else np.zeros(1, np.int32), dtype=wp.int32, device=device)
-        m.bending_dt = stable_dt(hinges, stiffness, m.particle_mass)
+        m.bending_dt = stable_dt(hinges, weights, stiffness, m.particle_mass)
         start, ids = _csr(tris.reshape(-1), np.repeat(np.arange(len(tris), dtype=np.int32), 3), n)
         m.particle_tri_start = wp.array(start, dtype=wp.int32, device=device)
         m.particle_tri_ids = wp.array(ids, dtype=wp.int32, device=device)

@@ -101,16 +101,23 @@ class Model:
     particle_stick_refs: wp.array
     """int32 ``2 * stick + end`` (end 0 = a, 1 = b) of each particle's sticks, in stick order."""
     hinge_count: int
-    """``H``, bending hinges (:mod:`warpsim.physics.kernels.bending`); 0 for cloth without bending stiffness."""
+    """``H``, bending hinges and cell twists (:mod:`warpsim.physics.kernels.bending`); 0 for cloth without bending
+    stiffness."""
     hinge_particles: wp.array
-    """``[H]`` vec3i the three particles of each hinge, end, middle, end; ``hinge_particles_np`` its host copy."""
+    """``[H]`` vec4i the particles of each hinge (end, middle, end, and a padding slot of weight 0) or twist (a
+    cell's four corners); ``hinge_particles_np`` its host copy."""
     hinge_particles_np: np.ndarray
+    hinge_weights: wp.array
+    """``[H]`` vec4 the weights ``w_j`` of each one's difference ``c = sum_j w_j x_j``: (1, -2, 1, 0) for a hinge,
+    (1, -1, -1, 1) for a twist; ``hinge_weights_np`` its host copy."""
+    hinge_weights_np: np.ndarray
     hinge_stiffness: wp.array
-    """``[H]`` float32 stiffness ``k = B w / h^3`` [N/m] of each hinge against its second difference."""
+    """``[H]`` float32 stiffness ``k`` [N/m] of each against its difference: ``B w / h^3`` a hinge, ``2 B / (h_u
+    h_v)`` a twist."""
     particle_hinge_start: wp.array
     """``[P + 1]`` int32 CSR offsets into ``particle_hinge_refs``."""
     particle_hinge_refs: wp.array
-    """int32 ``3 * hinge + role`` (0, 2 an end, 1 the middle) of each particle's hinges, in hinge order."""
+    """int32 ``4 * hinge + slot`` of each particle's hinges and twists, in hinge order (no padding slots)."""
     bending_dt: float
     """The largest time step [s] at which the hinges' explicit forces are stable
     (:func:`~warpsim.physics.kernels.bending.stable_dt`); ``inf`` without hinges."""

@@ -28,7 +28,6 @@ so a descriptor only lists what it changes. Sections and keys (``warpsim info SC
 from __future__ import annotations
 
 import copy
-import difflib
 import sys
 from pathlib import Path
 from typing import Any
@@ -41,7 +40,7 @@ else:  # pragma: no cover
 from ..objects import registry
 from ..physics.config import SECTIONS, Bounds, as_section, field_bounds, field_choices, plain
 from .controls import ControlError, ControlSchedule
-from .values import FLOAT_LIMIT, DescriptorError, range_values
+from .values import FLOAT_LIMIT, DescriptorError, range_values, suggest
 
 
 def section_class(section: str):
@@ -91,11 +90,6 @@ def _apply_preset(descriptor: dict, kind: str, design) -> None:
         descriptor[section].update(copy.deepcopy(values))
 
 
-def _suggest(word: str, options) -> str:
-    close = difflib.get_close_matches(word, list(options), n=1)
-    return f" (did you mean '{close[0]}'?)" if close else ""
-
-
 def _check_value(where: str, section: str, key: str, default, value):
     """Coerce ``value`` to the type of ``default`` or raise a DescriptorError naming ``where``."""
     name = f"{section}.{key}"
@@ -129,7 +123,7 @@ def _check_value(where: str, section: str, key: str, default, value):
     options = choices(section, key)
     if options is not None and value not in options:
         raise DescriptorError(
-            f"{where}: {name} = {value!r} is not one of {', '.join(options)}{_suggest(str(value), options)}"
+            f"{where}: {name} = {value!r} is not one of {', '.join(options)}{suggest(str(value), options)}"
         )
     limits = bounds(section, key)
     if limits is not None:
@@ -164,7 +158,7 @@ def merge(where: str, base: dict, override: dict) -> dict:
             continue
         if section not in out:
             raise DescriptorError(
-                f"{where}: unknown section [{section}]{_suggest(section, out)}; sections are {', '.join(out)}"
+                f"{where}: unknown section [{section}]{suggest(section, out)}; sections are {', '.join(out)}"
             )
         if not isinstance(values, dict):
             raise DescriptorError(f"{where}: [{section}] must be a table of keys, got {values!r}")
@@ -174,7 +168,7 @@ def merge(where: str, base: dict, override: dict) -> dict:
                 example = value if isinstance(value, (int, float)) and not isinstance(value, bool) else 8
                 hint = f"; wind.speed varies only between worlds or sweep cases: set wind.velocity=[{example},0,0]"
                 raise DescriptorError(
-                    f"{where}: unknown key {section}.{key}{_suggest(key, out[section])}; "
+                    f"{where}: unknown key {section}.{key}{suggest(key, out[section])}; "
                     f"[{section}] keys are {', '.join(out[section])}" + (hint if speed else "")
                 )
             checked = _check_value(where, section, key, out[section][key], value)
@@ -223,7 +217,7 @@ def _check_worlds(where: str, worlds, descriptor: dict) -> dict:
             name = f"worlds.{section}.{key}"
             if key not in keys:
                 raise DescriptorError(
-                    f"{where}: unknown key {name}{_suggest(key, keys)}; [{section}] keys are {', '.join(keys)}"
+                    f"{where}: unknown key {name}{suggest(key, keys)}; [{section}] keys are {', '.join(keys)}"
                 )
             if not isinstance(per_world, list) or len(per_world) != count:
                 raise DescriptorError(f"{where}: {name} must list one value per world ({count}), got {per_world!r}")
@@ -295,12 +289,12 @@ def check_axis(where: str, descriptor: dict, section: str, key: str, values) -> 
         raise DescriptorError(
             f"{where}: {name} cannot be swept: sweep keys of {', '.join(f'[{s}]' for s in sections)}"
             + (" (the sweep's --seconds sets how long every case runs)" if section == "scene" else "")
-            + _suggest(section, sections)
+            + suggest(section, sections)
         )
     keys = {**descriptor[section], **({"speed": 0.0} if section == "wind" else {})}
     if key not in keys:
         raise DescriptorError(
-            f"{where}: unknown key {name}{_suggest(key, keys)}; [{section}] keys are {', '.join(keys)}"
+            f"{where}: unknown key {name}{suggest(key, keys)}; [{section}] keys are {', '.join(keys)}"
         )
     if isinstance(values, str):
         values = range_values(f"{where}: {name} = {values!r}", values, None, "sweep")
@@ -364,7 +358,7 @@ def load_text(text: str, where: str) -> dict:
     if not isinstance(kind, str) or kind not in registry.OBJECTS:
         choices = tuple(registry.OBJECTS)
         raise DescriptorError(
-            f"{where}: scene.object = {kind!r} is not one of {', '.join(choices)}{_suggest(str(kind), choices)}"
+            f"{where}: scene.object = {kind!r} is not one of {', '.join(choices)}{suggest(str(kind), choices)}"
         )
     return merge(where, defaults(kind), raw)
 
@@ -394,7 +388,7 @@ def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, st
     for directory in search_dirs or []:
         names += [p.stem for p in sorted(Path(directory).glob("*.toml"))]
     raise DescriptorError(
-        f"unknown scene '{scene}'{_suggest(scene, names)}: use a built-in object ({', '.join(registry.OBJECTS)}), "
+        f"unknown scene '{scene}'{suggest(scene, names)}: use a built-in object ({', '.join(registry.OBJECTS)}), "
         "a scene name from `warpsim list`, or a path to a .toml descriptor"
     )
 

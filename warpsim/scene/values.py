@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import difflib
 import re
 import sys
 
@@ -12,6 +13,13 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 FLOAT_LIMIT = 1e30  # [any unit] the simulation is float32 (max 3.4e38): larger numbers are refused outright
+
+
+def suggest(word: str, options, cutoff: float = 0.6) -> str:
+    """`` (did you mean 'X'?)`` for the closest of ``options`` to a mistyped ``word`` (difflib's ratio at least
+    ``cutoff``), or nothing: the hint every one-line error about a name gives."""
+    close = difflib.get_close_matches(str(word), [str(o) for o in options], n=1, cutoff=cutoff)
+    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 class DescriptorError(ValueError):

@@ -7,6 +7,7 @@ from collections.abc import Sequence
 
 from .._extras import install_hint
 from ..run.figures import FIGURES, oscillations_of
+from ..scene.values import suggest
 
 EXTRA_HINT = install_hint("sweep")
 
@@ -67,10 +68,7 @@ def metrics_of(kind: str, names: Sequence[str] | None = None) -> tuple[str, ...]
         return have
     for name in names:
         if name not in have:
-            import difflib
-
-            close = difflib.get_close_matches(name, have, n=1)
-            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            hint = suggest(name, have)
             raise SweepError(f"--metrics: a {kind} has no metric {name!r}{hint}; it has {', '.join(have)}")
     chosen = set(names) | set(ALWAYS)
     return tuple(n for n in have if n in chosen)

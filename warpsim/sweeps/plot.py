@@ -9,24 +9,18 @@ left out of the picture and counted in its title. Every axis carries its unit (a
 
 from __future__ import annotations
 
-import difflib
 from pathlib import Path
 
 import numpy as np
 
 from .._extras import install_hint
+from ..scene.values import suggest
 
 MAX_LINES = 12  # lines one line plot draws before it asks for --where
 
 
 class PlotError(ValueError):
     """The table, keys or metric asked for cannot be drawn; the message says why in one line."""
-
-
-def _did_you_mean(name: str, known) -> str:
-    """`` (did you mean 'X'?)`` for the closest of ``known`` to a mistyped ``name``, or nothing."""
-    close = difflib.get_close_matches(str(name), [str(k) for k in known], n=1, cutoff=0.75)
-    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 def _require(module: str):
@@ -128,7 +122,7 @@ def plot_sweep(path, out, x: str, metric: str, y: str | None = None, where=()) -
     if metric not in table.columns or metric in keys:
         metrics = [c for c in table.columns if c not in keys]
         raise PlotError(
-            f"--metric {metric}: not in {path}{_did_you_mean(metric, metrics)}; it has {', '.join(metrics)}"
+            f"--metric {metric}: not in {path}{suggest(metric, metrics, cutoff=0.75)}; it has {', '.join(metrics)}"
         )
     if x == y:
         raise PlotError("--x and --y must be two different swept keys")
@@ -270,7 +264,7 @@ def recording_series(path, metrics) -> tuple[np.ndarray, dict[str, np.ndarray], 
         for name in metrics:
             if name not in known:
                 raise PlotError(
-                    f"--metric {name}: a {kind} recording has no such figure{_did_you_mean(name, known)}; "
+                    f"--metric {name}: a {kind} recording has no such figure{suggest(name, known, cutoff=0.75)}; "
                     f"it has {', '.join(known)}"
                 )
         model = recording.build_model()

@@ -406,16 +406,30 @@ def peak_frequency(ys: np.ndarray) -> float:
     return float(np.fft.rfftfreq(ys.size, FLAG_SAMPLE)[np.argmax(spectrum[1:]) + 1])
 
 
+def reduced_frequency(sim: Simulation, f: float) -> float:
+    """``f L / U`` of the flag of ``sim`` flapping at ``f`` [Hz]: its length away from the pole ``L`` [m] over its
+    wind speed ``U`` [m/s]."""
+    d = sim.descriptor
+    return f * float(d["flag"]["width"]) / float(np.linalg.norm(d["wind"]["velocity"]))
+
+
+def flag_middle_row(sim: Simulation) -> np.ndarray:
+    """The particles of the flag's middle row, from the pole out (:func:`~warpsim.objects.flag.build_flag` lays its
+    grid out in rows up the pole, columns away from it)."""
+    record = sim.model.objects[0]
+    rows = len(record.parts["pole"])
+    return record.parts["cloth"].reshape(rows, -1)[rows // 2]
+
+
 def flag_flapping(resolution: int, dt: float = 0.01, seconds: float = 30.0) -> dict:
     """The validation's flag (:func:`flag_simulation`) flown ``seconds``: its top trailing corner's sideways motion
     from 5 s on, its dominant frequency ``f`` [Hz] and ``f L / U``, its rms [m], and the worst stick stretch."""
     sim = flag_simulation(resolution, dt)
     _, ys, stretch = flag_corner_series(sim, seconds, after=5.0)
     f = peak_frequency(ys)
-    d = sim.descriptor
     return {
         "f": f,
-        "fL/U": f * float(d["flag"]["width"]) / float(np.linalg.norm(d["wind"]["velocity"])),
+        "fL/U": reduced_frequency(sim, f),
         "stretch": stretch,
         "rms": float(np.std(ys)),
     }
@@ -1449,11 +1463,7 @@ def flag_wave(resolution: int, dt: float, overrides: dict, seconds: float = 35.0
     three quarters and the whole of its length, fitted by a line: wavenumber ``k``), its speed ``c = 2 pi f / k``
     as ``c/U`` and its wavelength as ``λ/L``; and the worst stick stretch."""
     sim = flag_simulation(resolution, dt, overrides)
-    record = sim.model.objects[0]
-    cloth, pole = record.parts["cloth"], record.parts["pole"]
-    rows = len(pole)
-    grid = cloth.reshape(rows, len(cloth) // rows)  # rows up the pole, columns away from it (build_flag)
-    middle = grid[rows // 2]
+    middle = flag_middle_row(sim)
     columns = len(middle)
     stations = middle[[columns // 4, columns // 2, (3 * columns) // 4, columns - 1]]
     q0 = sim.model.particle_q0
@@ -1470,17 +1480,9 @@ def flag_wave(resolution: int, dt: float, overrides: dict, seconds: float = 35.0
     k_bin = int(round(f * len(along) * FLAG_SAMPLE))
     phase = np.unwrap(-np.angle(spectra[k_bin]))  # grows downstream for a wave running to the tip
     k = float(np.polyfit(where, phase, 1)[0])  # [rad/m]
-    d = sim.descriptor
-    length, speed = float(d["flag"]["width"]), float(np.linalg.norm(d["wind"]["velocity"]))
-    c = 2.0 * np.pi * f / k if k > 0.0 else math.nan
-    return {
-        "f": f,
-        "fL/U": f * length / speed,
-        "rms": float(np.std(corner)),
-        "c/U": c / speed,
-        "λ/L": c / f / length,
-        "stretch": stretch,
-    }
+    c_u = (2.0 * np.pi * f / k if k > 0.0 else math.nan) / float(np.linalg.norm(sim.descriptor["wind"]["velocity"]))
+    f_l_u = reduced_frequency(sim, f)
+    return {"f": f, "fL/U": f_l_u, "rms": float(np.std(corner)), "c/U": c_u, "λ/L": c_u / f_l_u, "stretch": stretch}
 
 
 SHEET_FLAG = {"flag": {"bending_stiffness": 0.1, "cloth_compliance": 1e-3}, "solver": {"mass_splitting": True}}

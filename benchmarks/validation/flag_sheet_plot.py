@@ -20,8 +20,10 @@ from benchmarks.validation.cases import (
     SHEET_FLAG,
     SHEET_ITERATIONS_PER_RESOLUTION,
     flag_corner,
+    flag_middle_row,
     flag_samples,
     flag_simulation,
+    reduced_frequency,
     refined_peak_frequency,
 )
 
@@ -35,18 +37,14 @@ def middle_row(resolution: int, sheet: bool, seconds: float = 25.0, after: float
         "solver": {**SHEET_FLAG["solver"], "iterations": SHEET_ITERATIONS_PER_RESOLUTION * resolution},
     }
     sim = flag_simulation(resolution, SHEET_DT, overrides)
-    record = sim.model.objects[0]
-    cloth, rows = record.parts["cloth"], len(record.parts["pole"])
-    row = cloth.reshape(rows, -1)[rows // 2]
+    row = flag_middle_row(sim)
     tip = flag_corner(sim)
     shapes, corner = [], []
     for _, p in flag_samples(sim, seconds, after):
         shapes.append(p[row, :2] - p[row[0], :2])
         corner.append(p[tip, 1])
-    d = sim.descriptor
-    speed = float(np.linalg.norm(d["wind"]["velocity"]))
     f = refined_peak_frequency(np.array(corner))
-    return {"shapes": np.array(shapes), "f": f, "fL/U": f * float(d["flag"]["width"]) / speed}
+    return {"shapes": np.array(shapes), "f": f, "fL/U": reduced_frequency(sim, f)}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.builder import ModelBuilder, check_memory
-from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, number
+from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
 from ..physics.model import ObjectRecord
 from ..physics.terrain import Heightfield
 
@@ -24,13 +24,19 @@ class FlagConfig(Checked):
             keeps every stick within 1% of its rest length (the scene steps finer, 1.25 ms with 110 iterations,
             so that its flapping does not depend on the step); finer cloth stretches more (see README).
         mass_per_area: fabric areal density [kg/m^2] (flag nylon ~0.1-0.2).
+        mass_lumping: how the cloth's mass is shared among its particles. ``"even"``, the default, is the paper's:
+            every particle the same, so that the grid's edges carry twice the cloth their area holds and its corners
+            four times, a heavier border the coarser the mesh. ``"area"`` gives each particle the cloth it stands for
+            (a quarter of every cell it touches), as a real cloth's: the sheet flag's resolutions 9, 17 and 33 then
+            flap within 9 % of each other, 10 % with even masses (scenes/flag_sheet.toml).
         bending_stiffness: the cloth's bending stiffness ``B`` [N m] (per metre of width: ``E t^3 / 12`` for a
             sheet of Young's modulus ``E`` and thickness ``t``; Poisson's ratio 0), as hinges along the grid's rows
             and columns and a twist in every cell (:func:`add_plate_hinges`, :mod:`warpsim.physics.kernels.bending`).
             0, the default, is the paper's cloth, which folds freely; its flapping is then set by the mesh
             (docs/objects.md). A flag's fabric has ~1e-5 to 1e-3, which sets waves of centimetres, finer than these
             meshes; a stiffer sheet (0.1, a card or a thin plastic sheet: scenes/flag_sheet.toml) sets its waves at
-            the flag's length, and its flapping converges as the mesh is refined. Explicit: dt must stay under
+            the flag's length, and its flapping converges as the mesh is refined (for a given cloth: a cloth stiffer in
+            its plane flaps slower, docs/objects.md). Explicit: dt must stay under
             ``Model.bending_dt`` (a scene past it is refused).
         cloth_compliance: stretch [m/N] per newton of tension of each of the cloth's sticks (XPBD; needs
             ``solver.mass_splitting``). A square grid's sticks, with both diagonals in every cell, give the cloth an
@@ -45,6 +51,7 @@ class FlagConfig(Checked):
     height: float = number(1.2, POSITIVE)
     resolution: int = number(5, Bounds(2, 4096))
     mass_per_area: float = number(0.15, POSITIVE)
+    mass_lumping: str = choice("even", ("even", "area"))
     bending_stiffness: float = number(0.0, NON_NEGATIVE)
     cloth_compliance: float = number(0.0, NON_NEGATIVE)
     pole_height: float = number(5.0, POSITIVE)
@@ -98,6 +105,7 @@ def build_flag(builder: ModelBuilder, cfg: FlagConfig, terrain: Heightfield) -> 
         count_u=count_u,
         count_v=count_v,
         mass=cfg.mass_per_area * cfg.width * cfg.height,
+        by_area=cfg.mass_lumping == "area",
     )
     for j in range(count_v):
         builder.add_nail(int(ids[j, 0]))

@@ -22,10 +22,13 @@ class MeshShapes:
         mass: float,
         vel=(0.0, 0.0, 0.0),
         shear: bool = True,
+        by_area: bool = False,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """A rectangular cloth of ``count_u x count_v`` particles at ``origin + i*axis_u + j*axis_v``.
 
-        ``axis_u``/``axis_v`` are the spacing vectors [m]; ``mass`` [kg] is the total, spread evenly.
+        ``axis_u``/``axis_v`` are the spacing vectors [m]; ``mass`` [kg] is the total, spread evenly over the
+        particles (the paper's: the grid's edges then carry twice the cloth their area holds, its corners four times),
+        or with ``by_area`` in proportion to the cloth each particle stands for (a quarter of each cell it touches).
         Sticks on the grid edges and on both diagonals of every cell (``shear``); two triangles per cell.
 
         Returns ``(particles [count_v, count_u], sticks, triangles)`` index arrays.
@@ -33,9 +36,12 @@ class MeshShapes:
         if count_u < 2 or count_v < 2:
             raise ValueError(f"a grid needs at least 2x2 particles, got {count_u}x{count_v}")
         o, du, dv = (np.asarray(a, dtype=np.float64) for a in (origin, axis_u, axis_v))
-        m = mass / (count_u * count_v)
+        share = np.ones((count_v, count_u))
+        if by_area:
+            share = np.outer(*(np.where((np.arange(n) == 0) | (np.arange(n) == n - 1), 0.5, 1.0) for n in share.shape))
+        m = mass * share / share.sum()
         ids = np.array(
-            [[self.add_particle(o + i * du + j * dv, m, vel) for i in range(count_u)] for j in range(count_v)]
+            [[self.add_particle(o + i * du + j * dv, m[j, i], vel) for i in range(count_u)] for j in range(count_v)]
         )
         s0, t0 = self.stick_count, self.tri_count
         for j in range(count_v):

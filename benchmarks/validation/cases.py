@@ -1599,7 +1599,9 @@ def flag_sheet() -> list[Row]:
             abs(soft_off) <= 0.10,
             note=f"the stiffest {100 * soft_off:+.0f} %: the flapping is the soft cloth's, and the frequency "
             "falls on as the cloth stiffens (8-13 % for each factor 4; resolution 17: 0.434, 0.404, 0.371 at the "
-            "first three, 7-8 % each, a scratch run, c/U 1.14, 1.08, 1.05). Rigid sticks (compliance 0, 1008-4032 "
+            "first three, 7-8 % each, a scratch run, c/U 1.14, 1.08, 1.05; resolution 33 at 6.25e-5 m/N: 0.391, "
+            "c/U 1.07, 11 % below the sheet flag's 0.440 where resolution 9 is 20 % below, so the finer the mesh "
+            "the less the stiffness moves it). Rigid sticks (compliance 0, 1008-4032 "
             "iterations) flap at 0.19-0.20 with 0.1 m rms, and may be the grid's more than a sheet's: a cell whose "
             "sides and both diagonals keep their lengths stays flat, so the rigid grid folds only along whole rows "
             "or columns (its crossed cells lock). A sheet's own stiffness needs elements that do not lock "

@@ -186,8 +186,8 @@ def flag_caveat(descriptor: dict) -> str:
         )
     return (
         f"note: the flapping is this cloth's, about {1.5 / float(flag['cloth_compliance']):,.0f} N/m in its plane: "
-        "a stiffer cloth flaps slower (7-13 % for each factor 4), and a sheet's own stiffness is beyond this grid "
-        f"{where}"
+        "a stiffer cloth flaps slower (16 times stiffer: 15 % at resolution 17, 11 % at 33), and a sheet's own "
+        f"stiffness is beyond these meshes {where}"
     )
 
 

@@ -151,7 +151,8 @@ def flag_caveat(descriptor: dict) -> str:
     ``(B / (rho U^2))^(1/3)``, with elastic sticks and at least :data:`SHEET_ITERATIONS` iterations per particle
     along it (the rigid sticks' iterations never converge on a fine mesh, and the flapping follows their count).
     Even then they are the elastic cloth's: a stiffer cloth flaps slower (the validation's row 'sheet flag
-    frequency, cloth stiffness'), and a sheet's own in-plane stiffness is beyond the grid (its crossed cells lock).
+    frequency, cloth stiffness'; less so on a finer mesh), and a sheet's own in-plane stiffness is beyond these
+    meshes and their iterations.
     The Euler mass-spring comparison's flapping is not validated."""
     flag, solver = descriptor["flag"], descriptor["solver"]
     resolution, bending = int(flag["resolution"]), float(flag["bending_stiffness"])

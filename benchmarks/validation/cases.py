@@ -446,6 +446,14 @@ FLAG_TIME_STEPS = (0.01, 0.0025, 0.000625)
 """The time steps [s] of the flag's time-step row, at resolution 17."""
 
 
+def flag_band_row(case: str, compared: str, value: float, digits: int, note: str) -> Row:
+    """The row of a flag's f L/U ``value`` (shown to ``digits`` decimals) against the paper flags' measured band,
+    0.30-0.53 (:data:`FLAG_SOURCE`)."""
+    return Row(
+        case, compared, "0.30-0.53", FLAG_SOURCE, f"{value:.{digits}f}", "0.30-0.53", 0.30 <= value <= 0.53, note=note
+    )
+
+
 def flag() -> list[Row]:
     """The flag's flapping at resolutions 9, 17 and 33 (iterations 28 x resolution) and at resolution 17 with the
     time step quartered twice: whether its frequency converges, lands in the measured band, and its sticks hold."""
@@ -502,15 +510,12 @@ def flag() -> list[Row]:
             "(its corner 0.6 m lower on average than at dt 0.000625) and fold into the big flap. "
             "benchmarks/validation/flag_time_step.py draws it (docs/flag_time_step.png)",
         ),
-        Row(
+        flag_band_row(
             "flag frequency, measured band",
             "f L/U at resolution 33, 4 m/s wind, 2 m flag",
-            "0.30-0.53",
-            FLAG_SOURCE,
-            f"{fine['fL/U']:.2f}",
-            "0.30-0.53",
-            0.30 <= fine["fL/U"] <= 0.53,
-            note="set by the mesh and the time step (rows above)",
+            fine["fL/U"],
+            2,
+            "set by the mesh and the time step (rows above)",
         ),
         Row(
             "flag sticks at resolution 33",
@@ -1495,10 +1500,6 @@ SHEET_FLAG = {
 stretch up to 3.6 % as the tip snaps at resolution 17), whose iterations converge (mass splitting), and each
 particle the mass of the cloth it stands for (not the paper's even share, which doubles the edges')."""
 
-SHEET_ITERATIONS_PER_RESOLUTION = SHEET_ITERATIONS
-"""Iterations per particle along the sheet flag (``warpsim.objects.figures.SHEET_ITERATIONS``, which its run's note
-checks): twice as many flap the same."""
-
 WAVE_NOTE = (  # the sheet flag's wave-speed row: why its waves miss the reference's, and what the band does not say
     "the waves run a little faster than the wind and are longer than the paper flags' (λ/L about 2.6 against 1.87), "
     "so that f L/U = (c/U)/(λ/L) still falls in the band. They are the soft cloth's in part: stiffer cloth's waves "
@@ -1517,13 +1518,16 @@ SHEET_STIFFER = (2.5e-4, 6.25e-5, 1.5625e-5)
 at each step down: the same figures as with twice as many again)."""
 
 
-def _sheet(
-    resolution: int, dt: float = SHEET_DT, iterations: int | None = None, compliance: float | None = None
-) -> dict:
-    iterations = iterations or SHEET_ITERATIONS_PER_RESOLUTION * resolution
-    flag = {**SHEET_FLAG["flag"], **({} if compliance is None else {"cloth_compliance": compliance})}
-    overrides = {"flag": flag, "solver": {**SHEET_FLAG["solver"], "iterations": iterations}}
-    return flag_wave(resolution, dt, overrides, seconds=45.0, after=10.0)
+def sheet_overrides(resolution: int, iterations: int | None = None, **flag) -> dict:
+    """The descriptor overrides of :data:`SHEET_FLAG` at ``resolution``, with ``flag`` keys on top: ``iterations``,
+    or ``SHEET_ITERATIONS`` per particle along it (``warpsim.objects.figures``, which its run's note checks; twice as
+    many flap the same)."""
+    iterations = iterations or SHEET_ITERATIONS * resolution
+    return {"flag": {**SHEET_FLAG["flag"], **flag}, "solver": {**SHEET_FLAG["solver"], "iterations": iterations}}
+
+
+def _sheet(resolution: int, dt: float = SHEET_DT, iterations: int | None = None, **flag) -> dict:
+    return flag_wave(resolution, dt, sheet_overrides(resolution, iterations, **flag), seconds=45.0, after=10.0)
 
 
 def flag_sheet() -> list[Row]:
@@ -1531,10 +1535,10 @@ def flag_sheet() -> list[Row]:
     time step doubled and with the iterations doubled; its frequency and its wave against the measured band."""
     runs = {res: _sheet(res) for res in (9, 17, 33)}
     coarse_dt = _sheet(17, 2 * SHEET_DT)
-    more = _sheet(17, iterations=2 * SHEET_ITERATIONS_PER_RESOLUTION * 17)
+    more = _sheet(17, iterations=2 * SHEET_ITERATIONS * 17)
     compliances = (SHEET_FLAG["flag"]["cloth_compliance"], *SHEET_STIFFER)
     stiffer = [runs[9]] + [
-        _sheet(9, iterations=2 ** (k + 1) * SHEET_ITERATIONS_PER_RESOLUTION * 9, compliance=c)
+        _sheet(9, iterations=2 ** (k + 1) * SHEET_ITERATIONS * 9, cloth_compliance=c)
         for k, c in enumerate(SHEET_STIFFER)
     ]
     soft_off = stiffer[-1]["fL/U"] / stiffer[0]["fL/U"] - 1.0
@@ -1543,8 +1547,8 @@ def flag_sheet() -> list[Row]:
     fine, mid = runs[33], runs[17]
     what = (
         "the flag of the rows above with a bending stiffness of 0.1 N m, elastic cloth (1e-3 m/N a stick, "
-        "mass splitting) and masses by area (14 iterations per resolution, dt "
-        f"{SHEET_DT:g} s, 10-45 s)"
+        f"mass splitting) and masses by area ({SHEET_ITERATIONS} iterations per resolution, dt {SHEET_DT:g} s, "
+        "10-45 s)"
     )
     listed = ", ".join(f"{r['fL/U']:.3f} ({res})" for res, r in runs.items())
     fine_off = fine["fL/U"] / mid["fL/U"] - 1.0
@@ -1575,7 +1579,7 @@ def flag_sheet() -> list[Row]:
         Row(
             "sheet flag frequency, time step and iterations",
             f"f L/U at resolution 17: dt {SHEET_DT:g} s against {2 * SHEET_DT:g} s, and "
-            f"{SHEET_ITERATIONS_PER_RESOLUTION * 17} iterations against {2 * SHEET_ITERATIONS_PER_RESOLUTION * 17}",
+            f"{SHEET_ITERATIONS * 17} iterations against {2 * SHEET_ITERATIONS * 17}",
             "the same",
             "a figure of the flag, not of its numerics",
             f"{mid['fL/U']:.3f}; {coarse_dt['fL/U']:.3f} at dt {2 * SHEET_DT:g}; {more['fL/U']:.3f} with "
@@ -1608,15 +1612,12 @@ def flag_sheet() -> list[Row]:
             "(nonconforming or a shell) and the iterations it then asks for; the rows above hold at this "
             "cloth's stiffness only",
         ),
-        Row(
+        flag_band_row(
             "sheet flag frequency, measured band",
             "f L/U at resolution 33",
-            "0.30-0.53",
-            FLAG_SOURCE,
-            f"{fine['fL/U']:.3f}",
-            "0.30-0.53",
-            0.30 <= fine["fL/U"] <= 0.53,
-            note="at this cloth's stiffness; a stiffer cloth flaps slower (the row 'cloth stiffness')",
+            fine["fL/U"],
+            3,
+            "at this cloth's stiffness; a stiffer cloth flaps slower (the row 'cloth stiffness')",
         ),
         Row(
             "sheet flag wave speed",

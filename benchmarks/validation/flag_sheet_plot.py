@@ -17,14 +17,13 @@ from benchmarks.validation import picture_command, save_picture
 from benchmarks.validation.cases import (
     FLAG_SAMPLE,
     SHEET_DT,
-    SHEET_FLAG,
-    SHEET_ITERATIONS_PER_RESOLUTION,
     flag_corner,
     flag_middle_row,
     flag_samples,
     flag_simulation,
     reduced_frequency,
     refined_peak_frequency,
+    sheet_overrides,
 )
 
 
@@ -32,11 +31,9 @@ def middle_row(resolution: int, sheet: bool, seconds: float = 25.0, after: float
     """Fly the flag (the sheet flag, or the same cloth without its bending stiffness: the paper's cloth with the
     sheet's elastic sticks, mass splitting and masses) ``seconds``: its middle row's distance from the pole and
     sideways offset [m] every ``FLAG_SAMPLE`` seconds after ``after``, and its corner's frequency [Hz]."""
-    overrides = {
-        "flag": {k: v for k, v in SHEET_FLAG["flag"].items() if sheet or k != "bending_stiffness"},
-        "solver": {**SHEET_FLAG["solver"], "iterations": SHEET_ITERATIONS_PER_RESOLUTION * resolution},
-    }
-    sim = flag_simulation(resolution, SHEET_DT, overrides)
+    sim = flag_simulation(
+        resolution, SHEET_DT, sheet_overrides(resolution, **({} if sheet else {"bending_stiffness": 0.0}))
+    )
     row = flag_middle_row(sim)
     tip = flag_corner(sim)
     shapes, corner = [], []

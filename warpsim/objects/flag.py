@@ -9,6 +9,7 @@ import numpy as np
 from ..physics.builder import ModelBuilder, check_memory
 from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
 from ..physics.model import ObjectRecord
+from ..physics.shapes import edge_halves
 from ..physics.terrain import Heightfield
 
 
@@ -68,12 +69,10 @@ def add_plate_hinges(builder: ModelBuilder, ids: np.ndarray, du: float, dv: floa
     ``B w / h^3`` with ``h`` its spacing and ``w`` the width of the strip it stands for (half a spacing on the grid's
     edges), and a twist on every cell, of stiffness ``2 B / (du dv)``."""
     rows, columns = ids.shape
-    for j in range(rows):
-        width = dv * (0.5 if j in (0, rows - 1) else 1.0)
+    for j, width in enumerate(dv * edge_halves(rows)):
         for i in range(1, columns - 1):
             builder.add_hinge(ids[j, i - 1], ids[j, i], ids[j, i + 1], bending * width / du**3)
-    for i in range(columns):
-        width = du * (0.5 if i in (0, columns - 1) else 1.0)
+    for i, width in enumerate(du * edge_halves(columns)):
         for j in range(1, rows - 1):
             builder.add_hinge(ids[j - 1, i], ids[j, i], ids[j + 1, i], bending * width / dv**3)
     for j in range(rows - 1):

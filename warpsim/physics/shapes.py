@@ -8,6 +8,14 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 
+def edge_halves(count: int) -> np.ndarray:
+    """The share of a line of ``count`` equally spaced points that each stands for: 1 inside, 1/2 at either end (the
+    trapezoid rule's weights, in spacings)."""
+    share = np.ones(count)
+    share[[0, -1]] = 0.5
+    return share
+
+
 class MeshShapes:
     """The shapes a :class:`~warpsim.physics.builder.ModelBuilder` adds in one call (it provides ``add_particle``,
     ``add_stick``, ``add_triangle``, ``stick_count`` and ``tri_count``)."""
@@ -36,9 +44,7 @@ class MeshShapes:
         if count_u < 2 or count_v < 2:
             raise ValueError(f"a grid needs at least 2x2 particles, got {count_u}x{count_v}")
         o, du, dv = (np.asarray(a, dtype=np.float64) for a in (origin, axis_u, axis_v))
-        share = np.ones((count_v, count_u))
-        if by_area:
-            share = np.outer(*(np.where((np.arange(n) == 0) | (np.arange(n) == n - 1), 0.5, 1.0) for n in share.shape))
+        share = np.outer(edge_halves(count_v), edge_halves(count_u)) if by_area else np.ones((count_v, count_u))
         m = mass * share / share.sum()
         ids = np.array(
             [[self.add_particle(o + i * du + j * dv, m[j, i], vel) for i in range(count_u)] for j in range(count_v)]

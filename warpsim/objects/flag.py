@@ -28,22 +28,30 @@ class FlagConfig(Checked):
         mass_lumping: how the cloth's mass is shared among its particles. ``"even"``, the default, is the paper's:
             every particle the same, so that the grid's edges carry twice the cloth their area holds and its corners
             four times, a heavier border the coarser the mesh. ``"area"`` gives each particle the cloth it stands for
-            (a quarter of every cell it touches), as a real cloth's: the sheet flag's resolutions 9, 17 and 33 then
-            flap within 9 % of each other, 10 % with even masses (scenes/flag_sheet.toml).
+            (a quarter of every cell it touches), as a real cloth's: a sheet flag with every stick alike flapped
+            within 9 % of itself at resolutions 9, 17 and 33 with it, 10 % with even masses (docs/objects.md).
         bending_stiffness: the cloth's bending stiffness ``B`` [N m] (per metre of width: ``E t^3 / 12`` for a
             sheet of Young's modulus ``E`` and thickness ``t``; Poisson's ratio 0), as hinges along the grid's rows
             and columns and a twist in every cell (:func:`add_plate_hinges`, :mod:`warpsim.physics.kernels.bending`).
             0, the default, is the paper's cloth, which folds freely; its flapping is then set by the mesh
             (docs/objects.md). A flag's fabric has ~1e-5 to 1e-3, which sets waves of centimetres, finer than these
             meshes; a stiffer sheet (0.1, a card or a thin plastic sheet: scenes/flag_sheet.toml) sets its waves at
-            the flag's length, and its flapping converges as the mesh is refined (for a given cloth: a cloth stiffer in
-            its plane flaps slower, docs/objects.md). Explicit: dt must stay under
+            the flag's length, and its flapping converges as the mesh is refined (with a woven cloth, whatever its
+            threads' stiffness: ``shear_compliance``). Explicit: dt must stay under
             ``Model.bending_dt`` (a scene past it is refused).
         cloth_compliance: stretch [m/N] per newton of tension of each of the cloth's sticks (XPBD; needs
             ``solver.mass_splitting``). A square grid's sticks, with both diagonals in every cell, give the cloth an
             in-plane stiffness of about ``1.5 / cloth_compliance`` [N/m] under a pull one way (``2 /`` held
             sideways) at any resolution. 0, the default, is the paper's rigid sticks, which the
             iterations only approach: finer cloth then stretches more and answers to the iteration count.
+        shear_compliance: stretch [m/N] per newton of each cell's two diagonal sticks, which alone resist the cloth's
+            shear along its threads (the rows and columns, ``cloth_compliance``): a shear stiffness ``G t`` of
+            ``1 / shear_compliance`` [N/m] (on the bias the threads hold it: ``1 / (2 cloth_compliance)``). 0, the
+            default, gives the diagonals ``cloth_compliance`` too: every stick alike, a cloth as stiff in shear as
+            a sheet. A woven fabric is stiff along its threads and shears under small forces (its threads turn at
+            their crossings): with diagonals softer than its threads, the sheet flag flaps the same whatever its
+            threads' stiffness, where the grid of like sticks flaps slower the stiffer it is made (its crossed
+            cells, over-constrained, lock on these meshes; docs/objects.md).
         pole_height: height of the flag's top edge above the terrain at the pole's foot [m].
         position: (x, y) of the pole [m].
     """
@@ -55,6 +63,7 @@ class FlagConfig(Checked):
     mass_lumping: str = choice("even", ("even", "area"))
     bending_stiffness: float = number(0.0, NON_NEGATIVE)
     cloth_compliance: float = number(0.0, NON_NEGATIVE)
+    shear_compliance: float = number(0.0, NON_NEGATIVE)
     pole_height: float = number(5.0, POSITIVE)
     position: tuple[float, float] = (0.0, 0.0)
 
@@ -110,6 +119,10 @@ def build_flag(builder: ModelBuilder, cfg: FlagConfig, terrain: Heightfield) -> 
         builder.add_nail(int(ids[j, 0]))
     if cfg.cloth_compliance > 0.0:
         builder.set_compliance(sticks, cfg.cloth_compliance)
+    if cfg.shear_compliance > 0.0:
+        # each cell's diagonals: longer than either of its sides
+        side = max(cfg.width / (count_u - 1), cfg.height / (count_v - 1))
+        builder.set_compliance([s for s in sticks if builder.stick_rest[s] > side * (1.0 + 1e-6)], cfg.shear_compliance)
     if cfg.bending_stiffness > 0.0:
         add_plate_hinges(builder, ids, cfg.width / (count_u - 1), cfg.height / (count_v - 1), cfg.bending_stiffness)
     particles = np.arange(p0, builder.particle_count)

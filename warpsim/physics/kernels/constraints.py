@@ -508,9 +508,9 @@ class StickProjector:
             # the plain average moves a stick's two ends by shares that do not follow its masses, so no lam per
             # stick is its tension: the stretch would come out n times too large, and differ at its two ends
             raise ValueError(
-                "elastic sticks (a compliance > 0: kite.sail_compliance, kite.frame_compliance or "
-                "flag.cloth_compliance) need solver.mass_splitting = true; make them rigid (compliance 0) for the "
-                "paper's plain average"
+                "elastic sticks (a compliance > 0: kite.sail_compliance, kite.frame_compliance, "
+                "flag.cloth_compliance or flag.shear_compliance) need solver.mass_splitting = true; make them "
+                "rigid (compliance 0) for the paper's plain average"
             )
         self.stick_compliance = wp.array(
             compliance.astype(np.float32) if len(compliance) else np.zeros(1, dtype=np.float32),

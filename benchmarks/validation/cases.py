@@ -9,7 +9,10 @@ from __future__ import annotations
 
 import functools
 import math
+import multiprocessing
+import os
 from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -473,8 +476,8 @@ def flag() -> list[Row]:
         "without a bending stiffness the mesh resolves, its fastest-growing wave is the mesh's shortest. A "
         "wavelength tied to the flag's length needs a short-wave limit the mesh resolves (implicit bending, an added "
         "mass falling at short waves, or an unsteady vortex lattice with a free wake), not more iterations. "
-        "With a sheet's bending stiffness and elastic cloth it converges with the mesh, though not with the "
-        "cloth's stiffness (the 'sheet flag' rows)"
+        "With a sheet's bending stiffness and a woven cloth it converges with the mesh, the step, the iterations "
+        "and the threads' stiffness (the 'sheet flag' rows)"
     )
     listed = ", ".join(f"{r['fL/U']:.2f} ({res})" for res, r in runs.items())
     return [
@@ -1492,30 +1495,38 @@ def flag_wave(resolution: int, dt: float, overrides: dict, seconds: float = 35.0
 
 
 SHEET_FLAG = {
-    "flag": {"bending_stiffness": 0.1, "cloth_compliance": 1e-3, "mass_lumping": "area"},
+    "flag": {
+        "bending_stiffness": 0.1,
+        "cloth_compliance": 1.5625e-5,
+        "shear_compliance": 1e-2,
+        "mass_lumping": "area",
+    },
     "solver": {"mass_splitting": True},
 }
 """The sheet flag: the validation's flag (2 m x 1.2 m, 0.15 kg/m^2, 4 m/s) with a bending stiffness of 0.1 N m
-(a sheet's, not a fabric's), elastic cloth of 1e-3 m/N a stick (about 1,500 N/m in the plane; its sticks
-stretch up to 3.6 % as the tip snaps at resolution 17), whose iterations converge (mass splitting), and each
-particle the mass of the cloth it stands for (not the paper's even share, which doubles the edges')."""
+(a sheet's, not a fabric's) and a woven cloth in its plane: threads (the grid's rows and columns) of 1.5625e-5 m/N a
+stick (64,000 N/m along them) and diagonals of 1e-2 m/N (a shear stiffness G t of 100 N/m; its diagonals stretch up
+to 5 % as the tip snaps), whose iterations converge (mass splitting), and each particle the mass of the cloth it
+stands for (not the paper's even share, which doubles the edges')."""
 
 WAVE_NOTE = (  # the sheet flag's wave-speed row: why its waves miss the reference's, and what the band does not say
-    "the waves run a little faster than the wind and are longer than the paper flags' (λ/L about 2.6 against 1.87), "
-    "so that f L/U = (c/U)/(λ/L) still falls in the band. They are the soft cloth's in part: stiffer cloth's waves "
-    "run slower (resolution 9: c/U 1.07 at this cloth, 0.87 at 64 times as stiff; the row 'cloth stiffness'). The "
-    "paper's air law feels only each triangle's own normal wind: a wave running at the wind's speed feels no force, "
-    "and nothing in it slows the wave as the reference's air does. The reference's paper flags' mass ratio and "
-    "stiffness are not in the stored excerpts, so the wavelength is compared in kind"
+    "the waves run a little faster than the wind and are longer than the paper flags' (λ/L about 2.55 against 1.87), "
+    "so that f L/U = (c/U)/(λ/L) still falls in the band. The paper's air law feels only each triangle's own normal "
+    "wind: a wave running at the wind's speed feels no force, and nothing in it slows the wave as the reference's air "
+    "does. The reference's paper flags' mass ratio and stiffness are not in the stored excerpts, so the wavelength is "
+    "compared in kind"
 )
 SHEET_DT = 0.0005
 """[s]: resolution 33's bending (its hinges and twists) needs dt <= 0.00058 s (Model.bending_dt); the same step at
 every resolution."""
 
+SHEET_SOFTER_THREADS = (1e-3, 2.5e-4, 6.25e-5)
+"""[m/N a stick]: the sheet flag's threads made 64, 16 and 4 times softer (its shear kept)."""
 
-SHEET_STIFFER = (2.5e-4, 6.25e-5, 1.5625e-5)
-"""[m/N a stick]: the cloth stiffened 4, 16 and 64 times over the sheet flag's (resolution 9, twice the iterations
-at each step down: the same figures as with twice as many again)."""
+SHEET_ALIKE = (1e-3, 2.5e-4, 6.25e-5, 1.5625e-5)
+"""[m/N a stick]: a cloth with every stick (threads and diagonals) of this compliance, as stiff in shear as a sheet
+(not a woven cloth): about 1,500 N/m in the plane and 4, 16, 64 times that (twice the iterations at each step down
+at resolution 9: the same figures as with twice as many again)."""
 
 
 def sheet_overrides(resolution: int, iterations: int | None = None, **flag) -> dict:
@@ -1530,28 +1541,76 @@ def _sheet(resolution: int, dt: float = SHEET_DT, iterations: int | None = None,
     return flag_wave(resolution, dt, sheet_overrides(resolution, iterations, **flag), seconds=45.0, after=10.0)
 
 
+def in_processes(function: Callable, jobs: dict, cost: Callable | None = None) -> dict:
+    """``function(*jobs[name])`` for every ``name`` of ``jobs``, one process per core (a run's CPU kernels use one
+    thread), the costliest first by ``cost(*args)``: the same results as one after another, in the order of
+    ``jobs``. ``function`` must be importable (a module's top level)."""
+    order = sorted(jobs, key=lambda name: -cost(*jobs[name])) if cost else list(jobs)
+    workers = min(len(jobs), os.cpu_count() or 1)
+    if workers <= 1:
+        return {name: function(*jobs[name]) for name in jobs}
+    # spawned, not forked: a forked child would inherit the parent's Warp runtime mid-state
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        futures = {name: pool.submit(function, *jobs[name]) for name in order}
+        return {name: futures[name].result() for name in jobs}
+
+
+def _sheet_job(resolution: int, dt: float, iterations: int | None, flag: dict) -> dict:
+    return _sheet(resolution, dt, iterations, **flag)
+
+
+def _sheet_cost(resolution: int, dt: float, iterations: int | None, flag: dict) -> float:
+    return resolution**2 * (iterations or SHEET_ITERATIONS * resolution) / dt
+
+
 def flag_sheet() -> list[Row]:
     """The sheet flag (:data:`SHEET_FLAG`): its flapping at resolutions 9, 17 and 33, at resolution 17 with the
-    time step doubled and with the iterations doubled; its frequency and its wave against the measured band."""
-    runs = {res: _sheet(res) for res in (9, 17, 33)}
-    coarse_dt = _sheet(17, 2 * SHEET_DT)
-    more = _sheet(17, iterations=2 * SHEET_ITERATIONS * 17)
-    compliances = (SHEET_FLAG["flag"]["cloth_compliance"], *SHEET_STIFFER)
-    stiffer = [runs[9]] + [
-        _sheet(9, iterations=2 ** (k + 1) * SHEET_ITERATIONS * 9, cloth_compliance=c)
-        for k, c in enumerate(SHEET_STIFFER)
-    ]
-    soft_off = stiffer[-1]["fL/U"] / stiffer[0]["fL/U"] - 1.0
+    time step doubled and with the iterations doubled, with softer threads; a cloth of like sticks against it; its
+    frequency and its wave against the measured band."""
+    alike = {"shear_compliance": 0.0}
+    jobs = {res: (res, SHEET_DT, None, {}) for res in (9, 17, 33)}
+    jobs["coarse dt"] = (17, 2 * SHEET_DT, None, {})
+    jobs["more iterations"] = (17, SHEET_DT, 2 * SHEET_ITERATIONS * 17, {})
+    for c in SHEET_SOFTER_THREADS:
+        jobs["threads", 9, c] = (9, SHEET_DT, None, {"cloth_compliance": c})
+    jobs["threads", 17, SHEET_SOFTER_THREADS[0]] = (17, SHEET_DT, None, {"cloth_compliance": SHEET_SOFTER_THREADS[0]})
+    for k, c in enumerate(SHEET_ALIKE):
+        jobs["alike", 9, c] = (9, SHEET_DT, 2**k * SHEET_ITERATIONS * 9, {"cloth_compliance": c, **alike})
+    for res in (17, 33):
+        jobs["alike", res, SHEET_ALIKE[0]] = (
+            res,
+            SHEET_DT,
+            None,
+            {"cloth_compliance": SHEET_ALIKE[0], **alike},
+        )
+    done = in_processes(_sheet_job, jobs, _sheet_cost)
+    runs = {res: done[res] for res in (9, 17, 33)}
+    coarse_dt, more = done["coarse dt"], done["more iterations"]
+    threads = [done["threads", 9, c] for c in SHEET_SOFTER_THREADS] + [runs[9]]
+    thread_values = [r["fL/U"] for r in threads]
+    thread_spread = max(thread_values) / min(thread_values) - 1.0
+    soft17 = done["threads", 17, SHEET_SOFTER_THREADS[0]]
+    stiffer = [done["alike", 9, c] for c in SHEET_ALIKE]
+    stiff_off = stiffer[-1]["fL/U"] / stiffer[0]["fL/U"] - 1.0
+    like = {res: done["alike", res, SHEET_ALIKE[0]] for res in (17, 33)} | {9: stiffer[0]}
+    gaps = {res: like[res]["fL/U"] / runs[res]["fL/U"] - 1.0 for res in (9, 17, 33)}
     ratios = [r["fL/U"] for r in runs.values()]
     spread = max(ratios) / min(ratios) - 1.0
     fine, mid = runs[33], runs[17]
     what = (
-        "the flag of the rows above with a bending stiffness of 0.1 N m, elastic cloth (1e-3 m/N a stick, "
-        f"mass splitting) and masses by area ({SHEET_ITERATIONS} iterations per resolution, dt {SHEET_DT:g} s, "
-        "10-45 s)"
+        "the flag of the rows above with a bending stiffness of 0.1 N m, a woven cloth (threads 1.5625e-5 m/N a "
+        "stick, 64,000 N/m; diagonals 1e-2 m/N, a shear stiffness of 100 N/m; mass splitting) and masses by area "
+        f"({SHEET_ITERATIONS} iterations per resolution, dt {SHEET_DT:g} s, 10-45 s)"
     )
     listed = ", ".join(f"{r['fL/U']:.3f} ({res})" for res, r in runs.items())
     fine_off = fine["fL/U"] / mid["fL/U"] - 1.0
+    locking = (
+        "a cloth of like sticks flaps slower the stiffer it is made, a woven one does not: its crossed cells are "
+        "over-constrained (a cell that keeps its sides and its diagonals stays flat) and lock, the less so the finer "
+        "the mesh; locked, the cloth bends as a stiffer sheet, and a stiffer flag flaps in a lower mode, slower "
+        "(Alben, Dynamics of flags over wide ranges of mass and bending stiffness, arXiv 2106.14988: mode number "
+        "and frequency as the -1/4 power of the bending stiffness)"
+    )
     return [
         Row(
             "sheet flag frequency, resolution",
@@ -1562,8 +1621,8 @@ def flag_sheet() -> list[Row]:
             "within 10 % of each other",
             spread <= 0.10,
             note=f"spread {100 * spread:.1f} %: resolution 9 (spacing 0.25 m, coarser than the bending length, "
-            "0.17 m) flaps slower, 17 and 33 agree (row below). With the paper's even masses (the grid's edges "
-            "twice their share) the same flag gave 0.398, 0.427 and 0.438 (spread 10.1 %)",
+            "0.17 m) flaps slower, 17 and 33 agree (row below). With every stick alike (1e-3 m/N, 1,500 N/m in the "
+            "plane) the same flag gives " + ", ".join(f"{like[res]['fL/U']:.3f}" for res in (9, 17, 33)),
         ),
         Row(
             "sheet flag frequency, fine resolutions",
@@ -1586,38 +1645,48 @@ def flag_sheet() -> list[Row]:
             "twice the iterations",
             "each within 5 %",
             max(abs(coarse_dt["fL/U"] / mid["fL/U"] - 1.0), abs(more["fL/U"] / mid["fL/U"] - 1.0)) <= 0.05,
-            note="at this cloth's stiffness; a stiffer cloth flaps slower (the row below)",
         ),
         Row(
-            "sheet flag frequency, cloth stiffness",
-            "f L/U at resolution 9 with the cloth's compliance "
-            + ", ".join(f"{c:g}" for c in compliances)
-            + " m/N a stick (1,500 N/m in the plane and 4, 16, 64 times that), twice the iterations at each step",
-            "the same as the cloth stiffens toward a sheet's (~1e5-1e6 N/m in the plane)",
+            "sheet flag frequency, thread stiffness",
+            "f L/U at resolution 9 with the threads' compliance "
+            + ", ".join(f"{c:g}" for c in (*SHEET_SOFTER_THREADS, SHEET_FLAG["flag"]["cloth_compliance"]))
+            + " m/N a stick (1,000 N/m along them, and 4, 16, 64 times that: the sheet flag's), its shear kept",
+            "the same as the threads stiffen",
             "a figure of the flag, not of how soft its cloth is made for the iterations",
+            ", ".join(f"{v:.3f}" for v in thread_values)
+            + f"; resolution 17: {soft17['fL/U']:.3f} and {mid['fL/U']:.3f}",
+            "within 10 % of each other",
+            thread_spread <= 0.10,
+            note=f"spread {100 * thread_spread:.1f} % ({100 * (mid['fL/U'] / soft17['fL/U'] - 1.0):+.1f} % at "
+            f"resolution 17); the threads need no softening: {SHEET_ITERATIONS} iterations per particle converge "
+            "them at 64,000 N/m (the same figures with 8 times as many at resolutions 9 and 17, scratch runs)",
+        ),
+        Row(
+            "sheet flag frequency, every stick alike",
+            "f L/U at resolution 9 with every stick (threads and diagonals) of compliance "
+            + ", ".join(f"{c:g}" for c in SHEET_ALIKE)
+            + " m/N (1,500 N/m in the plane and 4, 16, 64 times that), twice the iterations at each step",
+            "the same as the cloth stiffens toward a paper sheet's (~1e5 N/m in the plane)",
+            "a figure of the flag, not of its mesh's locking",
             ", ".join(f"{r['fL/U']:.3f}" for r in stiffer)
             + " (c/U "
             + ", ".join(f"{r['c/U']:.2f}" for r in stiffer)
             + ")",
-            "the stiffest within 10 % of the sheet flag's",
-            abs(soft_off) <= 0.10,
-            note=f"the stiffest {100 * soft_off:+.0f} %: the flapping is the soft cloth's, and the frequency "
-            "falls on as the cloth stiffens (8-13 % for each factor 4; resolution 17: 0.434, 0.404, 0.371 at the "
-            "first three, 7-8 % each, a scratch run, c/U 1.14, 1.08, 1.05; resolution 33 at 6.25e-5 m/N: 0.391, "
-            "c/U 1.07, 11 % below the sheet flag's 0.440 where resolution 9 is 20 % below, so the finer the mesh "
-            "the less the stiffness moves it). Rigid sticks (compliance 0, 1008-4032 "
-            "iterations) flap at 0.19-0.20 with 0.1 m rms, and may be the grid's more than a sheet's: a cell whose "
-            "sides and both diagonals keep their lengths stays flat, so the rigid grid folds only along whole rows "
-            "or columns (its crossed cells lock). A sheet's own stiffness needs elements that do not lock "
-            "(nonconforming or a shell) and the iterations it then asks for; the rows above hold at this "
-            "cloth's stiffness only",
+            "the stiffest within 10 % of the softest",
+            abs(stiff_off) <= 0.10,
+            note=f"the stiffest {100 * stiff_off:+.0f} %: {locking}. The softest such cloth against the woven "
+            "sheet flag: "
+            + ", ".join(f"{100 * gaps[res]:+.1f} % at {res}" for res in (9, 17, 33))
+            + ", so the two meet as the mesh is refined; 16 times stiffer, resolution 33 still flaps at 0.391 "
+            "(a scratch run). A paper flag (as stiff in shear as along, ~1e5 N/m) needs elements that do not lock "
+            "(nonconforming or a shell): the woven cloth holds for a fabric flag only",
         ),
         flag_band_row(
             "sheet flag frequency, measured band",
             "f L/U at resolution 33",
             fine["fL/U"],
             3,
-            "at this cloth's stiffness; a stiffer cloth flaps slower (the row 'cloth stiffness')",
+            "a woven cloth's flag, compared in kind with the reference's paper flags",
         ),
         Row(
             "sheet flag wave speed",

@@ -146,13 +146,15 @@ def flag_caveat(descriptor: dict) -> str:
     Without a bending stiffness they are the mesh's: the paper's air law is local and its cloth folds freely, so
     nothing but the mesh picks a wavelength (converged in the time step, resolution 5 flaps at f L/U 0.96 and
     resolution 9 at 1.36; docs/objects.md, "The flag at fine resolution"). With one, the validation's sheet flag
-    (B 0.1 N m, elastic sticks, masses by area) flaps within 1.2 % at resolutions 17 and 33 and 8 % slower at 9:
+    (B 0.1 N m, a woven cloth, masses by area) flaps within 0.1 % at resolutions 17 and 33 and 2 % slower at 9:
     its figures are the flag's on a mesh finer than resolution 17 and than the bending length
     ``(B / (rho U^2))^(1/3)``, with elastic sticks and at least :data:`SHEET_ITERATIONS` iterations per particle
     along it (the rigid sticks' iterations never converge on a fine mesh, and the flapping follows their count).
-    Even then they are the elastic cloth's: a stiffer cloth flaps slower (the validation's row 'sheet flag
-    frequency, cloth stiffness'; less so on a finer mesh), and a sheet's own in-plane stiffness is beyond these
-    meshes and their iterations.
+    Even then they are the cloth's in its plane: a woven cloth (``flag.shear_compliance``, stiff threads and a soft
+    shear, as the validation's sheet flag) flaps the same whatever its threads' stiffness, one of like sticks flaps
+    slower the stiffer it is made (its crossed cells lock; less so on a finer mesh), so that a paper sheet's
+    in-plane stiffness is beyond these meshes (the validation's rows 'sheet flag frequency, thread stiffness' and
+    'every stick alike').
     The Euler mass-spring comparison's flapping is not validated."""
     flag, solver = descriptor["flag"], descriptor["solver"]
     resolution, bending = int(flag["resolution"]), float(flag["bending_stiffness"])
@@ -177,8 +179,8 @@ def flag_caveat(descriptor: dict) -> str:
         finest = max(17, int(np.ceil(float(flag["width"]) / length)) + 1)
         return (
             f"note: at resolution {resolution} (spacing {spacing:.2g} m against a bending length of {length:.2g} m) "
-            f"the flapping is still the mesh's in part (the validation's sheet flag flaps 8 % slower at resolution 9 "
-            f"than at 33); resolution {finest} or more should converge {where}"
+            f"the flapping is still the mesh's in part (the validation's sheet flag flaps 2 % slower at resolution 9 "
+            f"than at 33, 8 % with every stick alike); resolution {finest} or more should converge {where}"
         )
     if int(solver["iterations"]) < SHEET_ITERATIONS * resolution:
         return (
@@ -186,10 +188,19 @@ def flag_caveat(descriptor: dict) -> str:
             f"({SHEET_ITERATIONS * resolution}) at which the validation's sheet flag flaps as with twice as many "
             f"{where}"
         )
+    if float(flag["shear_compliance"]) > 0.0:
+        return (
+            f"note: the flapping is this woven cloth's, {1.0 / float(flag['shear_compliance']):,.0f} N/m in shear: "
+            "its threads' stiffness hardly moves it (3 % from 1,000 to 64,000 N/m), a stiffer shear a little "
+            "(3 times stiffer: 3 % slower at resolution 17); a paper sheet's, as stiff in shear as along, is out of "
+            f"reach here {where}"
+        )
+    stiffness = 1.5 / float(flag["cloth_compliance"])
     return (
-        f"note: the flapping is this cloth's, about {1.5 / float(flag['cloth_compliance']):,.0f} N/m in its plane: "
-        "a stiffer cloth flaps slower (16 times stiffer: 15 % at resolution 17, 11 % at 33), and a real sheet, "
-        f"about a thousand times stiffer, is out of reach here {where}"
+        f"note: the flapping is this cloth's, every stick alike, about {stiffness:,.0f} N/m in its plane: a "
+        "stiffer one flaps slower (16 times stiffer: 15 % at resolution 17, 11 % at 33; its crossed cells lock), "
+        "and a paper sheet, a hundred times stiffer or more, is out of reach here; a woven cloth "
+        f"(flag.shear_compliance, scenes/flag_sheet.toml) does not depend on its threads' stiffness {where}"
     )
 
 

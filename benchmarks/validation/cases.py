@@ -1524,8 +1524,8 @@ SHEET_SOFTER_THREADS = (1e-3, 2.5e-4, 6.25e-5)
 """[m/N a stick]: the sheet flag's threads made 64, 16 and 4 times softer (its shear kept)."""
 
 SHEET_ALIKE = (1e-3, 2.5e-4, 6.25e-5, 1.5625e-5)
-"""[m/N a stick]: a cloth with every stick (threads and diagonals) of this compliance, as stiff in shear as a sheet
-(not a woven cloth): about 1,500 N/m in the plane and 4, 16, 64 times that (twice the iterations at each step down
+"""[m/N a stick]: a cloth with every stick (threads and diagonals) of this compliance, stiff in shear as a sheet is
+(a woven cloth is not): about 1,500 N/m in the plane and 4, 16, 64 times that (twice the iterations at each step down
 at resolution 9: the same figures as with twice as many again)."""
 
 
@@ -1546,13 +1546,20 @@ def in_processes(function: Callable, jobs: dict, cost: Callable | None = None) -
     thread), the costliest first by ``cost(*args)``: the same results as one after another, in the order of
     ``jobs``. ``function`` must be importable (a module's top level)."""
     order = sorted(jobs, key=lambda name: -cost(*jobs[name])) if cost else list(jobs)
-    workers = min(len(jobs), os.cpu_count() or 1)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    workers = min(len(jobs), cores)
     if workers <= 1:
         return {name: function(*jobs[name]) for name in jobs}
     # spawned, not forked: a forked child would inherit the parent's Warp runtime mid-state
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+    try:
         futures = {name: pool.submit(function, *jobs[name]) for name in order}
-        return {name: futures[name].result() for name in jobs}
+        results = {name: futures[name].result() for name in jobs}
+    except BaseException:  # one failed or Ctrl-C: the jobs not yet started are dropped, not waited for
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
+    return results
 
 
 def _sheet_job(resolution: int, dt: float, iterations: int | None, flag: dict) -> dict:
@@ -1605,9 +1612,10 @@ def flag_sheet() -> list[Row]:
     listed = ", ".join(f"{r['fL/U']:.3f} ({res})" for res, r in runs.items())
     fine_off = fine["fL/U"] / mid["fL/U"] - 1.0
     locking = (
-        "a cloth of like sticks flaps slower the stiffer it is made, a woven one does not: its crossed cells are "
-        "over-constrained (a cell that keeps its sides and its diagonals stays flat) and lock, the less so the finer "
-        "the mesh; locked, the cloth bends as a stiffer sheet, and a stiffer flag flaps in a lower mode, slower "
+        "a cloth of like sticks flaps slower the stiffer it is made, a woven one hardly: its crossed cells are "
+        "over-constrained (a cell that keeps its sides and its diagonals stays flat), and the trend is what their "
+        "locking would do, less so the finer the mesh: locked, the cloth bends as a stiffer sheet would, and a "
+        "stiffer flag flaps in a lower mode, slower "
         "(Alben, Dynamics of flags over wide ranges of mass and bending stiffness, arXiv 2106.14988: mode number "
         "and frequency as the -1/4 power of the bending stiffness)"
     )
@@ -1666,7 +1674,7 @@ def flag_sheet() -> list[Row]:
             "f L/U at resolution 9 with every stick (threads and diagonals) of compliance "
             + ", ".join(f"{c:g}" for c in SHEET_ALIKE)
             + " m/N (1,500 N/m in the plane and 4, 16, 64 times that), twice the iterations at each step",
-            "the same as the cloth stiffens toward a paper sheet's (~1e5 N/m in the plane)",
+            "the same as the cloth stiffens toward a paper sheet's (some 1e5 N/m or more in the plane)",
             "a figure of the flag, not of its mesh's locking",
             ", ".join(f"{r['fL/U']:.3f}" for r in stiffer)
             + " (c/U "
@@ -1678,8 +1686,8 @@ def flag_sheet() -> list[Row]:
             "sheet flag: "
             + ", ".join(f"{100 * gaps[res]:+.1f} % at {res}" for res in (9, 17, 33))
             + ", so the two meet as the mesh is refined; 16 times stiffer, resolution 33 still flaps at 0.391 "
-            "(a scratch run). A paper flag (as stiff in shear as along, ~1e5 N/m) needs elements that do not lock "
-            "(nonconforming or a shell): the woven cloth holds for a fabric flag only",
+            "(a scratch run). A paper flag (stiff in shear, E t some 1e5 N/m or more) needs elements that do not lock "
+            "(nonconforming or a shell): the rows above hold for the woven cloth",
         ),
         flag_band_row(
             "sheet flag frequency, measured band",

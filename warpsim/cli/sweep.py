@@ -179,7 +179,7 @@ def add_parser(sub) -> None:
         epilog="Metrics (see --list-metrics): window figures as NAME_mean/_min/_max over --window (default the "
         "second half of the run): altitude [m], airspeed [m/s], sink [m/s]; glider glide [-] and bank [deg]; kite "
         "line_angle [deg] and line_pull [N]; parachute radius [m] and swing [deg]; flag flap [m] and "
-        "flap_frequency [Hz] (the mesh's without a resolved bending stiffness, the elastic cloth's with one: the "
+        "flap_frequency [Hz] (the mesh's without a resolved bending stiffness, the cloth's with one: the "
         "run's note says which); and airborne [-], ground_time [s], "
         "worst_stretch [%], window_frames, blew_up, blowup_time [s], blowup_reason. Exit codes: 0 done, 2 bad "
         "input, 1 a task failed for good (the finished rows are kept), 130 interrupted (the finished rows are kept).",

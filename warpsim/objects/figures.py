@@ -169,8 +169,9 @@ def flag_caveat(descriptor: dict) -> str:
         return f"note: the Euler mass-spring comparison's flapping is not validated {where}"
     if float(flag["cloth_compliance"]) <= 0.0 or not solver["mass_splitting"]:
         return (
-            "note: with rigid sticks the flapping follows the iteration count on a fine mesh; set "
-            f"flag.cloth_compliance (e.g. 1e-3) and solver.mass_splitting = true for one that converges {where}"
+            "note: with rigid sticks (flag.cloth_compliance = 0) the flapping follows the iteration count on a fine "
+            "mesh; set flag.cloth_compliance (e.g. 1e-3) and solver.mass_splitting = true for one that converges "
+            f"{where}"
         )
     speed = float(np.linalg.norm(descriptor["wind"]["velocity"]))
     spacing = float(flag["width"]) / (resolution - 1)
@@ -190,14 +191,15 @@ def flag_caveat(descriptor: dict) -> str:
         )
     if float(flag["shear_compliance"]) > 0.0:
         return (
-            f"note: the flapping is this woven cloth's, {1.0 / float(flag['shear_compliance']):,.0f} N/m in shear: "
-            "the validation's sheet flag (100 N/m) flaps within 3.5 % whatever its threads' stiffness (1,000 to "
-            "64,000 N/m), but its shear moves it (333 N/m: 3 % slower at resolution 17, threads of 1,000 N/m); a "
-            f"paper sheet, stiff in shear, is out of reach here {where}"
+            f"note: the flapping is this woven cloth's, {1.0 / float(flag['shear_compliance']):,.0f} N/m in shear "
+            "(its diagonals stretch as it shears): converged in its mesh and its threads' stiffness (the "
+            "validation's sheet flag, 100 N/m in shear), but a stiffer shear flaps slower (333 N/m: 3 % at "
+            f"resolution 17); a paper sheet, stiff in shear, is out of reach here {where}"
         )
     stiffness = 1.5 / float(flag["cloth_compliance"])
     return (
-        f"note: the flapping is this cloth's, every stick alike, about {stiffness:,.0f} N/m in its plane: a "
+        f"note: the flapping is this cloth's, every stick alike, about {stiffness:,.0f} N/m in its plane (1.5 / "
+        "flag.cloth_compliance: a pull stretches the diagonals too): a "
         "stiffer one flaps slower (16 times stiffer: 15 % at resolution 17, 11 % at 33; its crossed cells lock), "
         "and a paper sheet, a hundred times stiffer or more, is out of reach here; a woven cloth "
         f"(flag.shear_compliance, scenes/flag_sheet.toml) does not depend on its threads' stiffness {where}"

@@ -510,7 +510,7 @@ class StickProjector:
             raise ValueError(
                 "elastic sticks (a compliance > 0: kite.sail_compliance, kite.frame_compliance, "
                 "flag.cloth_compliance or flag.shear_compliance) need solver.mass_splitting = true; make them "
-                "rigid (compliance 0) for the paper's plain average"
+                "rigid (every one of those keys 0) for the paper's plain average"
             )
         self.stick_compliance = wp.array(
             compliance.astype(np.float32) if len(compliance) else np.zeros(1, dtype=np.float32),

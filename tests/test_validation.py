@@ -134,3 +134,15 @@ def test_flight_figures_converge(figure):
     # the band compares the defaults with the finest; the validation runs every rung
     rows = cases.convergence_figures(names, ends_only=True)
     assert len(rows) == len(names) and all(r.ok and not r.model_limit for r in rows), rows
+
+
+def test_in_processes_returns_each_jobs_result_in_the_jobs_order(monkeypatch):
+    """cases.in_processes (the sheet flag's flights, one spawned process per core): every job's own result, keyed and
+    ordered as the jobs were given whatever order they ran in (costliest first), the same as in one process; with
+    one core it runs them in this process."""
+    jobs = {"coarse": (9, 0.0005, None, {}), "fine": (33, 0.0005, None, {}), ("twice", 17): (17, 0.001, 476, {})}
+    expected = {name: cases._sheet_cost(*args) for name, args in jobs.items()}
+    spawned = cases.in_processes(cases._sheet_cost, jobs, cases._sheet_cost)
+    assert list(spawned) == list(jobs) and spawned == expected
+    monkeypatch.setattr(cases.os, "sched_getaffinity", lambda _pid: {0}, raising=False)
+    assert cases.in_processes(cases._sheet_cost, jobs) == expected

@@ -10,7 +10,6 @@ from __future__ import annotations
 import functools
 import math
 import multiprocessing
-import os
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
@@ -29,7 +28,7 @@ from warpsim.physics.model import AIR_DENSITY, GRAVITY
 from warpsim.physics.solver import SolverVerlet
 from warpsim.physics.terrain import Heightfield
 from warpsim.run.diagnostics import object_metrics
-from warpsim.run.simulation import BlowUpError, Simulation
+from warpsim.run.simulation import BlowUpError, Simulation, available_cores
 from warpsim.scene import descriptor
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -1537,8 +1536,9 @@ def sheet_overrides(resolution: int, iterations: int | None = None, **flag) -> d
     return {"flag": {**SHEET_FLAG["flag"], **flag}, "solver": {**SHEET_FLAG["solver"], "iterations": iterations}}
 
 
-def _sheet(resolution: int, dt: float = SHEET_DT, iterations: int | None = None, **flag) -> dict:
-    return flag_wave(resolution, dt, sheet_overrides(resolution, iterations, **flag), seconds=45.0, after=10.0)
+def _sheet(resolution: int, dt: float = SHEET_DT, iterations: int | None = None, flag: dict | None = None) -> dict:
+    """:func:`flag_wave` of the sheet flag at ``resolution``, 10-45 s, with ``flag`` keys on top."""
+    return flag_wave(resolution, dt, sheet_overrides(resolution, iterations, **(flag or {})), seconds=45.0, after=10.0)
 
 
 def in_processes(function: Callable, jobs: dict, cost: Callable | None = None) -> dict:
@@ -1546,8 +1546,7 @@ def in_processes(function: Callable, jobs: dict, cost: Callable | None = None) -
     thread), the costliest first by ``cost(*args)``: the same results as one after another, in the order of
     ``jobs``. ``function`` must be importable (a module's top level)."""
     order = sorted(jobs, key=lambda name: -cost(*jobs[name])) if cost else list(jobs)
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    workers = min(len(jobs), cores)
+    workers = min(len(jobs), available_cores())
     if workers <= 1:
         return {name: function(*jobs[name]) for name in jobs}
     # spawned, not forked: a forked child would inherit the parent's Warp runtime mid-state
@@ -1560,10 +1559,6 @@ def in_processes(function: Callable, jobs: dict, cost: Callable | None = None) -
         raise
     pool.shutdown()
     return results
-
-
-def _sheet_job(resolution: int, dt: float, iterations: int | None, flag: dict) -> dict:
-    return _sheet(resolution, dt, iterations, **flag)
 
 
 def _sheet_cost(resolution: int, dt: float, iterations: int | None, flag: dict) -> float:
@@ -1590,7 +1585,7 @@ def flag_sheet() -> list[Row]:
             None,
             {"cloth_compliance": SHEET_ALIKE[0], **alike},
         )
-    done = in_processes(_sheet_job, jobs, _sheet_cost)
+    done = in_processes(_sheet, jobs, _sheet_cost)
     runs = {res: done[res] for res in (9, 17, 33)}
     coarse_dt, more = done["coarse dt"], done["more iterations"]
     threads = [done["threads", 9, c] for c in SHEET_SOFTER_THREADS] + [runs[9]]

@@ -325,7 +325,7 @@ def test_local_workers_are_bounded_by_cores_and_memory(monkeypatch):
     no more than 80 % of the available memory holds at `WORKER_BYTES` each."""
     from warpsim.physics import memory
 
-    monkeypatch.setattr(sweep_cluster, "cores", lambda: 2)
+    monkeypatch.setattr(sweep_cluster, "available_cores", lambda: 2)
     monkeypatch.setattr(memory, "available_memory", lambda: 100 * sweeps.WORKER_BYTES)
     assert sweeps.max_local_workers() == 8
     monkeypatch.setattr(memory, "available_memory", lambda: 5 * sweeps.WORKER_BYTES)

@@ -9,6 +9,7 @@ import os
 import time
 from pathlib import Path
 
+from ..run.summary import available_cores
 from .chunk import run_chunk
 from .metrics import SweepError
 from .plan import ChunkTask
@@ -116,17 +117,12 @@ WORKERS_PER_CORE = 4
 """Most local worker processes per core: each is single-threaded and CPU-bound, so more only time-slice."""
 
 
-def cores() -> int:
-    """Cores this process may run on."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-
-
 def max_local_workers() -> int:
     """Most worker processes a local cluster may start here: :data:`WORKERS_PER_CORE` per core, and no more than
     80 % of the available memory holds at :data:`WORKER_BYTES` each (at least 1)."""
     from ..physics.memory import available_memory
 
-    limit = WORKERS_PER_CORE * cores()
+    limit = WORKERS_PER_CORE * available_cores()
     available = available_memory()
     if available is not None:
         limit = min(limit, int(0.8 * available) // WORKER_BYTES)
@@ -142,8 +138,8 @@ def check_workers(workers: int | None) -> None:
     if workers > limit:
         raise SweepError(
             f"--workers {workers} is more than this machine can run ({limit}: {WORKERS_PER_CORE} per core on "
-            f"{cores()} cores, about {WORKER_BYTES >> 20} MB each of the memory available); use --workers {limit} "
-            "or fewer, or a --scheduler with workers on more machines"
+            f"{available_cores()} cores, about {WORKER_BYTES >> 20} MB each of the memory available); use --workers "
+            f"{limit} or fewer, or a --scheduler with workers on more machines"
         )
 
 
@@ -153,7 +149,7 @@ def connect(scheduler, workers: int | None):
     if scheduler is None:
         if workers is not None:
             return None, False, workers
-        return None, False, min(cores(), max_local_workers())
+        return None, False, min(available_cores(), max_local_workers())
     from dask.distributed import Client
 
     if workers is not None:

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import contextlib
 import math
-import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from ..run.summary import available_cores
 from . import chunk as chunks
 from . import cluster
 from .metrics import SweepError, require
@@ -112,8 +112,7 @@ def _run_owned(
             tasks = plan.chunks(size, set(range(len(plan.cases))) - set(todo), device, h5_dir)
             chunks.check_recordings_free(tasks)
             if threads is None:
-                cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-                threads = 1 if scheduler is not None else max(1, cores // max(used, 1))
+                threads = 1 if scheduler is not None else max(1, available_cores() // max(used, 1))
             tasks = [replace(task, threads=threads) for task in tasks]
             if client is None:  # the local cluster: kernels compiled once, here, then the workers start
                 chunks.warm_kernels(tasks, device)

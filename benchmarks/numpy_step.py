@@ -49,6 +49,9 @@ class NumpyVerlet:
 
     def __init__(self, sim: Simulation):
         m, solver = sim.model, sim.solver
+        if m.hinge_count:
+            # the bending forces (warpsim.physics.kernels.bending) are not written here: refused, not left out
+            raise ValueError("the NumPy (and C) reference has no bending stiffness: set flag.design = paper")
         self.dt = F32(sim.dt)
         self.n = m.particle_count
         self.q = sim.state.particle_q.numpy().astype(F64)  # copies

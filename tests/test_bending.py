@@ -127,9 +127,10 @@ def test_a_cantilever_sags_as_euler_bernoulli_says():
 def test_no_bending_stiffness_is_the_papers_cloth():
     from warpsim.scene import descriptor
 
-    sim = ws.Simulation(descriptor.resolve("flag")[0])
+    paper = descriptor.merge("t", descriptor.resolve("flag")[0], {"flag": {"design": "paper"}})
+    sim = ws.Simulation(paper)
     assert sim.model.hinge_count == 0 and sim.solver.particle_force is sim.solver.particle_air
-    stiff = ws.Simulation(descriptor.merge("t", descriptor.resolve("flag")[0], {"flag": {"bending_stiffness": 0.1}}))
+    stiff = ws.Simulation(descriptor.merge("t", paper, {"flag": {"bending_stiffness": 0.1}}))
     # 5 particles from the pole out, 3 up it: a hinge per three in a row (3 rows x 3), per three in a column (5 x 1),
     # a twist per cell (4 x 2)
     assert stiff.model.hinge_count == 3 * 3 + 5 * 1 + 4 * 2
@@ -234,12 +235,14 @@ def test_the_flags_note_says_what_its_flapping_is_not():
     from warpsim.scene import descriptor
 
     def note(iterations=None, method="verlet", mass_splitting=True, **flag):
-        d = descriptor.merge("t", descriptor.resolve("flag")[0], {"flag": flag})
+        d = descriptor.merge("t", descriptor.resolve("flag")[0], {"flag": {"design": "paper", **flag}})
         d["solver"].update(method=method, mass_splitting=mass_splitting)
         d["solver"]["iterations"] = iterations or 14 * d["flag"]["resolution"]
         return flag_caveat(d)
 
-    assert "those of this mesh (resolution 5)" in note()
+    assert "those of this mesh (resolution 5)" in note()  # the paper's cloth
+    default = flag_caveat(descriptor.resolve("flag")[0])  # the default flag, the sheet: converged
+    assert "this woven cloth's, 100 N/m in shear (its diagonals stretch as it shears): converged" in default
     sheet = {"bending_stiffness": 0.1, "cloth_compliance": 1e-3}
     assert "rigid sticks" in note(bending_stiffness=0.1, resolution=17)
     assert "rigid sticks" in note(resolution=17, mass_splitting=False, **sheet)
@@ -260,15 +263,16 @@ def test_the_flags_note_says_what_its_flapping_is_not():
 
 @pytest.mark.slow
 def test_the_sheet_flag_flaps_with_waves_running_to_its_tip():
-    """scenes/flag_sheet.toml at resolution 9 (coarse, for speed; 17 and 33 flap 2 % faster in the validation):
-    the corner flaps steadily at f L/U 0.433 (0.87 Hz in 4.03 m/s, 10-35 s), and the phase of the middle row's
-    sideways motion lags along it: a wave running from the pole to the tip at c/U 1.12, lambda/L 2.57 (measured
-    2026-11-27 with the woven cloth; the validation's 'sheet flag' rows). Without the bending stiffness the same
-    cloth flaps otherwise (resolution 9: 0.67 Hz, 17: 1.26 Hz, the picture's runs: the mesh's)."""
+    """The default flag (scenes/flag.toml, the sheet design) at resolution 9 (coarse, for speed; 17 and 33 flap 2 %
+    faster in the validation): the corner flaps steadily at f L/U 0.433 (0.87 Hz in 4.03 m/s, 10-35 s), and the
+    phase of the middle row's sideways motion lags along it: a wave running from the pole to the tip at c/U 1.12,
+    lambda/L 2.57 (measured 2026-11-27 with the woven cloth; the validation's 'flag frequency' rows). Without the
+    bending stiffness the same cloth flaps otherwise (resolution 9: 0.67 Hz, 17: 1.26 Hz, the picture's runs: the
+    mesh's)."""
     from benchmarks.validation.cases import flag_wave
     from warpsim.scene import descriptor
 
-    sheet = descriptor.resolve("scenes/flag_sheet.toml")[0]
+    sheet = descriptor.resolve("scenes/flag.toml")[0]
     overrides = {
         "flag": {
             key: sheet["flag"][key]

@@ -9,12 +9,12 @@ from pxr import Usd, UsdGeom
 from warpsim.cli import EXIT_BLOWUP, main
 from warpsim.io.recording import Recording
 from warpsim.run.simulation import BlowUpError, Simulation
-from warpsim.scene.descriptor import defaults
+from warpsim.scene.descriptor import defaults, merge
 
 
 def _euler_flag(**solver):
-    """A flag on the Euler mass-spring integrator at dt = 0.01 s: far above its stable step, it blows up."""
-    d = defaults("flag")
+    """The paper's flag on the Euler mass-spring integrator at dt = 0.01 s: far above its stable step, it blows up."""
+    d = merge("test", defaults("flag"), {"flag": {"design": "paper"}})
     d["solver"].update({"method": "euler", "dt": 0.01, **solver})
     return Simulation(d)
 
@@ -66,7 +66,9 @@ def test_the_world_that_blew_up_is_named():
 
 def test_cli_exit_code_message_and_kept_outputs(tmp_path, capsys):
     rec, usd = tmp_path / "flag.h5", tmp_path / "flag.usda"
-    code = main(["run", "flag", "--set", "solver.method=euler", "--dt", "0.01", "--h5", str(rec), "--usd", str(usd)])
+    code = main(
+        ["run", "flag_paper", "--set", "solver.method=euler", "--dt", "0.01", "--h5", str(rec), "--usd", str(usd)]
+    )
     assert code == EXIT_BLOWUP == 3
     captured = capsys.readouterr()
     assert "blew up" in captured.out  # the summary says so

@@ -28,7 +28,8 @@ def program(tmp_path_factory):
 # the momentum the projection moved (keep_momentum, on by default: 5e-5 m on the glider and 1.2e-3 m on the
 # parachute after 3 steps), and so does the C.
 PAPER_CANOPY = {"parachute": {"canopy": "paper"}}  # the C has the per-triangle laws only (the NumPy has the canopy)
-GROUND = {"terrain": {"kind": "procedural", "amplitude": 5.0}, "flag": {"pole_height": 0.5}}
+# the paper's flag: the C has no bending stiffness (refused, below)
+GROUND = {"terrain": {"kind": "procedural", "amplitude": 5.0}, "flag": {"design": "paper", "pole_height": 0.5}}
 
 
 @pytest.mark.parametrize(
@@ -64,8 +65,15 @@ def test_c_reference_refuses_the_whole_canopy_force(tmp_path):
         c_reference.export(sim, tmp_path / "model.bin")
 
 
+def test_c_reference_refuses_bending(tmp_path):
+    sim = Simulation(descriptor.resolve("flag")[0])  # the default flag: a sheet, with hinges and twists
+    with pytest.raises(ValueError, match="no bending stiffness: set flag.design = paper"):
+        c_reference.export(sim, tmp_path / "m.bin")
+
+
 def test_c_reference_refuses_wind_shear(tmp_path):
-    sim = Simulation(descriptor.merge("test", descriptor.resolve("flag")[0], {"wind": {"shear_exponent": 0.14}}))
+    sheared = {"flag": {"design": "paper"}, "wind": {"shear_exponent": 0.14}}
+    sim = Simulation(descriptor.merge("test", descriptor.resolve("flag")[0], sheared))
     with pytest.raises(ValueError, match="no wind shear"):
         c_reference.export(sim, tmp_path / "m.bin")
 

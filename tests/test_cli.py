@@ -20,12 +20,15 @@ def test_list(capsys):
 def test_info(capsys):
     assert main(["info", "flag"]) == 0
     out = capsys.readouterr().out
-    assert "particles 15, sticks 38, triangles 16, nails 3" in out
-    assert "[solver]" in out and "dt = 0.00125" in out and "iterations = 110" in out
+    assert "particles 187, sticks 666, triangles 320, nails 11" in out
+    assert "[solver]" in out and "dt = 0.00125" in out and "iterations = 238" in out and 'design = "sheet"' in out
+    assert main(["info", "flag_paper"]) == 0
+    out = capsys.readouterr().out
+    assert "particles 15, sticks 38, triangles 16, nails 3" in out and "iterations = 110" in out
 
 
 def test_run_prints_summary(capsys):
-    assert main(["run", "flag", "--seconds", "0.5", "--dt", "0.01", "--iterations", "40", "--fps", "20"]) == 0
+    assert main(["run", "flag_paper", "--seconds", "0.5", "--dt", "0.01", "--iterations", "40", "--fps", "20"]) == 0
     out = capsys.readouterr().out
     assert "simulated 0.500 s in 50 steps" in out
     assert "steps/s" in out and "real-time factor" in out and "worst stick stretch" in out

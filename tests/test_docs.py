@@ -25,6 +25,16 @@ def test_the_api_page_documents_every_public_name_through_warpsim():
     assert not re.search(r"^```\{auto", text, re.M), "autodoc directives must be written inside ```{eval-rst} blocks"
 
 
+def test_the_api_pages_first_example_runs_as_written(capsys):
+    """The first Python block of docs/api.md (a flag built, stepped and measured without a scene), run as written:
+    it flies, and its stretch is the woven cloth's shear (its diagonals), not a blow-up."""
+    text = (DOCS / "api.md").read_text(encoding="utf-8")
+    block = re.search(r"```python\n(.*?)```", text, re.S).group(1)
+    exec(compile(block, "docs/api.md", "exec"), {})
+    stretch = float(capsys.readouterr().out.split()[-1])
+    assert 0.005 < stretch < 0.2, stretch
+
+
 def test_the_readmes_links_and_pictures_exist():
     text = (ROOT / "README.md").read_text(encoding="utf-8")
     targets = re.findall(r"\]\(((?!https?:|#)[^)#\s]+)(?:#[^)]*)?\)", text)

@@ -4,13 +4,13 @@ import numpy as np
 import pytest
 
 from warpsim.run.simulation import Simulation
-from warpsim.scene.descriptor import defaults
+from warpsim.scene.descriptor import defaults, merge
 
 
 def _flag(method: str, dt: float):
-    """The default flag with the paper's solver settings: ``method`` at ``dt`` [s] and 55 iterations (the scene's
-    own are finer: 1.25 ms and 110, for figures that do not depend on them)."""
-    d = defaults("flag")
+    """The paper's flag (``flag.design = "paper"``) with the paper's solver settings: ``method`` at ``dt`` [s] and 55
+    iterations (its scene's own are finer: 1.25 ms and 110, for figures that do not depend on them)."""
+    d = merge("test", defaults("flag"), {"flag": {"design": "paper"}})
     d["solver"]["method"] = method
     d["solver"]["dt"] = dt
     d["solver"]["iterations"] = 55

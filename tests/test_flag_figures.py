@@ -14,6 +14,8 @@ from warpsim.run.figures import FlightFigures, swing_frequency
 from warpsim.run.simulation import Simulation
 from warpsim.scene.descriptor import defaults, merge
 
+PAPER = {"flag": {"design": "paper"}}  # the paper's cloth: cheap to fly, and it flaps at any wind
+
 
 def test_swing_frequency_of_a_sine_with_jitter_and_of_a_still_figure():
     rng = np.random.default_rng(1)
@@ -32,9 +34,9 @@ def test_swing_frequency_of_a_sine_with_jitter_and_of_a_still_figure():
 
 def test_a_flag_in_a_near_calm_does_not_flap():
     """In 0.5 m/s the flag hangs: its flap frequency is NaN, not the frequency of its jitter. (It settles from the
-    launch by a slow 0.23 Hz swing, lightly damped at the flag's default steps: ±8.9 cm over 10-20 s, ±2.5 cm over
+    launch by a slow 0.23 Hz swing, lightly damped at the paper flag's steps: ±8.9 cm over 10-20 s, ±2.5 cm over
     20-30 s, ±0.65 cm over 30-40 s.)"""
-    sim = Simulation(merge("test", defaults("flag"), {"wind": {"velocity": [0.5, 0.05, 0.0]}}))
+    sim = Simulation(merge("test", defaults("flag"), {**PAPER, "wind": {"velocity": [0.5, 0.05, 0.0]}}))
     figures = FlightFigures(sim, 30.0, 45.0)
     sim.run(45.0, on_frame=figures)
     row = figures.window.row(0)
@@ -44,7 +46,7 @@ def test_a_flag_in_a_near_calm_does_not_flap():
 def test_flag_flap_frequency_is_the_peak_of_its_corner_spectrum():
     """The run's ``flap`` frequency against an FFT of the top trailing corner's sideways position, taken from the
     frames' particles (the corner found from the positions as built, not from the figure's own code)."""
-    sim = Simulation(defaults("flag"))
+    sim = Simulation(merge("test", defaults("flag"), PAPER))
     q0 = sim.state.positions()
     cloth = sim.model.objects[0].parts["cloth"]
     corner = cloth[np.argmax(q0[cloth, 0] + 1e-3 * q0[cloth, 2])]  # farthest from the pole, top row
@@ -78,14 +80,14 @@ def test_run_prints_the_flap_and_sweeps_have_its_frequency():
 
     text = io.StringIO()
     with contextlib.redirect_stdout(text):
-        assert main(["run", "flag", "--seconds", "10"]) == 0
+        assert main(["run", "flag_paper", "--seconds", "10"]) == 0
     assert re.search(r"flag: .*flap ±[0-9.]+ m at [0-9.]+ Hz", text.getvalue()), text.getvalue()
     # the figure is said to be the mesh's, naming the resolution it was run at (the validation's rows: 5 and 9
     # converged in dt flap at f L/U 0.96 and 1.36)
     assert "note: the flap's frequency and size are those of this mesh (resolution 5)" in text.getvalue()
     text = io.StringIO()
     with contextlib.redirect_stdout(text):
-        assert main(["run", "flag", "--seconds", "6", "--set", "flag.resolution=9"]) == 0
+        assert main(["run", "flag_paper", "--seconds", "6", "--set", "flag.resolution=9"]) == 0
     assert "(resolution 9), not a real flag's" in text.getvalue(), text.getvalue()
     text = io.StringIO()
     with contextlib.redirect_stdout(text):
@@ -100,7 +102,7 @@ def test_flag_sweep_rows_are_the_same_whatever_the_chunk():
     from warpsim import sweeps
     from warpsim.scene import descriptor
 
-    base = descriptor.resolve("flag")[0]
+    base = merge("test", descriptor.resolve("flag")[0], PAPER)
     plan = sweeps.SweepPlan(base, sweeps.parse_axes(base, ["wind.speed=0.5,3,6"]), seconds=12.0)
     alone = [sweeps.run_chunk(task)[0] for task in plan.chunks(1, set(), "cpu", None)]
     together = sweeps.run_chunk(plan.chunks(3, set(), "cpu", None)[0])

@@ -48,12 +48,15 @@ def test_a_cpu_run_prints_no_warp_chatter():
 
 
 def test_euler_blow_up_summary_and_hint(capsys):
-    assert main(["run", "flag", "--set", "solver.method=euler", "--dt", "0.01"]) == EXIT_BLOWUP
+    assert main(["run", "flag_paper", "--set", "solver.method=euler", "--dt", "0.01"]) == EXIT_BLOWUP
     captured = capsys.readouterr()
     assert "up to the last good frame" in captured.out
     assert "--iterations" not in captured.err and "sqrt(mass / solver.spring_stiffness)" in captured.err
     # a Verlet blow-up (one iteration, 0.2 s steps, a 60 m/s gale) is told to iterate more instead
-    assert main(["run", "flag", "--iterations", "1", "--dt", "0.2", "--set", "wind.velocity=[60,0,0]"]) == EXIT_BLOWUP
+    assert (
+        main(["run", "flag_paper", "--iterations", "1", "--dt", "0.2", "--set", "wind.velocity=[60,0,0]"])
+        == EXIT_BLOWUP
+    )
     assert "more --iterations" in capsys.readouterr().err
 
 
@@ -84,4 +87,4 @@ def test_help_examples_name_keys_that_exist():
 def test_info_counts_shared_particles_once(capsys):
     assert main(["info", "flag"]) == 0
     out = capsys.readouterr().out
-    assert "particles 15," in out and "pole           3 particles,     0.000 kg (3 also in a part above" in out
+    assert "particles 187," in out and "pole          11 particles,     0.000 kg (11 also in a part above" in out

@@ -119,13 +119,14 @@ def test_glider_converges_as_dt_halves_and_iterations_double():
         "glider phugoid period",
         "parachute descent",
         "kite line angle at the anchor",
-        ("flag flapping frequency (resolution 5)", "flag flapping amplitude (resolution 5)"),  # one flight, two figures
+        # one flight, two figures; the default flag's ladder (40 s at up to 952 iterations a step) is the validation's
+        ("paper flag flapping frequency (resolution 5)", "paper flag flapping amplitude (resolution 5)"),
     ],
-    ids=["turn-rate", "phugoid", "parachute", "kite-line", "flag"],
+    ids=["turn-rate", "phugoid", "parachute", "kite-line", "paper-flag"],
 )
 def test_flight_figures_converge(figure):
     """The turn rate (bank held at 20°), the phugoid period, the parachute's descent, the kite's line angle and the
-    default flag's flapping frequency and amplitude at the defaults lie within 10 %, 10 %, 5 %, 5 %, 10 % and 10 % of
+    paper flag's flapping frequency and amplitude at the defaults lie within 10 %, 10 %, 5 %, 5 %, 10 % and 10 % of
     dt/4 with four times the iterations (the kite's line: 57.6° at the defaults, 60.2° at the finest; with Chebyshev
     0.95 it was 55.4° against 59.9°, outside its band; the flag at its 1.25 ms and 110 iterations: 1.93 Hz and
     ±0.27 m against 1.94 Hz and ±0.28 m; at the paper's 10 ms and 55 it flapped at 1.67 Hz, ±0.41 m). One figure a
@@ -134,6 +135,25 @@ def test_flight_figures_converge(figure):
     # the band compares the defaults with the finest; the validation runs every rung
     rows = cases.convergence_figures(names, ends_only=True)
     assert len(rows) == len(names) and all(r.ok and not r.model_limit for r in rows), rows
+
+
+def test_flag_convergence_rows_read_each_rungs_own_run(monkeypatch):
+    """The default flag's convergence rows take each rung's run (flown one process per core, cached by dt, iterations
+    and design): here the runs measured on 2026-11-27, given, so that no flag flies."""
+    ladder = cases._ladder(0.00125, 238)
+    runs = {
+        (dt, it, "sheet"): {"frequency": f, "amplitude": a}
+        for (dt, it), f, a in zip(
+            ladder, (0.9002, 0.9002, 0.8957, 0.8919), (0.8167, 0.8167, 0.8179, 0.8187), strict=True
+        )
+    }
+    monkeypatch.setattr(cases, "_FLAPS", runs)
+    monkeypatch.setattr(cases, "in_processes", lambda *a, **k: pytest.fail("every rung was given"))
+    frequency, amplitude = cases.flag_convergence()
+    assert frequency.measured == "0.900, 0.900, 0.896, 0.892" and frequency.ok and "+0.9 %" in frequency.note
+    assert amplitude.measured == "0.817, 0.817, 0.818, 0.819" and amplitude.ok and "-0.2 %" in amplitude.note
+    runs[ladder[-1] + ("sheet",)] = {"frequency": 0.80, "amplitude": 0.8187}  # the defaults 12.5 % off: outside 5 %
+    assert not cases.flag_convergence()[0].ok
 
 
 def test_in_processes_returns_each_jobs_result_in_the_jobs_order(monkeypatch):

@@ -7,7 +7,6 @@ never tuned away). All runs use Warp's ``cpu`` device unless told otherwise.
 
 from __future__ import annotations
 
-import functools
 import math
 import multiprocessing
 from collections.abc import Callable
@@ -357,13 +356,14 @@ FLAG_SAMPLE = 0.02
 
 
 def flag_simulation(resolution: int, dt: float, overrides: dict | None = None) -> Simulation:
-    """The validation's flag: the default flag at ``resolution`` with ``28 x resolution`` iterations and Chebyshev
-    0.995, stepping ``dt`` [s], with the descriptor ``overrides`` (``{section: {key: value}}``) on top."""
+    """The validation's flag: the paper's flag (``flag.design = "paper"``: rigid sticks, no bending, even masses) at
+    ``resolution`` with ``28 x resolution`` iterations and Chebyshev 0.995, stepping ``dt`` [s], with the descriptor
+    ``overrides`` (``{section: {key: value}}``; :data:`SHEET_FLAG`'s make it the default flag) on top."""
     d = descriptor.merge(
         "validation",
         descriptor.resolve("flag")[0],
         {
-            "flag": {"resolution": resolution},
+            "flag": {"design": "paper", "resolution": resolution},
             "solver": {"dt": dt, "iterations": FLAG_ITERATIONS_PER_RESOLUTION * resolution, "chebyshev": 0.995},
         },
     )
@@ -481,7 +481,7 @@ def flag() -> list[Row]:
     listed = ", ".join(f"{r['fL/U']:.2f} ({res})" for res, r in runs.items())
     return [
         Row(
-            "flag frequency, resolution",
+            "paper flag frequency, resolution",
             "f L/U of the flag's top trailing corner at resolutions 9, 17, 33 (28 iterations per resolution, "
             "Chebyshev 0.995, dt 0.01 s, 5-30 s)",
             "the same at every resolution",
@@ -492,7 +492,7 @@ def flag() -> list[Row]:
             note=f"spread {100 * spread:.0f} %; {limit}",
         ),
         Row(
-            "flag frequency, time step",
+            "paper flag frequency, time step",
             f"f L/U at resolution 17 ({FLAG_ITERATIONS_PER_RESOLUTION * 17} iterations, Chebyshev 0.995, 5-30 s) at dt "
             + ", ".join(f"{dt:g}" for dt in FLAG_TIME_STEPS)
             + " s",
@@ -513,14 +513,14 @@ def flag() -> list[Row]:
             "benchmarks/validation/flag_time_step.py draws it (docs/flag_time_step.png)",
         ),
         flag_band_row(
-            "flag frequency, measured band",
+            "paper flag frequency, measured band",
             "f L/U at resolution 33, 4 m/s wind, 2 m flag",
             fine["fL/U"],
             2,
             "set by the mesh and the time step (rows above)",
         ),
         Row(
-            "flag sticks at resolution 33",
+            "paper flag sticks at resolution 33",
             "worst stick stretch |l - r|/r over 5-30 s, 924 iterations, Chebyshev 0.995",
             "within 2 %",
             "the constraint solver's own accuracy (the paper keeps its cloth within 1 % at 55 iterations, coarse)",
@@ -1342,13 +1342,29 @@ def _parachute_descent(dt: float, iterations: int) -> float:
     return float(np.mean(speeds))
 
 
-@functools.lru_cache(maxsize=8)  # the frequency and the amplitude rows share each rung's run
-def _flag_flap(dt: float, iterations: int) -> dict:
-    """The default flag's (resolution 5) flapping as ``warpsim run flag --seconds 40`` prints it: the swings of its
-    trailing corner over 20-40 s, ``frequency`` [Hz] and ``amplitude`` (half the range) [m]."""
+_FLAPS: dict[tuple[float, int, str], dict] = {}
+""":func:`_flag_flap`'s runs by ``(dt, iterations, design)``: the frequency and the amplitude rows share each rung's
+run (:func:`flag_convergence` fills it from its processes)."""
+
+
+def _flag_flap(dt: float, iterations: int, design: str = "sheet") -> dict:
+    """The flag's flapping as ``warpsim run flag --seconds 40`` prints it (``design`` "paper": ``warpsim run
+    flag_paper --seconds 40``, resolution 5): the swings of its trailing corner over 20-40 s, ``frequency`` [Hz] and
+    ``amplitude`` (half the range) [m]."""
+    if (dt, iterations, design) not in _FLAPS:
+        _FLAPS[dt, iterations, design] = _fly_flag(dt, iterations, design)
+    return _FLAPS[dt, iterations, design]
+
+
+def _fly_flag(dt: float, iterations: int, design: str) -> dict:
+    """:func:`_flag_flap`'s run."""
     from warpsim.run.figures import FlightFigures
 
-    d = descriptor.merge("convergence", descriptor.resolve("flag")[0], {"solver": {"dt": dt, "iterations": iterations}})
+    d = descriptor.merge(
+        "convergence",
+        descriptor.resolve("flag")[0],
+        {"flag": {"design": design}, "solver": {"dt": dt, "iterations": iterations}},
+    )
     sim = Simulation(d)
     figures = FlightFigures(sim, 20.0, 40.0)
     sim.run(40.0, on_frame=figures)
@@ -1371,15 +1387,17 @@ CONVERGENCE = {
     "glider phugoid period": (_phugoid_period, 0.01, " s", 0.10, 55),
     "kite line angle at the anchor": (_kite_angle, 0.005, "°", 0.05, 55),
     "parachute descent": (_parachute_descent, 0.01, " m/s", 0.05, 55),
-    "flag flapping frequency (resolution 5)": (
-        lambda dt, it: _flag_flap(dt, it)["frequency"],
+    "flag flapping frequency": (lambda dt, it: _flag_flap(dt, it)["frequency"], 0.00125, " Hz", 0.05, 238),
+    "flag flapping amplitude": (lambda dt, it: _flag_flap(dt, it)["amplitude"], 0.00125, " m", 0.10, 238),
+    "paper flag flapping frequency (resolution 5)": (
+        lambda dt, it: _flag_flap(dt, it, "paper")["frequency"],
         0.00125,
         " Hz",
         0.10,
         110,
     ),
-    "flag flapping amplitude (resolution 5)": (
-        lambda dt, it: _flag_flap(dt, it)["amplitude"],
+    "paper flag flapping amplitude (resolution 5)": (
+        lambda dt, it: _flag_flap(dt, it, "paper")["amplitude"],
         0.00125,
         " m",
         0.10,
@@ -1401,8 +1419,8 @@ BEYOND_NOTES = {
 
 
 def convergence_figures(names=None, beyond: bool = False, ends_only: bool = False) -> list[Row]:
-    """Each figure of :data:`CONVERGENCE` (or of ``names``) at its default dt and iterations (55 but for the flag's
-    110), with the iterations doubled, dt halved with them, and dt quartered with four times the iterations (the
+    """Each figure of :data:`CONVERGENCE` (or of ``names``) at its default dt and iterations (55 but for the flags'
+    238 and 110), with the iterations doubled, dt halved with them, and dt quartered with four times the iterations (the
     finest). With ``beyond``, also a row that checks the finest rung against dt/8 with the same iterations: whether
     the finest rung stands for the limit. With ``ends_only``, only the defaults and the finest rung (what the band
     compares; a quarter less work)."""
@@ -1450,6 +1468,18 @@ def convergence_figures(names=None, beyond: bool = False, ends_only: bool = Fals
                 )
             )
     return rows
+
+
+def flag_convergence() -> list[Row]:
+    """The default flag's convergence rows (:data:`CONVERGENCE`), its four rungs one process per core (19 min on 2
+    cores: the finest, dt/4 with 952 iterations, takes 16 of them). No rung beyond the ladder: its finest step,
+    0.3125 ms, is already finer than the 'sheet flag' rows' 0.5 and 0.25 ms, and dt/8 would take 18 min alone."""
+    figures = ["flag flapping frequency", "flag flapping amplitude"]
+    _, dt, _, _, iterations = CONVERGENCE[figures[0]]
+    jobs = {(d, it): (d, it) for d, it in _ladder(dt, iterations) if (d, it, "sheet") not in _FLAPS}
+    runs = in_processes(_flag_flap, jobs, lambda d, it: it / d) if jobs else {}
+    _FLAPS.update({(d, it, "sheet"): run for (d, it), run in runs.items()})
+    return convergence_figures(figures)
 
 
 def refined_peak_frequency(ys: np.ndarray, sample: float = FLAG_SAMPLE) -> float:
@@ -1502,7 +1532,8 @@ SHEET_FLAG = {
     },
     "solver": {"mass_splitting": True},
 }
-"""The sheet flag: the validation's flag (2 m x 1.2 m, 0.15 kg/m^2, 4 m/s) with a bending stiffness of 0.1 N m
+"""The sheet flag, the default flag's design (``flag.design = "sheet"``, the same keys: a test checks): the
+validation's paper flag (2 m x 1.2 m, 0.15 kg/m^2, 4 m/s) with a bending stiffness of 0.1 N m
 (a sheet's, not a fabric's) and a woven cloth in its plane: threads (the grid's rows and columns) of 1.5625e-5 m/N a
 stick (64,000 N/m along them) and diagonals of 1e-2 m/N (a shear stiffness G t of 100 N/m; its diagonals stretch up
 to 5 % as the tip snaps), whose iterations converge (mass splitting), and each particle the mass of the cloth it
@@ -1600,7 +1631,8 @@ def flag_sheet() -> list[Row]:
     spread = max(ratios) / min(ratios) - 1.0
     fine, mid = runs[33], runs[17]
     what = (
-        "the flag of the rows above with a bending stiffness of 0.1 N m, a woven cloth (threads 1.5625e-5 m/N a "
+        "the default flag (flag.design = sheet): the paper flag of the rows above with a bending stiffness of "
+        "0.1 N m, a woven cloth (threads 1.5625e-5 m/N a "
         "stick, 64,000 N/m; diagonals 1e-2 m/N, a shear stiffness of 100 N/m; mass splitting) and masses by area "
         f"({SHEET_ITERATIONS} iterations per resolution, dt {SHEET_DT:g} s, 10-45 s)"
     )
@@ -1736,9 +1768,10 @@ CASES: dict[str, Callable[[], list[Row]]] = {
             "glider phugoid period",
             "kite line angle at the anchor",
             "parachute descent",
-            "flag flapping frequency (resolution 5)",
-            "flag flapping amplitude (resolution 5)",
+            "paper flag flapping frequency (resolution 5)",
+            "paper flag flapping amplitude (resolution 5)",
         ],
         beyond=True,
     ),
+    "convergence-flag": lambda: flag_convergence(),
 }

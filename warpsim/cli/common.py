@@ -106,8 +106,8 @@ def add_scene_options(parser, worlds: bool = True) -> None:
     parser.add_argument(
         "--iterations",
         type=iterations_type,
-        help="constraint iterations per step (default: the scene's; 55 in the glider, kite and parachute scenes, 110 "
-        "in the flag's, 238 in flag_sheet.toml; `warpsim info SCENE` shows it)",
+        help="constraint iterations per step (default: the scene's; 55 in the glider, kite and parachute scenes, 238 "
+        "in the flag's, 110 in flag_paper.toml; `warpsim info SCENE` shows it)",
     )
     parser.add_argument("--fps", type=number_type("--fps"), help="output frames per simulated second")
     parser.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")

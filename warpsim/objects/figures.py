@@ -163,7 +163,7 @@ def flag_caveat(descriptor: dict) -> str:
         return (
             f"note: the flap's frequency and size are those of this mesh (resolution {resolution}), not a real "
             f"flag's: the local air law and the bending-free cloth pick no wavelength, so a finer mesh flaps "
-            f"otherwise {where}"
+            f'otherwise; the default flag (flag.design = "sheet") converges {where}'
         )
     if solver["method"] != "verlet":
         return f"note: the Euler mass-spring comparison's flapping is not validated {where}"

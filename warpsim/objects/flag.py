@@ -1,4 +1,6 @@
-"""The flag of the paper's Verlet/Euler comparison (slide 15): a rectangular cloth nailed along a pole."""
+"""The flag: a rectangular sheet nailed along a pole, in two designs (``flag.design``): ``sheet``, a stiff woven
+sheet whose flapping converges as the mesh is refined, and ``paper``, the cloth of the paper's Verlet/Euler
+comparison (slide 15)."""
 
 from __future__ import annotations
 
@@ -18,36 +20,50 @@ class FlagConfig(Checked):
     """Parameters of the flag.
 
     Attributes:
+        design: ``sheet`` (the default: a bending stiffness of 0.1 N m, a card's or a thin plastic sheet's, and a
+            woven cloth in its plane, stiff along its threads and soft in shear, masses by area, at resolution 17
+            with elastic sticks whose iterations converge: its flapping is the flag's, the same at resolutions 17 and
+            33 and with the threads made 64 times softer, and in the band measured for flags; docs/objects.md) or
+            ``paper`` (the paper's cloth: rigid sticks, no bending, even masses, resolution 5, whose flapping is its
+            mesh's and its time step's). In a scene or with ``--set`` it is a preset (:data:`PRESETS`): it sets
+            the keys below but ``width``, ``height``, ``mass_per_area``, ``pole_height`` and ``position``, and
+            ``solver.mass_splitting``, ``solver.dt`` and ``solver.iterations``, and then the scene's own keys apply.
+            The builder itself reads only the individual keys: ``FlagConfig(design="paper")`` alone is still the
+            sheet (the keys' defaults are the sheet's); the paper's keys are ``PRESETS["paper"]["flag"]``.
         width: length of the flag away from the pole, along +x [m].
         height: height of the flag along the pole [m].
-        resolution: particles along the width; along the height as many as keep cells near square.
-            The default 5 is coarse on purpose: even with the paper's 55 Jacobi iterations at dt = 1/100 s it
-            keeps every stick within 1% of its rest length (the scene steps finer, 1.25 ms with 110 iterations,
-            so that its flapping does not depend on the step); finer cloth stretches more (see README).
+        resolution: particles along the width; along the height as many as keep cells near square. The sheet's
+            17 flaps within 0.1 % of 33 and 2 % faster than 9 (its spacing, 0.125 m, is finer than the bending
+            length ``(B / (rho U^2))^(1/3)``, 0.17 m in 4 m/s). The paper design's 5 is coarse on purpose: even with
+            the paper's 55 Jacobi iterations at dt = 1/100 s it keeps every rigid stick within 1% of its rest length;
+            finer paper cloth stretches more (see README).
         mass_per_area: fabric areal density [kg/m^2] (flag nylon ~0.1-0.2).
-        mass_lumping: how the cloth's mass is shared among its particles. ``"even"``, the default, is the paper's:
-            every particle the same, so that the grid's edges carry twice the cloth their area holds and its corners
-            four times, a heavier border the coarser the mesh. ``"area"`` gives each particle the cloth it stands for
-            (a quarter of every cell it touches), as a real cloth's: a sheet flag with every stick alike flapped
-            within 9 % of itself at resolutions 9, 17 and 33 with it, 10 % with even masses (docs/objects.md).
+        mass_lumping: how the cloth's mass is shared among its particles. ``"area"`` (the sheet's) gives each
+            particle the cloth it stands for (a quarter of every cell it touches), as a real cloth's. ``"even"``
+            (the paper's) gives every particle the same, so that the grid's edges carry twice the cloth their area
+            holds and its corners four times, a heavier border the coarser the mesh (a sheet flag with every stick
+            alike flapped within 9 % of itself at resolutions 9, 17 and 33 by area, 10 % with even masses;
+            docs/objects.md).
         bending_stiffness: the cloth's bending stiffness ``B`` [N m] (per metre of width: ``E t^3 / 12`` for a
             sheet of Young's modulus ``E`` and thickness ``t``; Poisson's ratio 0), as hinges along the grid's rows
             and columns and a twist in every cell (:func:`add_plate_hinges`, :mod:`warpsim.physics.kernels.bending`).
-            0, the default, is the paper's cloth, which folds freely; its flapping is then set by the mesh
-            (docs/objects.md). A flag's fabric has ~1e-5 to 1e-3, which sets waves of centimetres, finer than these
-            meshes; a stiffer sheet (0.1, a card or a thin plastic sheet: scenes/flag_sheet.toml) sets its waves at
-            the flag's length, and its flapping converges as the mesh is refined (with a woven cloth, whatever its
-            threads' stiffness: ``shear_compliance``). Explicit: dt must stay under
+            0 (the paper's) is a cloth that folds freely; its flapping is then set by the mesh (docs/objects.md).
+            A flag's fabric has ~1e-5 to 1e-3, which sets waves of centimetres, finer than these meshes; a stiffer
+            sheet (0.1, the sheet's: a card or a thin plastic sheet) sets its waves at the flag's length, and its
+            flapping converges as the mesh is refined (with a woven cloth, whatever its threads' stiffness:
+            ``shear_compliance``). Explicit: dt must stay under
             ``Model.bending_dt`` (a scene past it is refused).
         cloth_compliance: stretch [m/N] per newton of tension of each of the cloth's sticks (XPBD; needs
             ``solver.mass_splitting``). A square grid's sticks, with both diagonals in every cell, give the cloth an
             in-plane stiffness of about ``1.5 / cloth_compliance`` [N/m] under a pull one way (``2 /`` held
-            sideways) at any resolution. 0, the default, is the paper's rigid sticks, which the
-            iterations only approach: finer cloth then stretches more and answers to the iteration count.
+            sideways) at any resolution. The sheet's 1.5625e-5 makes its threads 64,000 N/m. 0 is the paper's rigid
+            sticks, which the iterations only approach: finer cloth then stretches more and answers to the iteration
+            count.
         shear_compliance: stretch [m/N] per newton of each cell's two diagonal sticks, which alone resist the cloth's
             shear along its threads (the rows and columns, ``cloth_compliance``): a shear stiffness ``G t`` of
             ``1 / shear_compliance`` [N/m] on square cells (``2 a b / (a^2 + b^2)`` of it on cells ``a`` by ``b``;
-            on the bias the threads hold it: ``1 / (2 cloth_compliance)``). 0, the default, gives the diagonals
+            on the bias the threads hold it: ``1 / (2 cloth_compliance)``). The sheet's 1e-2 is 100 N/m in shear
+            (its diagonals stretch up to ~5 % as the cloth shears: the run's worst stick). 0 gives the diagonals
             ``cloth_compliance`` too: every stick alike, a cloth stiff in shear. A woven fabric is stiff along its
             threads and shears under small forces (its threads turn at their crossings): with diagonals of 100 N/m
             the sheet flag flaps within 3.5 % whatever its threads' stiffness (1,000 to 64,000 N/m), where the grid
@@ -59,15 +75,40 @@ class FlagConfig(Checked):
 
     width: float = number(2.0, POSITIVE)
     height: float = number(1.2, POSITIVE)
-    resolution: int = number(5, Bounds(2, 4096))
+    design: str = choice("sheet", ("sheet", "paper"))
+    resolution: int = number(17, Bounds(2, 4096))
     mass_per_area: float = number(0.15, POSITIVE)
-    mass_lumping: str = choice("even", ("even", "area"))
-    bending_stiffness: float = number(0.0, NON_NEGATIVE)
-    cloth_compliance: float = number(0.0, NON_NEGATIVE)
-    shear_compliance: float = number(0.0, NON_NEGATIVE)
+    mass_lumping: str = choice("area", ("even", "area"))
+    bending_stiffness: float = number(0.1, NON_NEGATIVE)
+    cloth_compliance: float = number(1.5625e-5, NON_NEGATIVE)
+    shear_compliance: float = number(1e-2, NON_NEGATIVE)
     pole_height: float = number(5.0, POSITIVE)
     position: tuple[float, float] = (0.0, 0.0)
 
+
+_DESIGN_KEYS = ("resolution", "mass_lumping", "bending_stiffness", "cloth_compliance", "shear_compliance")
+PRESETS = {
+    # 1.25 ms steps (the bending's explicit limit at resolution 17 is 2.3 ms) and 14 iterations per particle along
+    # the flag (238): the same flapping with twice the iterations, half the step, at resolution 33 and 10 km out
+    # (benchmarks/validation: the 'flag frequency' rows); elastic sticks converge only with mass splitting
+    "sheet": {
+        "flag": {k: getattr(FlagConfig(), k) for k in _DESIGN_KEYS},
+        "solver": {"mass_splitting": True, "dt": 0.00125, "iterations": 238},
+    },
+    # 1.25 ms steps and 110 iterations: the flapping's frequency and amplitude within 4 % of their limit as dt -> 0
+    # and the iterations grow (1.94 Hz, ±0.28 m; at the paper's 10 ms and 55: 1.67 Hz, ±0.41 m)
+    "paper": {
+        "flag": {
+            "resolution": 5,
+            "mass_lumping": "even",
+            "bending_stiffness": 0.0,
+            "cloth_compliance": 0.0,
+            "shear_compliance": 0.0,
+        },
+        "solver": {"mass_splitting": False, "dt": 0.00125, "iterations": 110},
+    },
+}
+"""``flag.design`` presets: ``{design: {section: {key: value}}}`` (see :class:`FlagConfig`)."""
 
 MAX_PARTICLES = 2048 * 2048  # a larger flag takes minutes to build and gigabytes to hold
 

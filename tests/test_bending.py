@@ -254,8 +254,8 @@ def test_the_flags_note_says_what_its_flapping_is_not():
         assert "this cloth's, every stick alike, about 1,500 N/m in its plane (1.5 / flag.cloth_compliance" in said
         said = note(resolution=resolution, **sheet, shear_compliance=1e-2)  # a woven cloth: the threads do not count
         assert "this woven cloth's, 100 N/m in shear (its diagonals stretch as it shears): converged" in said, said
-    assert "238 iterations, fewer than the 14 per particle along the flag (462)" in note(
-        resolution=33, iterations=238, **sheet
+    assert "119 iterations, fewer than the 7 per particle along the flag (231)" in note(
+        resolution=33, iterations=119, **sheet
     )
     # a fabric's stiffness: centimetre waves, finer than resolution 33's 6 cm spacing
     assert "resolution 33 (spacing 0.062 m" in note(resolution=33, bending_stiffness=1e-4, cloth_compliance=1e-3)

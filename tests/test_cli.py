@@ -21,7 +21,7 @@ def test_info(capsys):
     assert main(["info", "flag"]) == 0
     out = capsys.readouterr().out
     assert "particles 187, sticks 666, triangles 320, nails 11" in out
-    assert "[solver]" in out and "dt = 0.00125" in out and "iterations = 238" in out and 'design = "sheet"' in out
+    assert "[solver]" in out and "dt = 0.00125" in out and "iterations = 119" in out and 'design = "sheet"' in out
     assert main(["info", "flag_paper"]) == 0
     out = capsys.readouterr().out
     assert "particles 15, sticks 38, triangles 16, nails 3" in out and "iterations = 110" in out

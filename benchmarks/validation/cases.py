@@ -1387,8 +1387,8 @@ CONVERGENCE = {
     "glider phugoid period": (_phugoid_period, 0.01, " s", 0.10, 55),
     "kite line angle at the anchor": (_kite_angle, 0.005, "°", 0.05, 55),
     "parachute descent": (_parachute_descent, 0.01, " m/s", 0.05, 55),
-    "flag flapping frequency": (lambda dt, it: _flag_flap(dt, it)["frequency"], 0.00125, " Hz", 0.05, 238),
-    "flag flapping amplitude": (lambda dt, it: _flag_flap(dt, it)["amplitude"], 0.00125, " m", 0.10, 238),
+    "flag flapping frequency": (lambda dt, it: _flag_flap(dt, it)["frequency"], 0.00125, " Hz", 0.05, 119),
+    "flag flapping amplitude": (lambda dt, it: _flag_flap(dt, it)["amplitude"], 0.00125, " m", 0.10, 119),
     "paper flag flapping frequency (resolution 5)": (
         lambda dt, it: _flag_flap(dt, it, "paper")["frequency"],
         0.00125,
@@ -1420,7 +1420,7 @@ BEYOND_NOTES = {
 
 def convergence_figures(names=None, beyond: bool = False, ends_only: bool = False) -> list[Row]:
     """Each figure of :data:`CONVERGENCE` (or of ``names``) at its default dt and iterations (55 but for the flags'
-    238 and 110), with the iterations doubled, dt halved with them, and dt quartered with four times the iterations (the
+    119 and 110), with the iterations doubled, dt halved with them, and dt quartered with four times the iterations (the
     finest). With ``beyond``, also a row that checks the finest rung against dt/8 with the same iterations: whether
     the finest rung stands for the limit. With ``ends_only``, only the defaults and the finest rung (what the band
     compares; a quarter less work)."""
@@ -1558,6 +1558,10 @@ SHEET_ALIKE = (1e-3, 2.5e-4, 6.25e-5, 1.5625e-5)
 (a woven cloth is not): about 1,500 N/m in the plane and 4, 16, 64 times that (twice the iterations at each step down
 at resolution 9: the same figures as with twice as many again)."""
 
+ALIKE_ITERATIONS = 14
+"""Iterations per particle along the flag of the cloth of like sticks (:data:`SHEET_ALIKE`), twice the woven cloth's
+:data:`SHEET_ITERATIONS`: its stiffer rungs need more (doubled again at each rung at resolution 9)."""
+
 
 def sheet_overrides(resolution: int, iterations: int | None = None, **flag) -> dict:
     """The descriptor overrides of :data:`SHEET_FLAG` at ``resolution``, with ``flag`` keys on top: ``iterations``,
@@ -1608,12 +1612,12 @@ def flag_sheet() -> list[Row]:
         jobs["threads", 9, c] = (9, SHEET_DT, None, {"cloth_compliance": c})
     jobs["threads", 17, SHEET_SOFTER_THREADS[0]] = (17, SHEET_DT, None, {"cloth_compliance": SHEET_SOFTER_THREADS[0]})
     for k, c in enumerate(SHEET_ALIKE):
-        jobs["alike", 9, c] = (9, SHEET_DT, 2**k * SHEET_ITERATIONS * 9, {"cloth_compliance": c, **alike})
+        jobs["alike", 9, c] = (9, SHEET_DT, 2**k * ALIKE_ITERATIONS * 9, {"cloth_compliance": c, **alike})
     for res in (17, 33):
         jobs["alike", res, SHEET_ALIKE[0]] = (
             res,
             SHEET_DT,
-            None,
+            ALIKE_ITERATIONS * res,
             {"cloth_compliance": SHEET_ALIKE[0], **alike},
         )
     done = in_processes(_sheet, jobs, _sheet_cost)
@@ -1694,13 +1698,14 @@ def flag_sheet() -> list[Row]:
             thread_spread <= 0.10,
             note=f"spread {100 * thread_spread:.1f} % ({100 * (mid['fL/U'] / soft17['fL/U'] - 1.0):+.1f} % at "
             f"resolution 17); the threads need no softening: {SHEET_ITERATIONS} iterations per particle converge "
-            "them at 64,000 N/m (the same figures with 8 times as many at resolutions 9 and 17, scratch runs)",
+            "them at 64,000 N/m (the same figures with 14 and 112 per particle at resolutions 9 and 17, scratch runs)",
         ),
         Row(
             "sheet flag frequency, every stick alike",
             "f L/U at resolution 9 with every stick (threads and diagonals) of compliance "
             + ", ".join(f"{c:g}" for c in SHEET_ALIKE)
-            + " m/N (1,500 N/m in the plane and 4, 16, 64 times that), twice the iterations at each step",
+            + f" m/N (1,500 N/m in the plane and 4, 16, 64 times that), {ALIKE_ITERATIONS} iterations per "
+            "resolution, twice as many at each step",
             "the same as the cloth stiffens toward a paper sheet's (some 1e5 N/m or more in the plane)",
             "a figure of the flag, not of its mesh's locking",
             ", ".join(f"{r['fL/U']:.3f}" for r in stiffer)

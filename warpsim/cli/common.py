@@ -106,7 +106,7 @@ def add_scene_options(parser, worlds: bool = True) -> None:
     parser.add_argument(
         "--iterations",
         type=iterations_type,
-        help="constraint iterations per step (default: the scene's; 55 in the glider, kite and parachute scenes, 238 "
+        help="constraint iterations per step (default: the scene's; 55 in the glider, kite and parachute scenes, 119 "
         "in the flag's, 110 in flag_paper.toml; `warpsim info SCENE` shows it)",
     )
     parser.add_argument("--fps", type=number_type("--fps"), help="output frames per simulated second")

@@ -88,12 +88,13 @@ class FlagConfig(Checked):
 
 _DESIGN_KEYS = ("resolution", "mass_lumping", "bending_stiffness", "cloth_compliance", "shear_compliance")
 PRESETS = {
-    # 1.25 ms steps (the bending's explicit limit at resolution 17 is 2.3 ms) and 14 iterations per particle along
-    # the flag (238): the same flapping with twice the iterations, half the step, at resolution 33 and 10 km out
-    # (benchmarks/validation: the 'flag frequency' rows); elastic sticks converge only with mass splitting
+    # 1.25 ms steps (the bending's explicit limit at resolution 17 is 2.3 ms) and 7 iterations per particle along
+    # the flag (119): within 1 % of dt/4 with 4 times the iterations, the same with twice the iterations
+    # (benchmarks/validation: the 'flag flapping' and 'sheet flag' rows); elastic sticks converge only with mass
+    # splitting
     "sheet": {
         "flag": {k: getattr(FlagConfig(), k) for k in _DESIGN_KEYS},
-        "solver": {"mass_splitting": True, "dt": 0.00125, "iterations": 238},
+        "solver": {"mass_splitting": True, "dt": 0.00125, "iterations": 119},
     },
     # 1.25 ms steps and 110 iterations: the flapping's frequency and amplitude within 4 % of their limit as dt -> 0
     # and the iterations grow (1.94 Hz, ±0.28 m; at the paper's 10 ms and 55: 1.67 Hz, ±0.41 m)

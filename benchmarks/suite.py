@@ -136,7 +136,7 @@ def case_flag(size: int) -> Callable[[Options], dict]:
     def run(opts: Options) -> dict:
         return measure(f"flag-{size}", flag(size), opts)
 
-    run.__doc__ = f"a {size}x{size} flag at 55 iterations"
+    run.__doc__ = f"a {size}x{size} flag of the paper's cloth at 55 iterations"
     return run
 
 

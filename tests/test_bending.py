@@ -231,29 +231,32 @@ def test_a_step_past_the_bending_limit_is_refused_in_one_line():
 
 def test_the_flags_note_says_what_its_flapping_is_not():
     """The run's note under the flap figure, per what the flag is built with (objects.figures.flag_caveat)."""
-    from warpsim.objects.figures import flag_caveat
+    from warpsim.objects.figures import SHEET_ITERATIONS, flag_caveat
     from warpsim.scene import descriptor
 
     def note(iterations=None, method="verlet", mass_splitting=True, **flag):
         d = descriptor.merge("t", descriptor.resolve("flag")[0], {"flag": {"design": "paper", **flag}})
         d["solver"].update(method=method, mass_splitting=mass_splitting)
-        d["solver"]["iterations"] = iterations or 14 * d["flag"]["resolution"]
+        d["solver"]["iterations"] = iterations or SHEET_ITERATIONS * d["flag"]["resolution"]
         return flag_caveat(d)
 
     assert "those of this mesh (resolution 5)" in note()  # the paper's cloth
     default = flag_caveat(descriptor.resolve("flag")[0])  # the default flag, the sheet: converged
-    assert "this woven cloth's, 100 N/m in shear (its diagonals stretch as it shears): converged" in default
+    assert "this flag's, a woven cloth (100 N/m in shear) with a card's bending, converged" in default
     sheet = {"bending_stiffness": 0.1, "cloth_compliance": 1e-3}
     assert "rigid sticks" in note(bending_stiffness=0.1, resolution=17)
     assert "rigid sticks" in note(resolution=17, mass_splitting=False, **sheet)
     assert "Euler mass-spring" in note(resolution=17, method="euler", **sheet)
     # the bending length (0.1 / (1.294 * 4.03^2))^(1/3) = 0.17 m: resolution 9's 0.25 m spacing is coarser
     assert "at resolution 9 (spacing 0.25 m against a bending length of 0.17 m)" in note(resolution=9, **sheet)
+    assert "33, 8 % with every stick alike)" in note(resolution=9, **sheet)
+    assert "than at 33); resolution" in note(resolution=9, **sheet, shear_compliance=1e-2)  # woven: no like sticks
     for resolution in (17, 33):  # converged in the mesh and the iterations; like sticks lock as they stiffen
         said = note(resolution=resolution, **sheet)
         assert "this cloth's, every stick alike, about 1,500 N/m in its plane (1.5 / flag.cloth_compliance" in said
         said = note(resolution=resolution, **sheet, shear_compliance=1e-2)  # a woven cloth: the threads do not count
-        assert "this woven cloth's, 100 N/m in shear (its diagonals stretch as it shears): converged" in said, said
+        assert "this flag's, a woven cloth (100 N/m in shear) with a card's bending, converged" in said, said
+        assert "the worst stick stretch is its diagonals as the cloth shears" in said, said
     assert "119 iterations, fewer than the 7 per particle along the flag (231)" in note(
         resolution=33, iterations=119, **sheet
     )
@@ -266,7 +269,7 @@ def test_the_sheet_flag_flaps_with_waves_running_to_its_tip():
     """The default flag (scenes/flag.toml, the sheet design) at resolution 9 (coarse, for speed; 17 and 33 flap 2 %
     faster in the validation): the corner flaps steadily at f L/U 0.433 (0.87 Hz in 4.03 m/s, 10-35 s), and the
     phase of the middle row's sideways motion lags along it: a wave running from the pole to the tip at c/U 1.12,
-    lambda/L 2.57 (measured 2026-11-27 with the woven cloth; the validation's 'flag frequency' rows). Without the
+    lambda/L 2.57 (measured 2026-11-27 with the woven cloth; the validation's 'sheet flag' rows). Without the
     bending stiffness the same cloth flaps otherwise (resolution 9: 0.67 Hz, 17: 1.26 Hz, the picture's runs: the
     mesh's)."""
     from benchmarks.validation.cases import flag_wave
@@ -280,7 +283,7 @@ def test_the_sheet_flag_flaps_with_waves_running_to_its_tip():
         },
         "solver": {"mass_splitting": True, "iterations": 126},
     }
-    wave = flag_wave(9, 0.000625, overrides, seconds=35.0, after=10.0)
+    wave = flag_wave(9, 0.000625, overrides, seconds=35.0, after=10.0, design="sheet")
     assert 0.37 < wave["fL/U"] < 0.46, wave
     assert 0.8 < wave["c/U"] < 1.25 and 1.8 < wave["λ/L"] < 3.2, wave
     assert wave["rms"] > 0.2, wave  # a flap, not a ripple

@@ -27,6 +27,21 @@ def test_info(capsys):
     assert "particles 15, sticks 38, triangles 16, nails 3" in out and "iterations = 110" in out
 
 
+def test_a_design_is_a_preset_applied_first_and_once(capsys):
+    """``flag.design`` sets the design's keys, then the other --set keys win whatever their order; setting the design
+    in force again changes nothing."""
+    from warpsim.scene import descriptor
+
+    for order in (["flag.resolution=9", "flag.design=paper"], ["flag.design=paper", "flag.resolution=9"]):
+        assert main(["info", "flag", *[arg for item in order for arg in ("--set", item)]]) == 0
+        out = capsys.readouterr().out
+        # the paper's cloth (rigid sticks, its 110 iterations) at resolution 9: 9 x 6 particles
+        assert "particles 54," in out and "iterations = 110" in out and "cloth_compliance = 0.0" in out, order
+    fine = descriptor.merge("t", descriptor.resolve("flag")[0], {"flag": {"resolution": 33}, "solver": {"dt": 5e-4}})
+    again = descriptor.merge("t", fine, {"flag": {"design": "sheet"}})
+    assert again["flag"]["resolution"] == 33 and again["solver"]["dt"] == 5e-4
+
+
 def test_run_prints_summary(capsys):
     assert main(["run", "flag_paper", "--seconds", "0.5", "--dt", "0.01", "--iterations", "40", "--fps", "20"]) == 0
     out = capsys.readouterr().out

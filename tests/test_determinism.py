@@ -91,8 +91,8 @@ def test_separate_processes_record_the_same_frames(tmp_path):
 def test_cuda_steps_as_the_cpu_does(scene):
     """A GPU runs the same physics: the scene, 0.5 s on ``cuda`` (the gather scheme, no atomics) and on the CPU (the
     fused scheme) at its defaults, ends with every particle within 0.1 mm of the other device's (on an H200: the
-    paper's flag 9e-6 m, glider 2e-7 m, parachute 9e-6 m; the default flag, a sheet whose bending kernel is new, has
-    not run on a GPU yet).
+    paper's flag 9e-6 m, glider 2e-7 m, parachute 9e-6 m; the default flag, a sheet with bending forces, has not run
+    on a GPU yet).
     The schemes add a particle's corrections in different orders, so they agree to float rounding, not bit for
     bit."""
     from warpsim.scene import descriptor

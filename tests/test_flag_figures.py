@@ -34,7 +34,7 @@ def test_swing_frequency_of_a_sine_with_jitter_and_of_a_still_figure():
 
 def test_a_flag_in_a_near_calm_does_not_flap():
     """In 0.5 m/s the flag hangs: its flap frequency is NaN, not the frequency of its jitter. (It settles from the
-    launch by a slow 0.23 Hz swing, lightly damped at the paper flag's steps: ±8.9 cm over 10-20 s, ±2.5 cm over
+    launch by a slow 0.23 Hz swing, lightly damped at the paper's flag's steps: ±8.9 cm over 10-20 s, ±2.5 cm over
     20-30 s, ±0.65 cm over 30-40 s.)"""
     sim = Simulation(merge("test", defaults("flag"), {**PAPER, "wind": {"velocity": [0.5, 0.05, 0.0]}}))
     figures = FlightFigures(sim, 30.0, 45.0)

@@ -12,6 +12,7 @@ import pytest
 from benchmarks.validation import cases
 from benchmarks.validation.__main__ import long_run, table
 from benchmarks.validation.svg import loglog_panels
+from warpsim.scene import descriptor
 
 
 def _rows(case):
@@ -119,14 +120,14 @@ def test_glider_converges_as_dt_halves_and_iterations_double():
         "glider phugoid period",
         "parachute descent",
         "kite line angle at the anchor",
-        # one flight, two figures; the default flag's ladder (40 s at up to 952 iterations a step) is the validation's
-        ("paper flag flapping frequency (resolution 5)", "paper flag flapping amplitude (resolution 5)"),
+        # one flight, two figures; the default flag's ladder (40 s at up to 476 iterations a step) is the validation's
+        ("paper's flag flapping frequency (resolution 5)", "paper's flag flapping amplitude (resolution 5)"),
     ],
     ids=["turn-rate", "phugoid", "parachute", "kite-line", "paper-flag"],
 )
 def test_flight_figures_converge(figure):
     """The turn rate (bank held at 20°), the phugoid period, the parachute's descent, the kite's line angle and the
-    paper flag's flapping frequency and amplitude at the defaults lie within 10 %, 10 %, 5 %, 5 %, 10 % and 10 % of
+    paper's flag's flapping frequency and amplitude at the defaults lie within 10 %, 10 %, 5 %, 5 %, 10 % and 10 % of
     dt/4 with four times the iterations (the kite's line: 57.6° at the defaults, 60.2° at the finest; with Chebyshev
     0.95 it was 55.4° against 59.9°, outside its band; the flag at its 1.25 ms and 110 iterations: 1.93 Hz and
     ±0.27 m against 1.94 Hz and ±0.28 m; at the paper's 10 ms and 55 it flapped at 1.67 Hz, ±0.41 m). One figure a
@@ -137,10 +138,27 @@ def test_flight_figures_converge(figure):
     assert len(rows) == len(names) and all(r.ok and not r.model_limit for r in rows), rows
 
 
+def test_the_validations_sheet_flag_is_the_default_flag():
+    """The 'sheet flag' rows fly the default flag's cloth and solver, at their own resolution, step and iterations."""
+    from warpsim.objects.figures import SHEET_ITERATIONS
+    from warpsim.objects.flag import PRESETS
+
+    sheet = PRESETS["sheet"]
+    assert cases.SHEET_FLAG["flag"].items() <= sheet["flag"].items()
+    assert cases.SHEET_FLAG["solver"].items() <= sheet["solver"].items()
+    assert sheet["solver"]["iterations"] == SHEET_ITERATIONS * sheet["flag"]["resolution"]
+    sim = cases.flag_simulation(9, cases.SHEET_DT, cases.sheet_overrides(9), "sheet")
+    default = descriptor.defaults("flag")
+    for section in ("flag", "solver", "air", "wind"):
+        differ = {k for k, v in sim.descriptor[section].items() if default[section][k] != v}
+        assert differ <= {"resolution", "dt", "iterations"}, (section, differ)
+
+
 def test_flag_convergence_rows_read_each_rungs_own_run(monkeypatch):
     """The default flag's convergence rows take each rung's run (flown one process per core, cached by dt, iterations
     and design): here the runs measured on 2026-11-27, given, so that no flag flies."""
-    ladder = cases._ladder(0.00125, 238)
+    _, dt, _, _, iterations = cases.CONVERGENCE["flag flapping frequency"]
+    ladder = cases._ladder(dt, iterations)
     runs = {
         (dt, it, "sheet"): {"frequency": f, "amplitude": a}
         for (dt, it), f, a in zip(

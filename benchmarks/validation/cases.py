@@ -18,6 +18,7 @@ import numpy as np
 
 from benchmarks.numpy_step import NumpyVerlet
 from warpsim.objects.figures import SHEET_ITERATIONS
+from warpsim.objects.flag import PRESETS as FLAG_PRESETS
 from warpsim.objects.kite import anchor_elevation, anchor_pull
 from warpsim.physics.builder import ModelBuilder
 from warpsim.physics.config import AirConfig
@@ -355,17 +356,17 @@ FLAG_SAMPLE = 0.02
 """Seconds between the samples of the validation flag's corner [s]."""
 
 
-def flag_simulation(resolution: int, dt: float, overrides: dict | None = None) -> Simulation:
-    """The validation's flag: the paper's flag (``flag.design = "paper"``: rigid sticks, no bending, even masses) at
-    ``resolution`` with ``28 x resolution`` iterations and Chebyshev 0.995, stepping ``dt`` [s], with the descriptor
-    ``overrides`` (``{section: {key: value}}``; :data:`SHEET_FLAG`'s make it the default flag) on top."""
+def flag_simulation(resolution: int, dt: float, overrides: dict | None = None, design: str = "paper") -> Simulation:
+    """The validation's flag of ``design`` at ``resolution``, stepping ``dt`` [s], with the descriptor ``overrides``
+    (``{section: {key: value}}``) on top: the paper's flag (rigid sticks, no bending, even masses) with
+    ``28 x resolution`` iterations and Chebyshev 0.995, or the default flag (the sheet) at the solver's defaults."""
+    solver: dict = {"dt": dt}
+    if design == "paper":
+        solver.update(iterations=FLAG_ITERATIONS_PER_RESOLUTION * resolution, chebyshev=0.995)
     d = descriptor.merge(
         "validation",
         descriptor.resolve("flag")[0],
-        {
-            "flag": {"design": "paper", "resolution": resolution},
-            "solver": {"dt": dt, "iterations": FLAG_ITERATIONS_PER_RESOLUTION * resolution, "chebyshev": 0.995},
-        },
+        {"flag": {"design": design, "resolution": resolution}, "solver": solver},
     )
     if overrides:
         d = descriptor.merge("validation", d, overrides)
@@ -481,7 +482,7 @@ def flag() -> list[Row]:
     listed = ", ".join(f"{r['fL/U']:.2f} ({res})" for res, r in runs.items())
     return [
         Row(
-            "paper flag frequency, resolution",
+            "paper's flag frequency, resolution",
             "f L/U of the flag's top trailing corner at resolutions 9, 17, 33 (28 iterations per resolution, "
             "Chebyshev 0.995, dt 0.01 s, 5-30 s)",
             "the same at every resolution",
@@ -492,7 +493,7 @@ def flag() -> list[Row]:
             note=f"spread {100 * spread:.0f} %; {limit}",
         ),
         Row(
-            "paper flag frequency, time step",
+            "paper's flag frequency, time step",
             f"f L/U at resolution 17 ({FLAG_ITERATIONS_PER_RESOLUTION * 17} iterations, Chebyshev 0.995, 5-30 s) at dt "
             + ", ".join(f"{dt:g}" for dt in FLAG_TIME_STEPS)
             + " s",
@@ -513,14 +514,14 @@ def flag() -> list[Row]:
             "benchmarks/validation/flag_time_step.py draws it (docs/flag_time_step.png)",
         ),
         flag_band_row(
-            "paper flag frequency, measured band",
+            "paper's flag frequency, measured band",
             "f L/U at resolution 33, 4 m/s wind, 2 m flag",
             fine["fL/U"],
             2,
             "set by the mesh and the time step (rows above)",
         ),
         Row(
-            "paper flag sticks at resolution 33",
+            "paper's flag sticks at resolution 33",
             "worst stick stretch |l - r|/r over 5-30 s, 924 iterations, Chebyshev 0.995",
             "within 2 %",
             "the constraint solver's own accuracy (the paper keeps its cloth within 1 % at 55 iterations, coarse)",
@@ -1378,6 +1379,9 @@ def _ladder(dt: float, iterations: int = 55) -> tuple[tuple[float, int], ...]:
     return ((dt, iterations), (dt, 2 * iterations), (dt / 2, 2 * iterations), (dt / 4, 4 * iterations))
 
 
+_SHEET_STEP = (FLAG_PRESETS["sheet"]["solver"]["dt"],)
+_SHEET_ITS = FLAG_PRESETS["sheet"]["solver"]["iterations"]  # the default flag's step [s] and iterations
+
 CONVERGENCE = {
     # figure: (measure(dt, iterations), default dt [s], unit, band: the defaults' largest distance from the finest,
     # default iterations)
@@ -1387,16 +1391,16 @@ CONVERGENCE = {
     "glider phugoid period": (_phugoid_period, 0.01, " s", 0.10, 55),
     "kite line angle at the anchor": (_kite_angle, 0.005, "°", 0.05, 55),
     "parachute descent": (_parachute_descent, 0.01, " m/s", 0.05, 55),
-    "flag flapping frequency": (lambda dt, it: _flag_flap(dt, it)["frequency"], 0.00125, " Hz", 0.05, 119),
-    "flag flapping amplitude": (lambda dt, it: _flag_flap(dt, it)["amplitude"], 0.00125, " m", 0.10, 119),
-    "paper flag flapping frequency (resolution 5)": (
+    "flag flapping frequency": (lambda dt, it: _flag_flap(dt, it)["frequency"], *_SHEET_STEP, " Hz", 0.05, _SHEET_ITS),
+    "flag flapping amplitude": (lambda dt, it: _flag_flap(dt, it)["amplitude"], *_SHEET_STEP, " m", 0.10, _SHEET_ITS),
+    "paper's flag flapping frequency (resolution 5)": (
         lambda dt, it: _flag_flap(dt, it, "paper")["frequency"],
         0.00125,
         " Hz",
         0.10,
         110,
     ),
-    "paper flag flapping amplitude (resolution 5)": (
+    "paper's flag flapping amplitude (resolution 5)": (
         lambda dt, it: _flag_flap(dt, it, "paper")["amplitude"],
         0.00125,
         " m",
@@ -1476,8 +1480,8 @@ def flag_convergence() -> list[Row]:
     0.3125 ms, is already finer than the 'sheet flag' rows' 0.5 and 0.25 ms, and dt/8 would take 18 min alone."""
     figures = ["flag flapping frequency", "flag flapping amplitude"]
     _, dt, _, _, iterations = CONVERGENCE[figures[0]]
-    jobs = {(d, it): (d, it) for d, it in _ladder(dt, iterations) if (d, it, "sheet") not in _FLAPS}
-    runs = in_processes(_flag_flap, jobs, lambda d, it: it / d) if jobs else {}
+    jobs = {(d, it): (d, it, "sheet") for d, it in _ladder(dt, iterations) if (d, it, "sheet") not in _FLAPS}
+    runs = in_processes(_flag_flap, jobs, lambda d, it, _: it / d) if jobs else {}
     _FLAPS.update({(d, it, "sheet"): run for (d, it), run in runs.items()})
     return convergence_figures(figures)
 
@@ -1494,13 +1498,15 @@ def refined_peak_frequency(ys: np.ndarray, sample: float = FLAG_SAMPLE) -> float
     return float((k + shift) / (ys.size * sample))
 
 
-def flag_wave(resolution: int, dt: float, overrides: dict, seconds: float = 35.0, after: float = 5.0) -> dict:
-    """The validation's flag (:func:`flag_simulation` with ``overrides``) flown ``seconds``: from ``after`` on, its
-    top trailing corner's frequency ``f`` [Hz] (:func:`refined_peak_frequency`), ``f L / U`` and rms sideways
-    motion [m]; the wave along its middle row at that frequency (the sideways motion's phase at a quarter, a half,
-    three quarters and the whole of its length, fitted by a line: wavenumber ``k``), its speed ``c = 2 pi f / k``
-    as ``c/U`` and its wavelength as ``λ/L``; and the worst stick stretch."""
-    sim = flag_simulation(resolution, dt, overrides)
+def flag_wave(
+    resolution: int, dt: float, overrides: dict, seconds: float = 35.0, after: float = 5.0, design: str = "sheet"
+) -> dict:
+    """The validation's flag (:func:`flag_simulation` of ``design`` with ``overrides``) flown ``seconds``: from
+    ``after`` on, its top trailing corner's frequency ``f`` [Hz] (:func:`refined_peak_frequency`), ``f L / U`` and
+    rms sideways motion [m]; the wave along its middle row at that frequency (the sideways motion's phase at a
+    quarter, a half, three quarters and the whole of its length, fitted by a line: wavenumber ``k``), its speed
+    ``c = 2 pi f / k`` as ``c/U`` and its wavelength as ``λ/L``; and the worst stick stretch."""
+    sim = flag_simulation(resolution, dt, overrides, design)
     middle = flag_middle_row(sim)
     columns = len(middle)
     stations = middle[[columns // 4, columns // 2, (3 * columns) // 4, columns - 1]]
@@ -1532,8 +1538,8 @@ SHEET_FLAG = {
     },
     "solver": {"mass_splitting": True},
 }
-"""The sheet flag, the default flag's design (``flag.design = "sheet"``, the same keys: a test checks): the
-validation's paper flag (2 m x 1.2 m, 0.15 kg/m^2, 4 m/s) with a bending stiffness of 0.1 N m
+"""The sheet flag, the default flag's design (``flag.design = "sheet"``: its keys, which a test checks): the
+paper's flag (2 m x 1.2 m, 0.15 kg/m^2, 4 m/s) with a bending stiffness of 0.1 N m
 (a sheet's, not a fabric's) and a woven cloth in its plane: threads (the grid's rows and columns) of 1.5625e-5 m/N a
 stick (64,000 N/m along them) and diagonals of 1e-2 m/N (a shear stiffness G t of 100 N/m; its diagonals stretch up
 to 5 % as the tip snaps), whose iterations converge (mass splitting), and each particle the mass of the cloth it
@@ -1547,7 +1553,7 @@ WAVE_NOTE = (  # the sheet flag's wave-speed row: why its waves miss the referen
     "compared in kind"
 )
 SHEET_DT = 0.0005
-"""[s]: resolution 33's bending (its hinges and twists) needs dt <= 0.00058 s (Model.bending_dt); the same step at
+"""[s]: resolution 33's bending (its hinges and twists) needs dt <= 0.0006 s (Model.bending_dt); the same step at
 every resolution."""
 
 SHEET_SOFTER_THREADS = (1e-3, 2.5e-4, 6.25e-5)
@@ -1635,7 +1641,7 @@ def flag_sheet() -> list[Row]:
     spread = max(ratios) / min(ratios) - 1.0
     fine, mid = runs[33], runs[17]
     what = (
-        "the default flag (flag.design = sheet): the paper flag of the rows above with a bending stiffness of "
+        "the default flag (flag.design = sheet): the paper's flag of the rows above with a bending stiffness of "
         "0.1 N m, a woven cloth (threads 1.5625e-5 m/N a "
         "stick, 64,000 N/m; diagonals 1e-2 m/N, a shear stiffness of 100 N/m; mass splitting) and masses by area "
         f"({SHEET_ITERATIONS} iterations per resolution, dt {SHEET_DT:g} s, 10-45 s)"
@@ -1773,10 +1779,10 @@ CASES: dict[str, Callable[[], list[Row]]] = {
             "glider phugoid period",
             "kite line angle at the anchor",
             "parachute descent",
-            "paper flag flapping frequency (resolution 5)",
-            "paper flag flapping amplitude (resolution 5)",
+            "paper's flag flapping frequency (resolution 5)",
+            "paper's flag flapping amplitude (resolution 5)",
         ],
         beyond=True,
     ),
-    "convergence-flag": lambda: flag_convergence(),
+    "convergence-flag": flag_convergence,
 }

@@ -33,7 +33,7 @@ def middle_row(resolution: int, sheet: bool, seconds: float = 25.0, after: float
     sheet's elastic sticks, mass splitting and masses) ``seconds``: its middle row's distance from the pole and
     sideways offset [m] every ``FLAG_SAMPLE`` seconds after ``after``, and its corner's frequency [Hz]."""
     sim = flag_simulation(
-        resolution, SHEET_DT, sheet_overrides(resolution, **({} if sheet else {"bending_stiffness": 0.0}))
+        resolution, SHEET_DT, sheet_overrides(resolution, **({} if sheet else {"bending_stiffness": 0.0})), "sheet"
     )
     row = flag_middle_row(sim)
     tip = flag_corner(sim)

@@ -107,7 +107,8 @@ def add_scene_options(parser, worlds: bool = True) -> None:
         "--iterations",
         type=iterations_type,
         help="constraint iterations per step (default: the scene's; 55 in the glider, kite and parachute scenes, 119 "
-        "in the flag's, 110 in flag_paper.toml; `warpsim info SCENE` shows it)",
+        "in the flag's (7 per particle along it: a finer flag.resolution needs more), 110 in flag_paper.toml; "
+        "`warpsim info SCENE` shows it)",
     )
     parser.add_argument("--fps", type=number_type("--fps"), help="output frames per simulated second")
     parser.add_argument("--device", default="cpu", help="Warp device: cpu (default) or cuda[:N]")
@@ -154,8 +155,11 @@ def load_scene(args, worlds_from_vary: bool = True) -> tuple[dict, str, str]:
     from ..scene.values import parse_override, parse_vary
 
     descriptor, text, where = resolve(args.scene, scene_dirs())
-    for item in args.set:
-        descriptor = merge(f"--set {item}", descriptor, parse_override(item))
+    overrides = [(item, parse_override(item)) for item in args.set]
+    # a design is a preset of other keys: its --set applies first, so that the others win in any order
+    overrides.sort(key=lambda pair: not any("design" in keys for keys in pair[1].values()))
+    for item, override in overrides:
+        descriptor = merge(f"--set {item}", descriptor, override)
     count = getattr(args, "worlds", None)
     worlds: dict = {}
     for item in getattr(args, "vary", []) if worlds_from_vary else []:

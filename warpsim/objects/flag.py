@@ -13,6 +13,7 @@ from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, nu
 from ..physics.model import ObjectRecord
 from ..physics.shapes import edge_halves
 from ..physics.terrain import Heightfield
+from .figures import SHEET_ITERATIONS
 
 
 @dataclass(kw_only=True)
@@ -94,7 +95,7 @@ PRESETS = {
     # splitting
     "sheet": {
         "flag": {k: getattr(FlagConfig(), k) for k in _DESIGN_KEYS},
-        "solver": {"mass_splitting": True, "dt": 0.00125, "iterations": 119},
+        "solver": {"mass_splitting": True, "dt": 0.00125, "iterations": SHEET_ITERATIONS * FlagConfig().resolution},
     },
     # 1.25 ms steps and 110 iterations: the flapping's frequency and amplitude within 4 % of their limit as dt -> 0
     # and the iterations grow (1.94 Hz, ±0.28 m; at the paper's 10 ms and 55: 1.67 Hz, ±0.41 m)

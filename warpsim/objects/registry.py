@@ -7,8 +7,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from . import figures, hang_glider, kite, parachute
-from . import flag as flag_
+from . import figures, flag, hang_glider, kite, parachute
 
 
 @dataclass(frozen=True)
@@ -69,11 +68,11 @@ class ObjectSpec:
 
 OBJECTS: dict[str, ObjectSpec] = {
     "flag": ObjectSpec(
-        config=flag_.FlagConfig,
-        build=flag_.build_flag,
+        config=flag.FlagConfig,
+        build=flag.build_flag,
         scene_defaults={"wind": {"velocity": [4.0, 0.5, 0.0]}},
-        summary="stiff woven sheet nailed along a pole, in wind (design = paper: the cloth of slide 15's Verlet/Euler)",
-        presets=flag_.PRESETS,
+        summary="stiff woven sheet nailed along a pole, in wind (design = paper: slide 15's Verlet-Euler cloth)",
+        presets=flag.PRESETS,
         figures=figures.FLAG_FIGURES,
         measure_figures=figures.flag_figures,
         hud=figures.flag_hud,

@@ -141,11 +141,13 @@ def merge(where: str, base: dict, override: dict) -> dict:
     kind = out["scene"]["object"]
     own = override.get(registry.section(kind))
     if isinstance(own, dict) and "design" in own and "design" in out[registry.section(kind)]:
-        # a design is a preset of other keys: apply it first, so the override's own keys win
+        # a design is a preset of other keys: apply it first, so the override's own keys win; the design in force
+        # again changes nothing (its keys as set stay)
         design = _check_value(
             where, registry.section(kind), "design", out[registry.section(kind)]["design"], own["design"]
         )
-        _apply_preset(out, kind, design)
+        if design != out[registry.section(kind)]["design"]:
+            _apply_preset(out, kind, design)
     for section, values in override.items():
         if section == "controls":
             out["controls"] = _check_controls(where, values, out["scene"]["object"])

@@ -270,7 +270,7 @@ def test_the_sheet_flag_flaps_with_waves_running_to_its_tip():
     faster in the validation): the corner flaps steadily at f L/U 0.433 (0.87 Hz in 4.03 m/s, 10-35 s), and the
     phase of the middle row's sideways motion lags along it: a wave running from the pole to the tip at c/U 1.12,
     lambda/L 2.57 (measured 2026-11-27 with the woven cloth; the validation's 'sheet flag' rows). Without the
-    bending stiffness the same cloth flaps otherwise (resolution 9: 0.67 Hz, 17: 1.26 Hz, the picture's runs: the
+    bending stiffness the same cloth flaps otherwise (resolution 9: 0.93 Hz, 17: 1.17 Hz, the picture's runs: the
     mesh's)."""
     from benchmarks.validation.cases import flag_wave
     from warpsim.scene import descriptor

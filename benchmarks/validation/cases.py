@@ -1475,9 +1475,9 @@ def convergence_figures(names=None, beyond: bool = False, ends_only: bool = Fals
 
 
 def flag_convergence() -> list[Row]:
-    """The default flag's convergence rows (:data:`CONVERGENCE`), its four rungs one process per core (19 min on 2
-    cores: the finest, dt/4 with 952 iterations, takes 16 of them). No rung beyond the ladder: its finest step,
-    0.3125 ms, is already finer than the 'sheet flag' rows' 0.5 and 0.25 ms, and dt/8 would take 18 min alone."""
+    """The default flag's convergence rows (:data:`CONVERGENCE`), its four rungs one process per core (10 min on 2
+    cores, most of it the finest rung, dt/4 with 476 iterations). No rung beyond the ladder: its finest step,
+    0.3125 ms, is already finer than the 'sheet flag' rows' 0.5 and 0.25 ms, and dt/8 would take 9 min alone."""
     figures = ["flag flapping frequency", "flag flapping amplitude"]
     _, dt, _, _, iterations = CONVERGENCE[figures[0]]
     jobs = {(d, it): (d, it, "sheet") for d, it in _ladder(dt, iterations) if (d, it, "sheet") not in _FLAPS}

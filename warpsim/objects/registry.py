@@ -71,7 +71,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         config=flag.FlagConfig,
         build=flag.build_flag,
         scene_defaults={"wind": {"velocity": [4.0, 0.5, 0.0]}},
-        summary="stiff woven sheet nailed along a pole, in wind (design = paper: slide 15's Verlet-Euler cloth)",
+        summary="stiff woven sheet nailed along a pole, in wind (design = paper: the cloth of the paper's slide 15)",
         presets=flag.PRESETS,
         figures=figures.FLAG_FIGURES,
         measure_figures=figures.flag_figures,

@@ -144,8 +144,7 @@ def test_the_validations_sheet_flag_is_the_default_flag():
     from warpsim.objects.flag import PRESETS
 
     sheet = PRESETS["sheet"]
-    assert cases.SHEET_FLAG["flag"].items() <= sheet["flag"].items()
-    assert cases.SHEET_FLAG["solver"].items() <= sheet["solver"].items()
+    assert cases.SHEET_FLAG is sheet
     assert sheet["solver"]["iterations"] == SHEET_ITERATIONS * sheet["flag"]["resolution"]
     sim = cases.flag_simulation(9, cases.SHEET_DT, cases.sheet_overrides(9), "sheet")
     default = descriptor.defaults("flag")

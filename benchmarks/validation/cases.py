@@ -1379,8 +1379,7 @@ def _ladder(dt: float, iterations: int = 55) -> tuple[tuple[float, int], ...]:
     return ((dt, iterations), (dt, 2 * iterations), (dt / 2, 2 * iterations), (dt / 4, 4 * iterations))
 
 
-_SHEET_STEP = (FLAG_PRESETS["sheet"]["solver"]["dt"],)
-_SHEET_ITS = FLAG_PRESETS["sheet"]["solver"]["iterations"]  # the default flag's step [s] and iterations
+_SHEET_SOLVER = FLAG_PRESETS["sheet"]["solver"]  # the default flag's step [s] and iterations
 
 CONVERGENCE = {
     # figure: (measure(dt, iterations), default dt [s], unit, band: the defaults' largest distance from the finest,
@@ -1391,8 +1390,20 @@ CONVERGENCE = {
     "glider phugoid period": (_phugoid_period, 0.01, " s", 0.10, 55),
     "kite line angle at the anchor": (_kite_angle, 0.005, "°", 0.05, 55),
     "parachute descent": (_parachute_descent, 0.01, " m/s", 0.05, 55),
-    "flag flapping frequency": (lambda dt, it: _flag_flap(dt, it)["frequency"], *_SHEET_STEP, " Hz", 0.05, _SHEET_ITS),
-    "flag flapping amplitude": (lambda dt, it: _flag_flap(dt, it)["amplitude"], *_SHEET_STEP, " m", 0.10, _SHEET_ITS),
+    "flag flapping frequency": (
+        lambda dt, it: _flag_flap(dt, it)["frequency"],
+        _SHEET_SOLVER["dt"],
+        " Hz",
+        0.05,
+        _SHEET_SOLVER["iterations"],
+    ),
+    "flag flapping amplitude": (
+        lambda dt, it: _flag_flap(dt, it)["amplitude"],
+        _SHEET_SOLVER["dt"],
+        " m",
+        0.10,
+        _SHEET_SOLVER["iterations"],
+    ),
     "paper's flag flapping frequency (resolution 5)": (
         lambda dt, it: _flag_flap(dt, it, "paper")["frequency"],
         0.00125,
@@ -1529,21 +1540,13 @@ def flag_wave(
     return {"f": f, "fL/U": f_l_u, "rms": float(np.std(corner)), "c/U": c_u, "λ/L": c_u / f_l_u, "stretch": stretch}
 
 
-SHEET_FLAG = {
-    "flag": {
-        "bending_stiffness": 0.1,
-        "cloth_compliance": 1.5625e-5,
-        "shear_compliance": 1e-2,
-        "mass_lumping": "area",
-    },
-    "solver": {"mass_splitting": True},
-}
-"""The sheet flag, the default flag's design (``flag.design = "sheet"``: its keys, which a test checks): the
-paper's flag (2 m x 1.2 m, 0.15 kg/m^2, 4 m/s) with a bending stiffness of 0.1 N m
-(a sheet's, not a fabric's) and a woven cloth in its plane: threads (the grid's rows and columns) of 1.5625e-5 m/N a
-stick (64,000 N/m along them) and diagonals of 1e-2 m/N (a shear stiffness G t of 100 N/m; its diagonals stretch up
-to 5 % as the tip snaps), whose iterations converge (mass splitting), and each particle the mass of the cloth it
-stands for (not the paper's even share, which doubles the edges')."""
+SHEET_FLAG = FLAG_PRESETS["sheet"]
+"""The sheet flag, the default flag's design (``flag.design = "sheet"``, :data:`warpsim.objects.flag.PRESETS`): the
+paper's flag (2 m x 1.2 m, 0.15 kg/m^2, 4 m/s) with a bending stiffness of 0.1 N m (a sheet's, not a fabric's) and a
+woven cloth in its plane: threads (the grid's rows and columns) of 1.5625e-5 m/N a stick (64,000 N/m along them) and
+diagonals of 1e-2 m/N (a shear stiffness G t of 100 N/m; its diagonals stretch up to 5 % as the tip snaps), whose
+iterations converge (mass splitting), and each particle the mass of the cloth it stands for (not the paper's even
+share, which doubles the edges'). The validation flies it at its own resolutions, step and iterations."""
 
 WAVE_NOTE = (  # the sheet flag's wave-speed row: why its waves miss the reference's, and what the band does not say
     "the waves run a little faster than the wind and are longer than the paper flags' (λ/L about 2.55 against 1.87), "
@@ -1570,11 +1573,10 @@ ALIKE_ITERATIONS = 14
 
 
 def sheet_overrides(resolution: int, iterations: int | None = None, **flag) -> dict:
-    """The descriptor overrides of :data:`SHEET_FLAG` at ``resolution``, with ``flag`` keys on top: ``iterations``,
-    or ``SHEET_ITERATIONS`` per particle along it (``warpsim.objects.figures``, which its run's note checks; twice as
-    many flap the same)."""
-    iterations = iterations or SHEET_ITERATIONS * resolution
-    return {"flag": {**SHEET_FLAG["flag"], **flag}, "solver": {**SHEET_FLAG["solver"], "iterations": iterations}}
+    """The descriptor overrides of the sheet flag (``design = "sheet"``) at ``resolution``, with ``flag`` keys on
+    top: ``iterations``, or ``SHEET_ITERATIONS`` per particle along it (``warpsim.objects.figures``, which its run's
+    note checks; twice as many flap the same)."""
+    return {"flag": flag, "solver": {"iterations": iterations or SHEET_ITERATIONS * resolution}}
 
 
 def _sheet(resolution: int, dt: float = SHEET_DT, iterations: int | None = None, flag: dict | None = None) -> dict:

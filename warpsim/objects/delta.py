@@ -151,3 +151,5 @@ def delta_sail_aero(
         np.where((side < -tol)[:, None], (rows[0][0], rows[n][n]), (rows[n][n], rows[n][0])),
     )
     builder.set_triangle_span(tris, ends)
+    # the same sail as one lifting surface of the vortex law, its wake shed from the last row (the trailing edge)
+    builder.add_lifting_surface(tris, list(zip(rows[n][:-1], rows[n][1:], strict=True)))

@@ -11,6 +11,8 @@ import warp as wp
 from .config import AIR_DENSITY, GRAVITY
 from .kernels.aero import sail_coefficients
 from .kernels.bending import stable_dt
+from .kernels.vortex import lattice_arrays
+from .lattice import build_lattice, check_surface
 from .memory import check_memory  # noqa: F401 - the objects' builders import it from here
 from .model import Model, ObjectRecord
 from .shapes import MeshShapes
@@ -56,6 +58,7 @@ class ModelBuilder(MeshShapes):
         self.tri_span: list[tuple[int, int]] = []
         self.drag_area: dict[int, float] = {}
         self.canopies: list[tuple[np.ndarray, np.ndarray, tuple[float, float, float]]] = []
+        self.lifting_surfaces: list[tuple[np.ndarray, np.ndarray]] = []
         self.nail_particles: list[int] = []
         self._nailed: set[int] = set()  # the same, for constant-time membership tests
         self.nail_target: list[Sequence[float]] = []
@@ -200,6 +203,20 @@ class ModelBuilder(MeshShapes):
         if not (np.isfinite(area) and area >= 0.0):
             raise ValueError(f"drag area must be finite and >= 0, got {area}")
         self.drag_area[int(particle)] = self.drag_area.get(int(particle), 0.0) + area
+
+    def add_lifting_surface(self, tri_ids, trailing) -> int:
+        """Make triangles ``tri_ids`` one lifting surface of the ``vortex`` air law
+        (:mod:`warpsim.physics.kernels.vortex`): one vortex ring a triangle, the wake shed from ``trailing``
+        (``[k, 2]`` particle pairs, each a boundary edge of those triangles). Under the other laws the triangles keep
+        their per-triangle air. Returns the surface's index; refuses a surface without a trailing edge, or whose
+        triangles do not make one sheet (:func:`warpsim.physics.lattice.check_surface`)."""
+        tri_ids = np.asarray(tri_ids, dtype=np.int64).reshape(-1)
+        if len(tri_ids) and (tri_ids.min() < 0 or tri_ids.max() >= self.tri_count):
+            raise ValueError("a lifting surface needs existing triangles")
+        trailing = np.asarray(trailing, dtype=np.int64).reshape(-1, 2)
+        check_surface(np.array(self.tri_indices, dtype=np.int64).reshape(-1, 3)[tri_ids], trailing)
+        self.lifting_surfaces.append((tri_ids, trailing))
+        return len(self.lifting_surfaces) - 1
 
     def add_canopy(self, tri_ids, table, axis, wake_lag: float = 0.0) -> int:
         """Make triangles ``tri_ids`` one parachute canopy whose air force is the whole canopy's
@@ -395,6 +412,8 @@ class ModelBuilder(MeshShapes):
         start, ids = _csr(tris.reshape(-1), np.repeat(np.arange(len(tris), dtype=np.int32), 3), n)
         m.particle_tri_start = wp.array(start, dtype=wp.int32, device=device)
         m.particle_tri_ids = wp.array(ids, dtype=wp.int32, device=device)
+        m.lattice = build_lattice(tris, self.lifting_surfaces, n)
+        m.vortex_arrays = lattice_arrays(m.lattice, device)
 
         m.terrain = self.terrain if self.terrain is not None else Heightfield.flat()
         m.terrain_data = m.terrain.device_data(device)

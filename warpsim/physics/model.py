@@ -14,6 +14,7 @@ import warp as wp
 from . import _warp
 from .config import AIR_DENSITY, GRAVITY
 from .kernels.collision import HeightfieldData
+from .lattice import Lattice
 from .terrain import Heightfield
 
 _warp.init()  # every warpsim object needs Warp; start it without its CPU-machine chatter
@@ -125,6 +126,10 @@ class Model:
     """``[P + 1]`` int32 CSR offsets into ``particle_tri_ids``."""
     particle_tri_ids: wp.array
     """int32 triangles of each particle, in triangle order."""
+    lattice: Lattice
+    """The vortex lattice of the lifting surfaces builders declared (:mod:`warpsim.physics.lattice`; empty without)."""
+    vortex_arrays: dict
+    """Device copies of :attr:`lattice`'s arrays, by name (:func:`warpsim.physics.kernels.vortex.lattice_arrays`)."""
     stick_particles: wp.array
     """``[S]`` vec2i, the two particles of each stick; ``stick_particles_np`` is its host ``[S, 2]`` copy."""
     stick_particles_np: np.ndarray

@@ -16,8 +16,8 @@ import numpy as np
 import warp as wp
 
 from .config import AirConfig, GroundConfig, SolverConfig, WindConfig
-from .kernels import MODULES, aero, bending, canopy, collision, constraints, controls, momentum, springs, verlet
-from .kernels.aero import body_drag, triangle_air_force
+from .kernels import MODULES, aero, bending, canopy, collision, constraints, controls, momentum, springs, verlet, vortex
+from .kernels.aero import AeroModel, body_drag, triangle_air_force
 from .kernels.bending import bending_force
 from .kernels.canopy import canopy_air_force
 from .kernels.collision import collide_heightfield
@@ -86,6 +86,8 @@ class _Solver:
         self.particle_force = self.particle_air
         if model.hinge_count:
             self.particle_force = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)
+        self.vortex = vortex.VortexScratch(model) if model.lattice.panel_count else None
+        """The vortex law's buffers when the model has lifting surfaces (:mod:`warpsim.physics.kernels.vortex`)."""
         self.canopy_load = wp.zeros(max(model.canopy_count, 1), dtype=wp.vec4, device=model.device)
         self.canopy_side = wp.zeros(max(model.canopy_count, 1), dtype=wp.vec3, device=model.device)
         sticks = np.unique(np.concatenate([np.zeros(0, np.int32), *(r.controlled_sticks() for r in model.objects)]))
@@ -98,6 +100,14 @@ class _Solver:
 
     def _launch(self, state: State, control: Control, dt: float) -> None:
         raise NotImplementedError
+
+    def _vortex(self, state: State, control: Control, dt: float) -> None:
+        """The vortex law on the lifting surfaces, under ``air.model = "vortex"`` (its forces replace the per-triangle
+        law's on the surfaces' triangles and are written into ``particle_air``)."""
+        if self.vortex is not None and int(self.air.model) == AeroModel.VORTEX:
+            vortex.vortex_air_force(
+                self.model, state, control, dt, self.air, self.wind, self.vortex, self.tri_force, self.particle_air
+            )
 
     def _particle_forces(self, state: State) -> wp.array:
         """Each particle's own force [N] this step: the drag bodies' drag, plus the bending hinges' force when the
@@ -175,7 +185,7 @@ class SolverVerlet(_Solver):
     None = fused on the CPU, gather on CUDA.
     """
 
-    modules = (aero, bending, canopy, collision, constraints, controls, momentum, verlet)
+    modules = (aero, bending, canopy, collision, constraints, controls, momentum, verlet, vortex)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, *, constraint_scheme=None, **kwargs):
         super().__init__(model, config, **kwargs)
@@ -188,6 +198,7 @@ class SolverVerlet(_Solver):
         self._ramp_controls(control, dt)
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
         canopy_air_force(m, state, control, dt, self.air, self.wind, self.canopy_side, self.canopy_load, self.tri_force)
+        self._vortex(state, control, dt)
         body_drag(m, state, control, dt, self.air, self.wind, self.particle_air)
         forces = self._particle_forces(state)
         integrate_verlet(m, state, control, self.tri_force, forces, dt, cfg.damping)
@@ -204,7 +215,7 @@ class SolverEuler(_Solver):
     ``spring_stiffness`` [N/m] and ``spring_damping`` [N s/m] from its :class:`~warpsim.physics.config.SolverConfig`;
     arguments as for :class:`SolverVerlet`, without a constraint scheme)."""
 
-    modules = (aero, bending, canopy, collision, controls, springs)
+    modules = (aero, bending, canopy, collision, controls, springs, vortex)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, **kwargs):
         super().__init__(model, config, **kwargs)
@@ -215,6 +226,7 @@ class SolverEuler(_Solver):
         self._ramp_controls(control, dt)
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
         canopy_air_force(m, state, control, dt, self.air, self.wind, self.canopy_side, self.canopy_load, self.tri_force)
+        self._vortex(state, control, dt)
         body_drag(m, state, control, dt, self.air, self.wind, self.particle_air)
         forces = self._particle_forces(state)
         integrate_euler_springs(

@@ -5,9 +5,9 @@ shared math lives in ``@wp.func`` helpers. Launch parameters are grouped as mode
 scalars, then outputs (``_out``).
 """
 
-from . import aero, bending, canopy, collision, constraints, controls, frame, momentum, springs, verlet
+from . import aero, bending, canopy, collision, constraints, controls, frame, momentum, springs, verlet, vortex
 
-MODULES = (aero, bending, canopy, collision, constraints, controls, momentum, springs, verlet)
+MODULES = (aero, bending, canopy, collision, constraints, controls, momentum, springs, verlet, vortex)
 """The solvers' kernel modules (``frame`` is the runner's)."""
 
 __all__ = [
@@ -22,4 +22,5 @@ __all__ = [
     "momentum",
     "springs",
     "verlet",
+    "vortex",
 ]

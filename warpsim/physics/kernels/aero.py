@@ -45,6 +45,9 @@ class AeroModel(enum.IntEnum):
     PAPER = 0
     PLATE = 1
     SAIL = 2
+    VORTEX = 3
+    """The ``sail`` law on every triangle, except on the lifting surfaces a builder declares, whose air is the
+    vortex lattice's (:mod:`warpsim.physics.kernels.vortex`)."""
 
 
 STALL_SHARPNESS = wp.constant(40.0)
@@ -194,7 +197,7 @@ def _triangle_air_force(
     height = float(centre[2] - terrain_height(hf, centre[0], centre[1]))
     w = wind_at(wind[particle_world[idx[0]]], height, shear_reference_height, shear_exponent)
     n = cross / cross_len
-    if aero_model == AeroModel.SAIL:
+    if aero_model == AeroModel.SAIL or aero_model == AeroModel.VORTEX:
         ends = tri_span[t]
         span = wp.vec3(0.0)
         if ends[0] >= 0:
@@ -219,6 +222,7 @@ def _body_drag(
     aero_scale: float,
     shear_exponent: float,
     shear_reference_height: float,
+    accumulate: int,
     particle_air_out: wp.array(dtype=wp.vec3),
 ):
     k = wp.tid()
@@ -228,7 +232,10 @@ def _body_drag(
         wind[particle_world[i]], float(x[2] - terrain_height(hf, x[0], x[1])), shear_reference_height, shear_exponent
     )
     w = w - wp.vec3(x - particle_q_prev[i]) / dt
-    particle_air_out[i] = w * (0.5 * air_density * wp.length(w) * drag_area[k] * aero_scale)
+    drag = w * (0.5 * air_density * wp.length(w) * drag_area[k] * aero_scale)
+    if accumulate != 0:
+        drag += particle_air_out[i]
+    particle_air_out[i] = drag
 
 
 @wp.func
@@ -286,9 +293,12 @@ def triangle_air_force(model, state, control, dt: float, air, wind, tri_force_ou
 def body_drag(model, state, control, dt: float, air, wind, particle_air_out: wp.array) -> None:
     """Parasitic drag [N] of the model's drag bodies (a pilot, a frame: particles given a drag area ``C_D A``
     [m^2]), ``0.5 rho C_D A |w| w`` in the relative wind ``w``, written into ``particle_air_out`` (``[P]``) at
-    their particles. Only the ``sail`` air model has drag bodies; the others leave the array at zero."""
-    if model.drag_count == 0 or int(air.model) != AeroModel.SAIL:
+    their particles (added to what is there when the model has lifting surfaces under the ``vortex`` law, whose
+    forces are written there first). Only the ``sail`` and ``vortex`` air models have drag bodies; the others leave
+    the array at zero."""
+    if model.drag_count == 0 or int(air.model) not in (AeroModel.SAIL, AeroModel.VORTEX):
         return
+    accumulate = int(int(air.model) == AeroModel.VORTEX and model.lattice.panel_count > 0)
     wp.launch(
         _body_drag,
         dim=model.drag_count,
@@ -305,6 +315,7 @@ def body_drag(model, state, control, dt: float, air, wind, particle_air_out: wp.
             float(air.scale),
             float(wind.shear_exponent),
             float(wind.reference_height),
+            accumulate,
         ],
         outputs=[particle_air_out],
         device=model.device,

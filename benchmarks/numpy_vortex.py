@@ -1,0 +1,143 @@
+"""A plain NumPy version of warpsim's vortex-lattice air law (:mod:`warpsim.physics.kernels.vortex`), for the tests.
+
+The same lattice, wake, cut-off core, solve, Kutta-Joukowski edge forces and section polar, written with whole-array
+NumPy operations in float64 and ``np.linalg.solve`` (LAPACK's LU with partial pivoting) instead of the kernels'
+float32 and their own elimination: the two agree to float32 rounding, which the tests check. Uniform wind (no
+shear profile) only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from warpsim.physics.kernels.aero import STALL_SHARPNESS
+from warpsim.physics.kernels.vortex import CORE_FRACTION
+from warpsim.physics.lattice import TRAILING
+
+INV_FOUR_PI = 1.0 / (4.0 * np.pi)
+
+
+def segment_velocity(x: np.ndarray, a: np.ndarray, b: np.ndarray, core2: float) -> np.ndarray:
+    """``[M, K, 3]`` velocities at points ``x [M, 3]`` of unit segments ``a -> b`` (``[K, 3]``), cut-off core."""
+    r1 = x[:, None, :] - a[None]
+    r2 = x[:, None, :] - b[None]
+    r0 = (b - a)[None]
+    c = np.cross(r1, r2)
+    n1 = np.linalg.norm(r1, axis=-1)
+    n2 = np.linalg.norm(r2, axis=-1)
+    den = (c * c).sum(-1) + core2 * (r0 * r0).sum(-1)
+    ok = (n1 > 0) & (n2 > 0) & (den > 0)
+    n1, n2, den = np.where(ok, n1, 1.0), np.where(ok, n2, 1.0), np.where(ok, den, 1.0)
+    k = (r0 * (r1 / n1[..., None] - r2 / n2[..., None])).sum(-1) * INV_FOUR_PI / den
+    return c * np.where(ok, k, 0.0)[..., None]
+
+
+def ray_velocity(x: np.ndarray, a: np.ndarray, d: np.ndarray, core2: float) -> np.ndarray:
+    """``[M, K, 3]`` velocities at ``x`` of unit semi-infinite lines leaving ``a [K, 3]`` along unit ``d [3]``."""
+    r1 = x[:, None, :] - a[None]
+    n1 = np.linalg.norm(r1, axis=-1)
+    c = np.cross(np.broadcast_to(d, r1.shape), r1)
+    den = (c * c).sum(-1) + core2
+    ok = (n1 > 0) & (den > 0)
+    n1, den = np.where(ok, n1, 1.0), np.where(ok, den, 1.0)
+    k = (1.0 + (r1 @ d) / n1) * INV_FOUR_PI / den
+    return c * np.where(ok, k, 0.0)[..., None]
+
+
+def ring_velocities(x: np.ndarray, corners: np.ndarray, trailing: np.ndarray, d: np.ndarray, core2: float):
+    """``[M, N, 3]`` velocity at ``x [M, 3]`` of each ring ``corners [N, 3, 3]`` of unit circulation with its wake legs
+    (``trailing [N]`` edge bits)."""
+    v = np.zeros((len(x), len(corners), 3))
+    for e in range(3):
+        a, b = corners[:, e], corners[:, (e + 1) % 3]
+        shed = ((trailing >> e) & 1).astype(bool)[None, :, None]
+        v += np.where(
+            shed, ray_velocity(x, a, d, core2) - ray_velocity(x, b, d, core2), segment_velocity(x, a, b, core2)
+        )
+    return v
+
+
+def _bound_of_trailing(x, corners, trailing, core2):
+    """The trailing edges' own bound segments, which :func:`ring_velocities` with no trailing bits counts and the
+    wake replaces: added back so that the difference is the wake legs alone."""
+    v = np.zeros((len(x), len(corners), 3))
+    for e in range(3):
+        shed = ((trailing >> e) & 1).astype(bool)[None, :, None]
+        v += np.where(shed, segment_velocity(x, corners[:, e], corners[:, (e + 1) % 3], core2), 0.0)
+    return v
+
+
+def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, scale: float = 1.0):
+    """The vortex law's forces on ``model`` at positions ``q`` and ``q_prev`` ``[P, 3]`` [m] for steps of ``dt`` [s],
+    in a uniform ``wind`` ``[W, 3]`` [m/s] per world: ``(particle_force [P, 3], tri_force {triangle: per-vertex force
+    [3]}, gamma [V])``, as the kernels write them into ``particle_air`` and ``tri_force`` [N] and their circulations
+    [m^2/s]."""
+    lat = model.lattice
+    tris = model.tri_indices_np
+    sail = model.tri_sail.numpy().astype(np.float64)
+    rho = float(model.air_density)
+    wind = np.asarray(wind, dtype=np.float64).reshape(-1, 3)
+    world = model.particle_world_np
+    gamma = np.zeros(lat.panel_count)
+    stall = np.zeros(lat.panel_count)
+    tri_force = {}
+    induced = np.zeros((lat.edge_count, 3))
+    for s in range(lat.surface_count):
+        v0, v1 = lat.surface_start[s], lat.surface_start[s + 1]
+        idx = tris[lat.panel_tri[v0:v1]]
+        origin = q[lat.surface_origin[s]]
+        corners = (q[idx] - origin).astype(np.float32).astype(np.float64)
+        cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 1])
+        length = np.linalg.norm(cross, axis=1)
+        n = cross / np.where(length > 0, length, 1.0)[:, None]
+        area = 0.5 * length
+        point = corners.mean(axis=1)
+        moved = (q[idx] - q_prev[idx]).sum(axis=1)
+        w = wind[world[idx[:, 0]]] - moved / (3.0 * dt)
+        mean = (w * area[:, None]).sum(0)
+        trailing = lat.panel_trailing[v0:v1]
+        plane = (n * area[:, None]).sum(0)
+        plane = plane / np.linalg.norm(plane) if np.linalg.norm(plane) > 0 else plane
+        if area.sum() > 0 and np.linalg.norm(mean) > 0:
+            d = mean / np.linalg.norm(mean)
+            core2 = CORE_FRACTION**2 * area.sum() / (v1 - v0)
+            a = (ring_velocities(point, corners, trailing, d, core2) * n[:, None, :]).sum(-1)
+            gamma[v0:v1] = np.linalg.solve(a, -(w * n).sum(1))
+            mine = (lat.edge_panels[:, 0] >= v0) & (lat.edge_panels[:, 0] < v1) & (lat.edge_panels[:, 1] == TRAILING)
+            p, k = lat.edge_panels[mine, 0] - v0, lat.edge_corner[mine]
+            mid = 0.5 * (corners[p, k] + corners[p, (k + 1) % 3])
+            legs = ring_velocities(mid, corners, trailing, d, core2) - ring_velocities(
+                mid, corners, 0 * trailing, d, core2
+            )
+            legs += _bound_of_trailing(mid, corners, trailing, core2)
+            induced[mine] = (legs * gamma[v0:v1][None, :, None]).sum(1)
+        for row, t in enumerate(lat.panel_tri[v0:v1]):
+            coef = sail[t]
+            speed = np.linalg.norm(w[row])
+            force = w[row] * coef[2] * speed
+            sigma = 0.0
+            if speed > 0:
+                sin_s = min(abs(plane @ w[row]) / speed, 1.0)
+                sigma = 1.0 / (1.0 + np.exp(-STALL_SHARPNESS * (np.arcsin(sin_s) - coef[3])))
+                wn = n[row] @ w[row] / speed
+                sin_a = min(abs(wn), 1.0)
+                if sin_a > 1e-6:
+                    force = force + n[row] * (np.sign(wn) / (0.222 + 0.283 / sin_a) * speed * speed * sigma)
+            stall[v0 + row] = sigma
+            tri_force[int(t)] = force * (0.5 * rho * area[row] * scale / 3.0)
+    g = gamma[lat.edge_panels[:, 0]].copy()
+    sigma = stall[lat.edge_panels[:, 0]].copy()
+    inner = lat.edge_panels[:, 1] >= 0
+    g[inner] -= gamma[lat.edge_panels[inner, 1]]
+    sigma[inner] = 0.5 * (sigma[inner] + stall[lat.edge_panels[inner, 1]])
+    a, b = lat.edge_particles[:, 0], lat.edge_particles[:, 1]
+    moved = (q[a] - q_prev[a]) + (q[b] - q_prev[b])
+    velocity = wind[world[a]] - moved / (2.0 * dt)
+    edge = q[b] - q[a]
+    shed = lat.edge_panels[:, 1] == TRAILING
+    velocity[shed], edge[shed] = induced[shed], -edge[shed]  # the wake's downwash on the trailing edges
+    edge_force = np.cross(velocity, edge) * (rho * g * scale * (1.0 - sigma))[:, None]
+    particle_force = np.zeros_like(q)
+    np.add.at(particle_force, a, 0.5 * edge_force)
+    np.add.at(particle_force, b, 0.5 * edge_force)
+    return particle_force, tri_force, gamma

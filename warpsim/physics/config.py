@@ -215,11 +215,15 @@ class AirConfig(Checked):
         model: the air-force law, :class:`~warpsim.physics.kernels.aero.AeroModel` (``paper``, ``plate``, ``sail``).
         scale: multiplier on the air force (1 = the model as written; 0 = no air).
         density: air density [kg/m^3] (the paper's 1.294217666).
+        vortex_interval: ``vortex`` law: how often [s] the lattice's influence matrix is rebuilt and factorised
+            (0 = every step); the circulations are solved from those factors every step
+            (:mod:`warpsim.physics.kernels.vortex`).
     """
 
     model: AeroModel = choice(AeroModel.PAPER, AeroModel)
     scale: float = number(1.0, NON_NEGATIVE)
     density: float = number(AIR_DENSITY, NON_NEGATIVE)
+    vortex_interval: float = number(0.1, Bounds(0.0, 10.0))
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -10,8 +10,11 @@ and 13.12, on an unstructured mesh:
 * no air passes through the sail at each panel's centroid: ``sum_j A_ij G_j = -w_i . n_i`` with ``w_i`` the wind
   minus the sail's own velocity there (so a rolling or yawing sail is damped by its own motion) and ``A_ij`` the
   velocity ring ``j`` (and its wake legs) induces at centroid ``i`` per unit circulation, along ``n_i``;
-* the ``N x N`` system of each surface is solved by Gaussian elimination with partial pivoting, one thread per
-  surface (``N^3 / 3`` multiply-adds: about 87,000 for the 64 panels of the hang glider);
+* the ``N x N`` system of each surface is factorised by Gaussian elimination with partial pivoting (one thread per
+  surface, ``N^3 / 3`` multiply-adds: about 87,000 for the 64 panels of the hang glider) every
+  ``air.vortex_interval`` seconds, the influence matrix rebuilt then (one thread per row); every step the
+  circulations come from those factors and this step's ``w_i . n_i`` by substitution (``N^2``), so the sail's own
+  motion, gusts and the controls act at once and only the lattice's geometry lags;
 * Kutta-Joukowski on every edge inside the sail or on its leading and side edges: ``F = rho G_e (V x l)`` with
   ``G_e`` the net circulation of the edge (the difference of its two panels'), ``l`` the edge [m] and ``V`` the
   local relative wind at its midpoint (Katz & Plotkin eq. 12.24 with the sail's own motion in ``V``); half of it
@@ -186,49 +189,51 @@ def _matrix(
     panel_trailing: wp.array(dtype=wp.int32),
     surface_start: wp.array(dtype=wp.int32),
     matrix_start: wp.array(dtype=wp.int64),
-    max_panels: int,
+    counter: wp.array(dtype=wp.int32),
     corners: wp.array(dtype=wp.vec3),
     point: wp.array(dtype=wp.vec3),
     normal: wp.array(dtype=wp.vec4),
     wake: wp.array(dtype=wp.vec4),
     matrix_out: wp.array(dtype=wp.float32),
 ):
-    tid = wp.tid()
-    i = tid / max_panels
-    jl = tid - i * max_panels
+    i = wp.tid()  # one row: the normal velocity at centroid i of every ring of its surface
+    if counter[0] != 0:
+        return
     s = panel_surface[i]
     first = surface_start[s]
     count = surface_start[s + 1] - first
-    if jl >= count:
-        return
-    j = first + jl
     wk = wake[s]
+    d = wp.vec3(wk[0], wk[1], wk[2])
     nv = normal[i]
-    v = ring_velocity(point[i], j, corners, panel_trailing[j], wp.vec3(wk[0], wk[1], wk[2]), wk[3])
-    matrix_out[matrix_start[s] + wp.int64((i - first) * count + jl)] = wp.dot(v, wp.vec3(nv[0], nv[1], nv[2]))
+    n = wp.vec3(nv[0], nv[1], nv[2])
+    x = point[i]
+    row = matrix_start[s] + wp.int64((i - first) * count)
+    j = int(0)  # noqa: UP018
+    while j < count:
+        v = ring_velocity(x, first + j, corners, panel_trailing[first + j], d, wk[3])
+        matrix_out[row + wp.int64(j)] = wp.dot(v, n)
+        j += 1
 
 
 @wp.kernel
-def _solve(
+def _factor(
     surface_start: wp.array(dtype=wp.int32),
     matrix_start: wp.array(dtype=wp.int64),
-    normal: wp.array(dtype=wp.vec4),
-    panel_wind: wp.array(dtype=wp.vec3),
+    counter: wp.array(dtype=wp.int32),
     wake: wp.array(dtype=wp.vec4),
     matrix_out: wp.array(dtype=wp.float32),
-    gamma_out: wp.array(dtype=wp.float32),
+    pivot_out: wp.array(dtype=wp.int32),
+    factored_out: wp.array(dtype=wp.int32),
 ):
-    s = wp.tid()
+    s = wp.tid()  # LU factors of one surface's matrix, in place (Gaussian elimination, partial pivoting)
+    if counter[0] != 0:
+        return
     first = surface_start[s]
     n = surface_start[s + 1] - first
     base = matrix_start[s]
-    for r in range(n):
-        nv = normal[first + r]
-        gamma_out[first + r] = -wp.dot(panel_wind[first + r], wp.vec3(nv[0], nv[1], nv[2]))
     ok = int(1)  # noqa: UP018 -- Warp needs int() for a variable a loop changes
     if wake[s][3] == 0.0:  # no relative wind, no wake direction: no circulation
         ok = 0
-    # Gaussian elimination with partial pivoting, in place; the right-hand side rides in gamma_out
     k = int(0)  # noqa: UP018
     while k < n and ok == 1:
         p = int(k)
@@ -240,6 +245,7 @@ def _solve(
                 big = value
                 p = r
             r += 1
+        pivot_out[first + k] = p
         if not (big > 1.0e-12):  # also catches NaN
             ok = 0
         else:
@@ -250,36 +256,78 @@ def _solve(
                     matrix_out[base + wp.int64(k * n + c)] = matrix_out[base + wp.int64(p * n + c)]
                     matrix_out[base + wp.int64(p * n + c)] = t
                     c += 1
-                t = gamma_out[first + k]
-                gamma_out[first + k] = gamma_out[first + p]
-                gamma_out[first + p] = t
-            pivot = matrix_out[base + wp.int64(k * n + k)]
+            inv = 1.0 / matrix_out[base + wp.int64(k * n + k)]
             r = int(k + 1)
             while r < n:
-                f = matrix_out[base + wp.int64(r * n + k)] / pivot
+                f = matrix_out[base + wp.int64(r * n + k)] * inv
+                matrix_out[base + wp.int64(r * n + k)] = f  # L below the diagonal
                 if f != 0.0:
                     c = int(k + 1)
+                    upper = base + wp.int64(k * n)
+                    lower = base + wp.int64(r * n)
                     while c < n:
-                        matrix_out[base + wp.int64(r * n + c)] = (
-                            matrix_out[base + wp.int64(r * n + c)] - f * matrix_out[base + wp.int64(k * n + c)]
+                        matrix_out[lower + wp.int64(c)] = (
+                            matrix_out[lower + wp.int64(c)] - f * matrix_out[upper + wp.int64(c)]
                         )
                         c += 1
-                    gamma_out[first + r] = gamma_out[first + r] - f * gamma_out[first + k]
                 r += 1
         k += 1
-    if ok == 1:
-        r = int(n - 1)
-        while r >= 0:
-            acc = float(gamma_out[first + r])
-            c = int(r + 1)
-            while c < n:
-                acc -= matrix_out[base + wp.int64(r * n + c)] * gamma_out[first + c]
-                c += 1
-            gamma_out[first + r] = acc / matrix_out[base + wp.int64(r * n + r)]
-            r -= 1
-    else:
-        for r in range(n):
-            gamma_out[first + r] = 0.0
+    factored_out[s] = ok
+
+
+@wp.kernel
+def _substitute(
+    surface_start: wp.array(dtype=wp.int32),
+    matrix_start: wp.array(dtype=wp.int64),
+    normal: wp.array(dtype=wp.vec4),
+    panel_wind: wp.array(dtype=wp.vec3),
+    matrix: wp.array(dtype=wp.float32),
+    pivot: wp.array(dtype=wp.int32),
+    factored: wp.array(dtype=wp.int32),
+    gamma_out: wp.array(dtype=wp.float32),
+):
+    s = wp.tid()  # this step's circulations from the latest factors: no air through any centroid
+    first = surface_start[s]
+    n = surface_start[s + 1] - first
+    base = matrix_start[s]
+    for i in range(n):
+        nv = normal[first + i]
+        gamma_out[first + i] = -wp.dot(panel_wind[first + i], wp.vec3(nv[0], nv[1], nv[2]))
+    if factored[s] == 0:
+        for i in range(n):
+            gamma_out[first + i] = 0.0
+        return
+    for k in range(n):  # the rows' swaps, in order
+        p = pivot[first + k]
+        if p != k:
+            t = gamma_out[first + k]
+            gamma_out[first + k] = gamma_out[first + p]
+            gamma_out[first + p] = t
+    r = int(1)  # noqa: UP018
+    while r < n:  # forward: L has ones on its diagonal
+        acc = float(gamma_out[first + r])
+        row = base + wp.int64(r * n)
+        c = int(0)  # noqa: UP018
+        while c < r:
+            acc -= matrix[row + wp.int64(c)] * gamma_out[first + c]
+            c += 1
+        gamma_out[first + r] = acc
+        r += 1
+    r = n - 1  # noqa: PLW2901
+    while r >= 0:  # backward
+        acc = float(gamma_out[first + r])
+        row = base + wp.int64(r * n)
+        c = int(r + 1)
+        while c < n:
+            acc -= matrix[row + wp.int64(c)] * gamma_out[first + c]
+            c += 1
+        gamma_out[first + r] = acc / matrix[row + wp.int64(r)]
+        r -= 1
+
+
+@wp.kernel
+def _tick(interval: int, counter_out: wp.array(dtype=wp.int32)):
+    counter_out[0] = (counter_out[0] + 1) % interval
 
 
 @wp.func
@@ -454,9 +502,10 @@ class VortexScratch:
 
     Attributes: ``corners [3V]``, ``point [V]``, ``normal [V]`` (unit normal and area [m^2]), ``wind [V]`` (relative
     wind at each centroid [m/s]), ``wake [S]`` (wake direction and squared core [m^2]), ``plane [S]`` (each sail's
-    area-weighted mean normal), ``matrix`` (each surface's influence matrix, then its LU factors), ``gamma [V]``
-    (circulations [m^2/s]), ``stall [V]`` (separated-flow blend, 0-1), ``induced [E]`` (the wake's downwash at each
-    trailing edge's midpoint [m/s]), ``edge_force [E]`` [N].
+    area-weighted mean normal), ``matrix`` (each surface's influence matrix, then its LU factors), ``pivot [V]``
+    (the factors' row swaps), ``factored [S]`` (1 where the factors hold), ``counter [1]`` (steps since the last
+    factorisation, modulo ``interval``), ``gamma [V]`` (circulations [m^2/s]), ``stall [V]`` (separated-flow blend,
+    0-1), ``induced [E]`` (the wake's downwash at each trailing edge's midpoint [m/s]), ``edge_force [E]`` [N].
     """
 
     def __init__(self, model):
@@ -473,6 +522,10 @@ class VortexScratch:
         self.stall = wp.zeros(v, dtype=wp.float32, device=device)
         self.induced = wp.zeros(e, dtype=wp.vec3, device=device)
         self.edge_force = wp.zeros(e, dtype=wp.vec3, device=device)
+        self.pivot = wp.zeros(v, dtype=wp.int32, device=device)
+        self.factored = wp.zeros(s, dtype=wp.int32, device=device)
+        self.counter = wp.zeros(1, dtype=wp.int32, device=device)
+        self.interval = 1
 
 
 def vortex_air_force(
@@ -487,6 +540,7 @@ def vortex_air_force(
     if lat.panel_count == 0:
         return
     arrays, dev, rho, scale = model.vortex_arrays, model.device, float(model.air_density), float(air.scale)
+    scratch.interval = max(1, int(round(float(air.vortex_interval) / float(dt))))
     shear = (float(wind.shear_exponent), float(wind.reference_height))
     sc = scratch
     wp.launch(
@@ -517,13 +571,13 @@ def vortex_air_force(
     )
     wp.launch(
         _matrix,
-        dim=lat.panel_count * lat.max_panels,
+        dim=lat.panel_count,
         inputs=[
             arrays["panel_surface"],
             arrays["panel_trailing"],
             arrays["surface_start"],
             arrays["matrix_start"],
-            lat.max_panels,
+            sc.counter,
             sc.corners,
             sc.point,
             sc.normal,
@@ -533,10 +587,17 @@ def vortex_air_force(
         device=dev,
     )
     wp.launch(
-        _solve,
+        _factor,
         dim=lat.surface_count,
-        inputs=[arrays["surface_start"], arrays["matrix_start"], sc.normal, sc.wind, sc.wake],
-        outputs=[sc.matrix, sc.gamma],  # the matrix is factorised in place
+        inputs=[arrays["surface_start"], arrays["matrix_start"], sc.counter, sc.wake],
+        outputs=[sc.matrix, sc.pivot, sc.factored],
+        device=dev,
+    )
+    wp.launch(
+        _substitute,
+        dim=lat.surface_count,
+        inputs=[arrays["surface_start"], arrays["matrix_start"], sc.normal, sc.wind, sc.matrix, sc.pivot, sc.factored],
+        outputs=[sc.gamma],
         device=dev,
     )
     wp.launch(
@@ -591,3 +652,4 @@ def vortex_air_force(
         outputs=[particle_air_out],
         device=dev,
     )
+    wp.launch(_tick, dim=1, inputs=[sc.interval], outputs=[sc.counter], device=dev)

@@ -82,6 +82,7 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, sca
     stall = np.zeros(lat.panel_count)
     tri_force = {}
     induced = np.zeros((lat.edge_count, 3))
+    wake_dir = np.zeros((lat.surface_count, 3))
     for s in range(lat.surface_count):
         v0, v1 = lat.surface_start[s], lat.surface_start[s + 1]
         idx = tris[lat.panel_tri[v0:v1]]
@@ -99,7 +100,7 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, sca
         plane = (n * area[:, None]).sum(0)
         plane = plane / np.linalg.norm(plane) if np.linalg.norm(plane) > 0 else plane
         if area.sum() > 0 and np.linalg.norm(mean) > 0:
-            d = mean / np.linalg.norm(mean)
+            d = wake_dir[s] = mean / np.linalg.norm(mean)
             core2 = CORE_FRACTION**2 * area.sum() / (v1 - v0)
             a = (ring_velocities(point, corners, trailing, d, core2) * n[:, None, :]).sum(-1)
             gamma[v0:v1] = np.linalg.solve(a, -(w * n).sum(1))
@@ -137,7 +138,19 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, sca
     shed = lat.edge_panels[:, 1] == TRAILING
     velocity[shed], edge[shed] = induced[shed], -edge[shed]  # the wake's downwash on the trailing edges
     edge_force = np.cross(velocity, edge) * (rho * g * scale * (1.0 - sigma))[:, None]
+    # each load a quarter of the way to the far corner of the panel downstream (none on the trailing edges)
+    d = wake_dir[lat.panel_surface[lat.edge_panels[:, 0]]]
+    mid = 0.5 * (q[a] + q[b])
+    far = lat.edge_opposite
+    ahead = ((q[far[:, 0]] - mid) * d).sum(1)
+    behind = np.where(far[:, 1] >= 0, ((q[np.maximum(far[:, 1], 0)] - mid) * d).sum(1), -np.inf)
+    side = np.where(ahead > 0, 1, 0)
+    side = np.where((behind > 0) & (behind > ahead), 2, side)
+    side[shed] = 0
+    corner = np.where(side == 2, far[:, 1], far[:, 0])
+    share = np.where(side > 0, 0.25, 0.0)[:, None]
     particle_force = np.zeros_like(q)
-    np.add.at(particle_force, a, 0.5 * edge_force)
-    np.add.at(particle_force, b, 0.5 * edge_force)
+    np.add.at(particle_force, a, 0.5 * (1.0 - share) * edge_force)
+    np.add.at(particle_force, b, 0.5 * (1.0 - share) * edge_force)
+    np.add.at(particle_force, corner, share * edge_force)
     return particle_force, tri_force, gamma

@@ -38,7 +38,7 @@ def test_rectangle_induced_drag_and_centre_of_pressure():
     e = f["CL"] ** 2 / (math.pi * 8.0 * f["CD"])
     assert 0.90 <= e <= 1.05
     x_cp = 0.25 - f["Cm"] / f["CL"]  # moments about the quarter chord, chord 1 m
-    assert x_cp == pytest.approx(0.25, abs=0.05)
+    assert x_cp == pytest.approx(0.25, abs=0.02)
 
 
 def test_delta_wing_lift_slope():

@@ -636,6 +636,9 @@ def kite_flight(
         q = frame.positions
         air = 3.0 * sim.solver.tri_force.numpy()[triangles].sum(axis=0)  # each vertex holds a third
         drag_bodies = sim.solver.particle_air.numpy()[record.particles].sum(axis=0)
+        if sim.solver.vortex is not None and d["air"]["model"] == "vortex":  # the lattice's forces, on its edges
+            lattice = sim.solver.vortex.edge_force.numpy().sum(axis=0)
+            air, drag_bodies = air + lattice, drag_bodies - lattice
         c = q[sail]
         normals = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 1])
         mean_normal = normals.sum(axis=0) / np.linalg.norm(normals, axis=1).sum()

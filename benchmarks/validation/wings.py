@@ -131,3 +131,16 @@ def lift_slope(wing: Wing, alpha_deg: float = 5.0) -> float:
     """``dC_L/dalpha`` [1/rad] from the lift at ``+-alpha_deg``."""
     up, down = loads(wing, alpha_deg)["CL"], loads(wing, -alpha_deg)["CL"]
     return (up - down) / (2.0 * math.radians(alpha_deg))
+
+
+def lifting_line(aspect_ratio: float, terms: int = 60) -> tuple[float, float]:
+    """Prandtl's lifting line for a flat rectangular wing of ``aspect_ratio`` (a thin section's ``2 pi``), solved by
+    Glauert's series of ``terms`` odd sines collocated at as many stations (Anderson, *Fundamentals of
+    Aerodynamics*, 5.3.2): ``(lift slope [1/rad], span efficiency e = 1 / (1 + delta))``."""
+    theta = np.arange(1, terms + 1) * (0.5 * math.pi / terms)  # one half-span: the load is symmetric
+    n = 2 * np.arange(terms) + 1
+    mu = 2.0 * math.pi / (4.0 * aspect_ratio)  # a0 c / (4 b) with c = 1, b = A
+    rows = np.sin(np.outer(theta, n)) * (mu * n[None, :] + np.sin(theta)[:, None])
+    a = np.linalg.solve(rows, mu * np.sin(theta))  # per radian of angle of attack
+    delta = float((n[1:] * (a[1:] / a[0]) ** 2).sum())
+    return math.pi * aspect_ratio * float(a[0]), 1.0 / (1.0 + delta)

@@ -37,7 +37,9 @@ class Lattice:
         edge_corner: ``[E]`` the edge's index ``e`` in its first panel (it runs from that panel's corner ``e`` to
             ``e + 1``).
         edge_particles: ``[E, 2]`` the edge's particles, in its first panel's direction.
-        particle_edge_start, particle_edge_ids: CSR of the loaded edges at each particle (``[P + 1]``, ``[2 E]``).
+        edge_opposite: ``[E, 2]`` the corner of each of its two panels off the edge (-1: no second panel).
+        particle_edge_start, particle_edge_refs: CSR of ``4 * edge + role`` at each particle (``[P + 1]``, at most
+            ``[4 E]``): role 0 and 1 the edge's particles, 2 and 3 its panels' far corners.
     """
 
     panel_tri: np.ndarray
@@ -49,8 +51,9 @@ class Lattice:
     edge_panels: np.ndarray
     edge_corner: np.ndarray
     edge_particles: np.ndarray
+    edge_opposite: np.ndarray
     particle_edge_start: np.ndarray
-    particle_edge_ids: np.ndarray
+    particle_edge_refs: np.ndarray
 
     @property
     def panel_count(self) -> int:
@@ -113,7 +116,7 @@ def build_lattice(
     """The :class:`Lattice` of ``surfaces`` (each ``(triangle ids, trailing edges [k, 2] particle pairs)``) on a
     model's triangles ``tri_indices`` ``[T, 3]`` with ``particle_count`` particles."""
     panel_tri, panel_surface, panel_trailing, start, origin, matrix = [], [], [], [0], [], [0]
-    edge_panels, edge_corner, edge_particles = [], [], []
+    edge_panels, edge_corner, edge_particles, edge_opposite = [], [], [], []
     for s, (tri_ids, trailing) in enumerate(surfaces):
         tri_ids = np.asarray(tri_ids, dtype=np.int64)
         tris = tri_indices[tri_ids]
@@ -134,13 +137,20 @@ def build_lattice(
             edge_panels.append((first + row, other))
             edge_corner.append(e)
             edge_particles.append((int(tris[row][e]), int(tris[row][(e + 1) % 3])))
+            edge_opposite.append(
+                (int(tris[row][(e + 2) % 3]), int(tris[held[1][0]][(held[1][1] + 2) % 3]) if len(held) == 2 else -1)
+            )
         start.append(first + len(tri_ids))
         origin.append(int(tris[0][0]))
         matrix.append(matrix[-1] + len(tri_ids) ** 2)
     edge_particles = np.array(edge_particles, dtype=np.int32).reshape(-1, 2)
-    edge_ids = np.repeat(np.arange(len(edge_particles), dtype=np.int32), 2)
-    order = np.argsort(edge_particles.reshape(-1), kind="stable")
-    counts = np.bincount(edge_particles.reshape(-1), minlength=particle_count)
+    edge_opposite = np.array(edge_opposite, dtype=np.int32).reshape(-1, 2)
+    # each edge's force reaches its two particles (roles 0, 1) and the far corner of either panel (roles 2, 3)
+    ends = np.concatenate([edge_particles, edge_opposite], axis=1).reshape(-1)
+    refs = np.arange(len(ends), dtype=np.int32)  # 4 * edge + role
+    refs, ends = refs[ends >= 0], ends[ends >= 0]
+    order = np.argsort(ends, kind="stable")
+    counts = np.bincount(ends, minlength=particle_count)
     return Lattice(
         panel_tri=np.array(panel_tri, dtype=np.int32),
         panel_surface=np.array(panel_surface, dtype=np.int32),
@@ -151,8 +161,9 @@ def build_lattice(
         edge_panels=np.array(edge_panels, dtype=np.int32).reshape(-1, 2),
         edge_corner=np.array(edge_corner, dtype=np.int32),
         edge_particles=edge_particles,
+        edge_opposite=edge_opposite,
         particle_edge_start=np.concatenate([[0], np.cumsum(counts)]).astype(np.int32),
-        particle_edge_ids=edge_ids[order].astype(np.int32),
+        particle_edge_refs=refs[order].astype(np.int32),
     )
 
 

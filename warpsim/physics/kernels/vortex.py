@@ -36,8 +36,10 @@ Induced velocities use a cut-off core (the vortex core of Katz & Plotkin 10.4.5 
 in the segment's law) of ``d = 5 %`` of the surface's mean panel size, so a sail that folds or flies edge-on stays
 finite. Positions are measured in float32 from one particle of each surface, so the law is the same 10 km out.
 
-The lattice's loads sit on the panels' edges, a quarter panel ahead of where the classical lattice (rings shifted a
-quarter panel back) puts them: with ``n`` panels along the chord the centre of pressure is ``c / (4 n)`` forward.
+The lattice's loads are not left on the panels' edges: each edge's load goes a quarter of the way towards the far
+corner of the panel downstream of it (three eighths to either particle of the edge, a quarter to that corner), where
+the classical lattice (rings shifted a quarter panel back) puts its bound vortex. Left on the edges, the loads sat a
+quarter panel forward, which on the hang glider's 8 rows moved its neutral point 9 cm ahead.
 The free wake of unsteady flow is not modelled here: the wake follows the relative wind of the moment.
 """
 
@@ -56,6 +58,8 @@ CORE_FRACTION = wp.constant(0.05)
 INV_FOUR_PI = wp.constant(0.07957747154594767)
 STALL_SHARPNESS = wp.constant(40.0)  # the sail law's, 1/rad
 TRAILING = wp.constant(-2)  # lattice.TRAILING
+LOAD_SHIFT = wp.constant(0.25)
+"""Share of an edge's load moved to the far corner of its downstream panel: a quarter of the way there."""
 
 
 @wp.func
@@ -420,6 +424,9 @@ def _polar(
 def _edge_force(
     edge_panels: wp.array(dtype=wp.vec2i),
     edge_particles: wp.array(dtype=wp.vec2i),
+    edge_opposite: wp.array(dtype=wp.vec2i),
+    panel_surface: wp.array(dtype=wp.int32),
+    wake: wp.array(dtype=wp.vec4),
     particle_world: wp.array(dtype=wp.int32),
     hf: HeightfieldData,
     particle_q: wp.array(dtype=wp.vec3d),
@@ -434,6 +441,7 @@ def _edge_force(
     stall: wp.array(dtype=wp.float32),
     induced: wp.array(dtype=wp.vec3),
     edge_force_out: wp.array(dtype=wp.vec3),
+    edge_side_out: wp.array(dtype=wp.int32),
 ):
     e = wp.tid()
     panels = edge_panels[e]
@@ -442,14 +450,29 @@ def _edge_force(
     ends = edge_particles[e]
     a = particle_q[ends[0]]
     b = particle_q[ends[1]]
+    edge_side_out[e] = 0
     if panels[1] == TRAILING:  # the wake's downwash on the circulation it carries away: induced drag (Trefftz)
         edge_force_out[e] = wp.cross(induced[e], wp.vec3(a - b)) * (air_density * g * aero_scale * (1.0 - sigma))
         return
+    # the load acts a quarter of the way to the far corner of the panel downstream (the classical lattice's
+    # bound vortex lies a quarter panel behind the panel's leading edge): which panel is downstream?
+    wk = wake[panel_surface[panels[0]]]
+    d = wp.vec3(wk[0], wk[1], wk[2])
+    mid = (a + b) * wp.float64(0.5)
+    far = edge_opposite[e]
+    ahead = wp.dot(wp.vec3(particle_q[far[0]] - mid), d)
+    side = int(0)  # noqa: UP018
+    if ahead > 0.0:
+        side = 1
+    if far[1] >= 0:
+        behind = wp.dot(wp.vec3(particle_q[far[1]] - mid), d)
+        if behind > 0.0 and behind > ahead:
+            side = 2
+    edge_side_out[e] = side
     if panels[1] >= 0:
         g -= gamma[panels[1]]
         sigma = 0.5 * (sigma + stall[panels[1]])
     moved = (a - particle_q_prev[ends[0]]) + (b - particle_q_prev[ends[1]])
-    mid = (a + b) * wp.float64(0.5)
     height = float(mid[2] - terrain_height(hf, mid[0], mid[1]))
     w = wind_at(wind[particle_world[ends[0]]], height, shear_reference_height, shear_exponent)
     velocity = w - wp.vec3(moved) / (2.0 * dt)
@@ -459,8 +482,9 @@ def _edge_force(
 @wp.kernel
 def _gather(
     particle_edge_start: wp.array(dtype=wp.int32),
-    particle_edge_ids: wp.array(dtype=wp.int32),
+    particle_edge_refs: wp.array(dtype=wp.int32),
     edge_force: wp.array(dtype=wp.vec3),
+    edge_side: wp.array(dtype=wp.int32),
     particle_air_out: wp.array(dtype=wp.vec3),
 ):
     i = wp.tid()
@@ -468,9 +492,19 @@ def _gather(
     k = particle_edge_start[i]
     end = particle_edge_start[i + 1]
     while k < end:
-        f += edge_force[particle_edge_ids[k]]
+        ref = particle_edge_refs[k]
+        e = ref / 4
+        role = ref - 4 * e
+        side = edge_side[e]
+        if role < 2:  # one of the edge's particles
+            if side == 0:
+                f += 0.5 * edge_force[e]
+            else:
+                f += (0.5 * (1.0 - LOAD_SHIFT)) * edge_force[e]
+        elif role - 1 == side:  # the far corner of the panel downstream
+            f += LOAD_SHIFT * edge_force[e]
         k += 1
-    particle_air_out[i] = 0.5 * f
+    particle_air_out[i] = f
 
 
 def lattice_arrays(lattice, device) -> dict:
@@ -493,7 +527,8 @@ def lattice_arrays(lattice, device) -> dict:
         "edge_corner": up(lattice.edge_corner, wp.int32, zero),
         "edge_particles": up(lattice.edge_particles, wp.vec2i, np.zeros((1, 2), np.int32)),
         "particle_edge_start": up(lattice.particle_edge_start, wp.int32, zero),
-        "particle_edge_ids": up(lattice.particle_edge_ids, wp.int32, zero),
+        "particle_edge_refs": up(lattice.particle_edge_refs, wp.int32, zero),
+        "edge_opposite": up(lattice.edge_opposite, wp.vec2i, np.zeros((1, 2), np.int32)),
     }
 
 
@@ -505,7 +540,8 @@ class VortexScratch:
     area-weighted mean normal), ``matrix`` (each surface's influence matrix, then its LU factors), ``pivot [V]``
     (the factors' row swaps), ``factored [S]`` (1 where the factors hold), ``counter [1]`` (steps since the last
     factorisation, modulo ``interval``), ``gamma [V]`` (circulations [m^2/s]), ``stall [V]`` (separated-flow blend,
-    0-1), ``induced [E]`` (the wake's downwash at each trailing edge's midpoint [m/s]), ``edge_force [E]`` [N].
+    0-1), ``induced [E]`` (the wake's downwash at each trailing edge's midpoint [m/s]), ``edge_force [E]`` [N],
+    ``edge_side [E]`` (0: the load stays on the edge; 1, 2: its first or second panel is downstream).
     """
 
     def __init__(self, model):
@@ -522,6 +558,7 @@ class VortexScratch:
         self.stall = wp.zeros(v, dtype=wp.float32, device=device)
         self.induced = wp.zeros(e, dtype=wp.vec3, device=device)
         self.edge_force = wp.zeros(e, dtype=wp.vec3, device=device)
+        self.edge_side = wp.zeros(e, dtype=wp.int32, device=device)
         self.pivot = wp.zeros(v, dtype=wp.int32, device=device)
         self.factored = wp.zeros(s, dtype=wp.int32, device=device)
         self.counter = wp.zeros(1, dtype=wp.int32, device=device)
@@ -629,6 +666,9 @@ def vortex_air_force(
         inputs=[
             arrays["edge_panels"],
             arrays["edge_particles"],
+            arrays["edge_opposite"],
+            arrays["panel_surface"],
+            sc.wake,
             model.particle_world,
             model.terrain_data,
             state.particle_q,
@@ -642,13 +682,13 @@ def vortex_air_force(
             sc.stall,
             sc.induced,
         ],
-        outputs=[sc.edge_force],
+        outputs=[sc.edge_force, sc.edge_side],
         device=dev,
     )
     wp.launch(
         _gather,
         dim=model.particle_count,
-        inputs=[arrays["particle_edge_start"], arrays["particle_edge_ids"], sc.edge_force],
+        inputs=[arrays["particle_edge_start"], arrays["particle_edge_refs"], sc.edge_force, sc.edge_side],
         outputs=[particle_air_out],
         device=dev,
     )

@@ -506,6 +506,41 @@ def case_build_scaling(opts: Options) -> dict:
     }
 
 
+VORTEX_OVERRIDES = {"hang-glider": {}, "kite": {"kite": {"tow_point": 0.35}}}
+"""What each object flies with under the vortex law (the kite's bridle moved to where the lattice's centre of
+pressure lets it fly)."""
+
+
+def case_vortex(name: str, rounds: int = 3) -> Callable[[Options], dict]:
+    def run(opts: Options) -> dict:
+        sims = {
+            law: Simulation(
+                scene(name, {"air": {"model": law}, **(VORTEX_OVERRIDES[name] if law == "vortex" else {})}),
+                device=opts.device,
+            )
+            for law in ("sail", "vortex")
+        }
+        rates = {law: [] for law in sims}
+        for _ in range(rounds):  # alternating rounds: the machine's drift falls on both laws alike
+            for law, sim in sims.items():
+                rates[law].append(
+                    time_steps(sim.step, opts.min_time, lambda s=sim: wp.synchronize_device(s.model.device))
+                )
+        sail, vortex = (float(np.median(rates[law])) for law in ("sail", "vortex"))
+        row = _row(f"vortex-{name.removeprefix('hang-')}", sims["vortex"], vortex)
+        lattice = sims["vortex"].model.lattice
+        return _compare(
+            row,
+            "the sail law, same run",
+            sail,
+            panels=lattice.panel_count,
+            interval_s=float(sims["vortex"].solver.air.vortex_interval),
+        )
+
+    run.__doc__ = f"the {name} on the vortex law against the sail law, {rounds} alternating rounds"
+    return run
+
+
 CASES: dict[str, Callable[[Options], dict]] = {
     "flag": case_object("flag"),
     "hang-glider": case_object("hang-glider"),
@@ -520,6 +555,8 @@ CASES: dict[str, Callable[[Options], dict]] = {
     **{f"newton-flag-{n}": case_newton(n) for n in FLAG_SIZES},
     **{f"c-reference-{n}": case_c_reference(n) for n in ("hang-glider", "flag-32", "flag-256")},
     **{f"run-{n}": case_run_vs_raw(n) for n in ("hang-glider", "kite", "parachute")},
+    "vortex-glider": case_vortex("hang-glider"),
+    "vortex-kite": case_vortex("kite"),
     "startup": case_startup,
     "viewer": case_viewer,
     "build-scaling": case_build_scaling,

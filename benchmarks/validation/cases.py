@@ -1790,4 +1790,11 @@ CASES: dict[str, Callable[[], list[Row]]] = {
         beyond=True,
     ),
     "convergence-flag": flag_convergence,
+    "vortex": lambda: _vortex_rows(),
 }
+
+
+def _vortex_rows() -> list[Row]:
+    from .vortex_rows import object_rows, vortex_rows  # it imports this module's Row and kite_flight
+
+    return vortex_rows() + object_rows()

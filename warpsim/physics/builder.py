@@ -214,7 +214,7 @@ class ModelBuilder(MeshShapes):
         if len(tri_ids) and (tri_ids.min() < 0 or tri_ids.max() >= self.tri_count):
             raise ValueError("a lifting surface needs existing triangles")
         trailing = np.asarray(trailing, dtype=np.int64).reshape(-1, 2)
-        check_surface(np.array(self.tri_indices, dtype=np.int64).reshape(-1, 3)[tri_ids], trailing)
+        check_surface(np.array([self.tri_indices[t] for t in tri_ids], dtype=np.int64).reshape(-1, 3), trailing)
         self.lifting_surfaces.append((tri_ids, trailing))
         return len(self.lifting_surfaces) - 1
 

@@ -652,3 +652,28 @@ def test_a_link_planted_at_the_temporary_name_is_not_written_through(output, tmp
     assert main(["render" if output.endswith(".png") else "convert", str(rec), str(out)]) == 0
     assert victim.read_text() == "precious" and out.is_file() and not out.is_symlink()
     assert not os.path.lexists(temporary_path(out))
+
+
+def test_a_link_at_the_recording_is_never_written_through(tmp_path, capsys):
+    """`--h5 LINK` truncated the link's target and wrote the recording into it (exit 0): a link there is refused in
+    one line, exit 2, its target untouched; a link planted at a sweep chunk's recording is removed, not followed."""
+    from warpsim.scene.descriptor import resolve
+    from warpsim.sweeps.chunk import _chunk_recorder
+
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    link = tmp_path / "a.h5"
+    link.symlink_to(victim)
+    assert main(["run", "kite", "--seconds", "0.05", "--quiet", "--h5", str(link)]) == EXIT_USAGE
+    err = capsys.readouterr().err
+    assert "symbolic link" in err and err.count("\n") == 1
+    assert victim.read_text() == "precious" and link.is_symlink()
+
+    class Task:
+        h5 = str(tmp_path / "cases-000000-000000.h5")
+
+    os.symlink(victim, Task.h5)
+    sim = Simulation(resolve("kite")[0])
+    recorder = _chunk_recorder(Task, sim)
+    recorder.close()
+    assert victim.read_text() == "precious" and not os.path.islink(Task.h5) and os.path.getsize(Task.h5) > 0

@@ -4,6 +4,7 @@ attributes (documented in :mod:`.hdf5`), its error, the writer's lock, and the c
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 from pathlib import Path
 
@@ -87,8 +88,13 @@ def check_recording_path(path) -> Path:
 def claim(path, create: bool) -> WriterLock:
     """Take the writer's lock of the recording ``path`` (see :class:`warpsim.io.h5safe.WriterLock`).
 
-    Raises :class:`RecordingError` when another run is writing it or it cannot be opened for writing.
+    Raises :class:`RecordingError` when another run is writing it, when ``path`` is a symbolic link (never written
+    through: its target would be truncated) or when it cannot be opened for writing.
     """
+    if os.path.islink(path):
+        raise RecordingError(
+            f"{path}: is a symbolic link; a recording is never written through one (remove the link or name a file)"
+        )
     try:
         return WriterLock(path, create)
     except LockedError:

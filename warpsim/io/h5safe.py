@@ -49,13 +49,14 @@ class WriterLock:
     """Hold an exclusive writer's lock on ``path`` (created empty when missing and ``create``).
 
     Raises :class:`LockedError` at once when another process holds it, and ``OSError`` when the file cannot be
-    opened for writing. The lock lasts until :meth:`release` or the end of the process (a killed writer's
-    lock goes with it).
+    opened for writing (``ELOOP`` when ``path`` is a symbolic link: a recording is never written through one).
+    The lock lasts until :meth:`release` or the end of the process (a killed writer's lock goes with it).
     """
 
     def __init__(self, path, create: bool):
         self.path = Path(path)
-        flags = os.O_RDWR | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)
+        # never through a link: a link planted at the recording's name would have its target truncated and rewritten
+        flags = os.O_RDWR | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_NOFOLLOW", 0)
         self.created = False  # True when this lock made the (empty) file
         self.fd: int | None = None
         if create:

@@ -104,6 +104,8 @@ def _chunk_recorder(task: ChunkTask, sim):
 
     path = Path(task.h5)
     path.parent.mkdir(parents=True, exist_ok=True)
+    if path.is_symlink():  # the chunk's own name: a link planted there is removed, never written through
+        path.unlink()
     # the recorder takes the file's writer lock before it truncates it: a run writing it is never overwritten
     return open_recording(path, sim, to_toml(sim.descriptor), "warpsim sweep")
 

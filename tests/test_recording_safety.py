@@ -677,3 +677,45 @@ def test_a_link_at_the_recording_is_never_written_through(tmp_path, capsys):
     recorder = _chunk_recorder(Task, sim)
     recorder.close()
     assert victim.read_text() == "precious" and not os.path.islink(Task.h5) and os.path.getsize(Task.h5) > 0
+
+
+@pytest.mark.parametrize(
+    "field, value, message",
+    [("time", 1e300, "is not its"), ("steps", 2**62, "is outside 0..")],
+)
+def test_a_crafted_checkpoint_time_or_step_count_is_one_line(tmp_path, capsys, field, value, message):
+    """A checkpoint time of 1e300 (its digest recomputed) was resumed, exit 0, and then every reader refused the
+    whole recording; a step count of 2**62 ended `run --resume` in a 27-line ValueError. Each is one line, exit 2,
+    and the recording is left as it was."""
+    path = _crafted(tmp_path, "crafted.h5")
+    with Recording(path) as r:
+        cp, slot, frame = r.checkpoint(), r._slot, r.checkpoint_frame
+    getattr(cp, field)[0] = value
+    with h5py.File(path, "r+") as f:
+        f[f"checkpoint/slot{slot}/{field}"][0] = value
+        f[f"checkpoint/slot{slot}/digest"][...] = cp.digest(frame)
+    before = path.read_bytes()
+    assert main(["run", "--resume", str(path), "--seconds", "0.2", "--quiet"]) == EXIT_USAGE
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1, err
+    assert path.read_bytes() == before
+
+
+def test_a_replay_of_controls_its_scene_lacks_is_one_line(tmp_path, capsys):
+    """A recording whose stored control names were edited (`pitch` for the kite) ended `run --replay` in a 29-line
+    KeyError: one line, exit 2."""
+    d = defaults("kite")
+    path = tmp_path / "kite.h5"
+    sim = Simulation(d)
+    sim.set_controls(anchor=(1.0, 0.0))
+    with H5Recorder(path, sim.model, d, sim.checkpoint, to_toml(d), "kite") as recorder:
+        sim.run(0.1, on_frame=recorder.write)
+    with Recording(path) as r:
+        cp, slot, frame = r.checkpoint(), r._slot, r.checkpoint_frame
+    cp.control_names = tuple("pitch" if n == "anchor" else n for n in cp.control_names)
+    with h5py.File(path, "r+") as f:  # the names and the newest checkpoint's digest, as a careful forger would
+        f["checkpoint"].attrs["control_names"] = list(cp.control_names)
+        f[f"checkpoint/slot{slot}/digest"][...] = cp.digest(frame)
+    assert main(["run", "--replay", str(path), "--quiet"]) == EXIT_USAGE
+    err = capsys.readouterr().err
+    assert "pitch" in err and err.count("\n") == 1, err

@@ -230,6 +230,12 @@ def _start(run: _RunInputs, device: str, args):
             sim.restore(run.checkpoint)
         except ValueError as err:
             raise UsageError(f"--resume {args.resume}: its checkpoint does not fit its scene ({err})") from None
+    unknown = sorted({name for frame in run.controls or () for name in frame} - set(sim.control_names()))
+    if unknown:  # a recording whose stored controls are not its scene's (edited): one line, not a KeyError
+        raise UsageError(
+            f"--replay {args.replay}: its frames set {', '.join(unknown)}, which its scene has no control for "
+            f"(it has {', '.join(sim.control_names())})"
+        )
     if not args.quiet:
         m = sim.model
         print(

@@ -95,8 +95,17 @@ class Checkpoint:
                 )
         if not (np.isfinite(self.q).all() and np.isfinite(self.q_prev).all() and np.isfinite(self.time).all()):
             raise ValueError("checkpoint positions or time are not finite")
-        if self.steps[0] < 0:
-            raise ValueError(f"checkpoint step count {self.steps[0]} is negative")
+        if not 0 <= self.steps[0] <= MAX_STEPS:
+            raise ValueError(f"checkpoint step count {self.steps[0]} is outside 0..{MAX_STEPS}")
+
+    def check_time(self, dt: float) -> None:
+        """Raise ``ValueError`` unless the time is the step count's at ``dt`` [s] (to the rounding of summing the
+        steps): a crafted time (1e300) would be accepted and make the recording unreadable afterwards."""
+        expected = float(self.steps[0]) * float(dt)
+        if not abs(float(self.time[0]) - expected) <= 1e-6 * expected + dt:
+            raise ValueError(
+                f"checkpoint time {float(self.time[0]):.6g} s is not its {int(self.steps[0])} steps of {dt:g} s"
+            )
 
 
 def pack_rng(state: dict) -> np.ndarray:
@@ -144,6 +153,10 @@ def unpack_controls(names: tuple[str, ...], flags: np.ndarray, table: np.ndarray
         else:
             out[name] = tuple(float(v) for v in table[k, : VECTOR_CONTROLS[name]])
     return out
+
+
+MAX_STEPS = 2**53
+"""The most solver steps a checkpoint may count (exact in float64; centuries of simulated time at 1 ms)."""
 
 
 def take_checkpoint(sim) -> Checkpoint:

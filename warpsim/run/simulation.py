@@ -279,9 +279,11 @@ class Simulation:
     def restore(self, checkpoint: Checkpoint) -> None:
         """Continue from a :meth:`checkpoint` of a simulation of the same descriptor (bit for bit).
 
-        Raises ``ValueError`` when its fields do not fit this scene (other shapes, types or controls).
+        Raises ``ValueError`` when its fields do not fit this scene (other shapes, types or controls) or its time
+        is not its step count's.
         """
         checkpoint.check_like(self.checkpoint())
+        checkpoint.check_time(self.dt)
         self._release()
         restore_checkpoint(self, checkpoint)
 

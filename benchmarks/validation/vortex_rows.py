@@ -86,8 +86,8 @@ def induced_drag() -> list[Row]:
             "0.25 c",
             "thin-aerofoil theory (the quarter chord)",
             f"{x_cp:.3f} c",
-            "within 0.05 c",
-            abs(x_cp - 0.25) <= 0.05,
+            "within 0.02 c",
+            abs(x_cp - 0.25) <= 0.02,
             note="each edge load moved a quarter of the way into its downstream panel (the classical lattice)",
         )
     )

@@ -3,7 +3,7 @@ forces, as coefficients in body axes.
 
 A wing here is a flat lifting surface built with :class:`warpsim.ModelBuilder` (a rectangle of ``span_panels x
 chord_panels`` cells, two triangles each, or a delta of ``divisions`` rows), its leading edge at ``x = 0`` and
-its trailing edge downstream (``+x``): it flies towards ``-x``, left wing at ``-y``... The forces are those
+its trailing edge downstream (``+x``): it flies towards ``-x``, its right wing at ``+y``. The forces are those
 the kernels hand to the particles (:func:`warpsim.physics.kernels.vortex.vortex_air_force`), summed.
 
 Body axes are the flight-mechanics ones: ``x`` forward (world ``-x``), ``y`` right (world ``+y``), ``z`` down

@@ -59,6 +59,7 @@ class ModelBuilder(MeshShapes):
         self.drag_area: dict[int, float] = {}
         self.canopies: list[tuple[np.ndarray, np.ndarray, tuple[float, float, float]]] = []
         self.lifting_surfaces: list[tuple[np.ndarray, np.ndarray]] = []
+        self._owned_tris: set[int] = set()  # the triangles of the canopies and lifting surfaces: each has one owner
         self.nail_particles: list[int] = []
         self._nailed: set[int] = set()  # the same, for constant-time membership tests
         self.nail_target: list[Sequence[float]] = []
@@ -208,14 +209,18 @@ class ModelBuilder(MeshShapes):
         """Make triangles ``tri_ids`` one lifting surface of the ``vortex`` air law
         (:mod:`warpsim.physics.kernels.vortex`): one vortex ring a triangle, the wake shed from ``trailing``
         (``[k, 2]`` particle pairs, each a boundary edge of those triangles). Under the other laws the triangles keep
-        their per-triangle air. Returns the surface's index; refuses a surface without a trailing edge, or whose
-        triangles do not make one sheet (:func:`warpsim.physics.lattice.check_surface`)."""
+        their per-triangle air. Returns the surface's index; refuses a surface without a trailing edge, whose
+        triangles do not make one sheet (:func:`warpsim.physics.lattice.check_surface`), or that shares a triangle with
+        another surface or a canopy."""
         tri_ids = np.asarray(tri_ids, dtype=np.int64).reshape(-1)
         if len(tri_ids) and (tri_ids.min() < 0 or tri_ids.max() >= self.tri_count):
             raise ValueError("a lifting surface needs existing triangles")
+        if self._owned_tris.intersection(int(t) for t in tri_ids):
+            raise ValueError("a triangle of the lifting surface already belongs to another surface or a canopy")
         trailing = np.asarray(trailing, dtype=np.int64).reshape(-1, 2)
         check_surface(np.array([self.tri_indices[t] for t in tri_ids], dtype=np.int64).reshape(-1, 3), trailing)
         self.lifting_surfaces.append((tri_ids, trailing))
+        self._owned_tris.update(int(t) for t in tri_ids)
         return len(self.lifting_surfaces) - 1
 
     def add_canopy(self, tri_ids, table, axis, wake_lag: float = 0.0) -> int:
@@ -235,6 +240,8 @@ class ModelBuilder(MeshShapes):
             raise ValueError("a canopy needs existing triangles")
         if table.shape != (TABLE_ROWS, 2) or not np.isfinite(table).all():
             raise ValueError(f"a canopy's table must be {TABLE_ROWS} x 2 finite numbers, got shape {table.shape}")
+        if self._owned_tris.intersection(int(t) for t in tri_ids):
+            raise ValueError("a triangle of the canopy already belongs to another canopy or a lifting surface")
         q = np.asarray(self.particle_q, dtype=np.float64)
         tris = np.asarray(self.tri_indices, dtype=np.int64)[tri_ids]
         a, b, c = q[tris[:, 0]], q[tris[:, 1]], q[tris[:, 2]]
@@ -246,6 +253,7 @@ class ModelBuilder(MeshShapes):
             raise ValueError("a canopy needs a positive projected area")
         orient = 1.0 if float(np.dot(area_vec, np.asarray(axis, dtype=np.float64))) >= 0.0 else -1.0
         self.canopies.append((tri_ids, table, (nominal, projected, orient, float(wake_lag))))
+        self._owned_tris.update(int(t) for t in tri_ids)
         return len(self.canopies) - 1
 
     def set_triangle_loading(self, tri_ids, loading) -> None:

@@ -212,7 +212,8 @@ class AirConfig(Checked):
     """``[air]``: how the air pushes on the triangles (see :mod:`warpsim.physics.kernels.aero`).
 
     Attributes:
-        model: the air-force law, :class:`~warpsim.physics.kernels.aero.AeroModel` (``paper``, ``plate``, ``sail``).
+        model: the air-force law, :class:`~warpsim.physics.kernels.aero.AeroModel` (``paper``, ``plate``, ``sail``,
+            ``vortex``).
         scale: multiplier on the air force (1 = the model as written; 0 = no air).
         density: air density [kg/m^3] (the paper's 1.294217666).
         vortex_interval: ``vortex`` law: how often [s] the lattice's influence matrix is rebuilt and factorised

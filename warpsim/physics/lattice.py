@@ -67,10 +67,6 @@ class Lattice:
     def edge_count(self) -> int:
         return len(self.edge_corner)
 
-    @property
-    def max_panels(self) -> int:
-        """The most panels of one surface (0 without surfaces)."""
-        return int(np.diff(self.surface_start).max()) if self.surface_count else 0
 
 
 def surface_edges(tris: np.ndarray) -> dict[tuple[int, int], list[tuple[int, int]]]:

@@ -11,10 +11,11 @@ and 13.12, on an unstructured mesh:
   minus the sail's own velocity there (so a rolling or yawing sail is damped by its own motion) and ``A_ij`` the
   velocity ring ``j`` (and its wake legs) induces at centroid ``i`` per unit circulation, along ``n_i``;
 * the ``N x N`` system of each surface is factorised by Gaussian elimination with partial pivoting (one thread per
-  surface, ``N^3 / 3`` multiply-adds: about 87,000 for the 64 panels of the hang glider) every
-  ``air.vortex_interval`` seconds, the influence matrix rebuilt then (one thread per row); every step the
-  circulations come from those factors and this step's ``w_i . n_i`` by substitution (``N^2``), so the sail's own
-  motion, gusts and the controls act at once and only the lattice's geometry lags;
+  surface, ``N^3 / 3`` multiply-adds) every ``air.vortex_interval`` seconds, the influence matrix rebuilt then (one
+  thread per row), and again every step while a factorisation failed (no relative wind, a singular matrix); every
+  step the circulations come from those factors and this step's ``w_i . n_i`` by substitution (``N^2``), so the
+  sail's own motion, gusts and the controls act at once and only the lattice's geometry and its wake's direction
+  lag;
 * Kutta-Joukowski on every edge inside the sail or on its leading and side edges: ``F = rho G_e (V x l)`` with
   ``G_e`` the net circulation of the edge (the difference of its two panels'), ``l`` the edge [m] and ``V`` the
   local relative wind at its midpoint (Katz & Plotkin eq. 12.24 with the sail's own motion in ``V``); half of it
@@ -23,9 +24,7 @@ and 13.12, on an unstructured mesh:
 * the induced drag from the far wake (a Trefftz-plane evaluation, Katz & Plotkin 8.3 and 12.3): each trailing edge
   carries its panel's circulation ``G`` into the wake, and the wake legs' downwash ``w`` at its midpoint (half the
   far wake's) loads it with ``rho G (w x l)``; summed over a straight trailing edge this is ``(rho / 2) sum G w_T
-  ds``, the far-field induced drag. Its spanwise spread gives the yaw moment of an asymmetric load. The near-field
-  alternative (the induced velocity in every edge's ``V``) converges slowly on these lattices and overestimates
-  the leading edge's suction (span efficiencies 1.08-1.17 for rectangles at 16 x 8 cells, measured);
+  ds``, the far-field induced drag. Its spanwise spread gives the yaw moment of an asymmetric load;
 * a section polar for what potential flow leaves out, per panel from the sail law's coefficients
   (:func:`warpsim.physics.kernels.aero.sail_coefficients`): profile drag ``0.5 rho C_D0 |w| w A`` and, past the
   stall angle (of the panel's relative wind to the sail's mean plane), a blend into the flat plate's separated
@@ -36,10 +35,9 @@ Induced velocities use a cut-off core (the vortex core of Katz & Plotkin 10.4.5 
 in the segment's law) of ``d = 5 %`` of the surface's mean panel size, so a sail that folds or flies edge-on stays
 finite. Positions are measured in float32 from one particle of each surface, so the law is the same 10 km out.
 
-The lattice's loads are not left on the panels' edges: each edge's load goes a quarter of the way towards the far
-corner of the panel downstream of it (three eighths to either particle of the edge, a quarter to that corner), where
-the classical lattice (rings shifted a quarter panel back) puts its bound vortex. Left on the edges, the loads sat a
-quarter panel forward, which on the hang glider's 8 rows moved its neutral point 9 cm ahead.
+Each edge's load goes a quarter of the way towards the far corner of the panel downstream of it (three eighths to
+either particle of the edge, a quarter to that corner), where the classical lattice (rings shifted a quarter panel
+back) puts its bound vortex; left on the edges, the loads would sit a quarter panel forward.
 The free wake of unsteady flow is not modelled here: the wake follows the relative wind of the moment.
 """
 
@@ -48,7 +46,8 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
-from .aero import plate_normal_coefficient, wind_at
+from .. import lattice
+from .aero import STALL_SHARPNESS, plate_normal_coefficient, wind_at
 from .collision import HeightfieldData, terrain_height
 
 wp.set_module_options({"enable_backward": False})
@@ -56,8 +55,7 @@ wp.set_module_options({"enable_backward": False})
 CORE_FRACTION = wp.constant(0.05)
 """Vortex core radius as a fraction of the surface's mean panel size (square root of the mean panel area)."""
 INV_FOUR_PI = wp.constant(0.07957747154594767)
-STALL_SHARPNESS = wp.constant(40.0)  # the sail law's, 1/rad
-TRAILING = wp.constant(-2)  # lattice.TRAILING
+TRAILING = wp.constant(lattice.TRAILING)
 LOAD_SHIFT = wp.constant(0.25)
 """Share of an edge's load moved to the far corner of its downstream panel: a quarter of the way there."""
 
@@ -194,6 +192,7 @@ def _matrix(
     surface_start: wp.array(dtype=wp.int32),
     matrix_start: wp.array(dtype=wp.int64),
     counter: wp.array(dtype=wp.int32),
+    factored: wp.array(dtype=wp.int32),
     corners: wp.array(dtype=wp.vec3),
     point: wp.array(dtype=wp.vec3),
     normal: wp.array(dtype=wp.vec4),
@@ -201,9 +200,9 @@ def _matrix(
     matrix_out: wp.array(dtype=wp.float32),
 ):
     i = wp.tid()  # one row: the normal velocity at centroid i of every ring of its surface
-    if counter[0] != 0:
-        return
     s = panel_surface[i]
+    if counter[0] != 0 and factored[s] != 0:  # rebuilt on schedule, or at once while the last try failed
+        return
     first = surface_start[s]
     count = surface_start[s + 1] - first
     wk = wake[s]
@@ -230,14 +229,18 @@ def _factor(
     factored_out: wp.array(dtype=wp.int32),
 ):
     s = wp.tid()  # LU factors of one surface's matrix, in place (Gaussian elimination, partial pivoting)
-    if counter[0] != 0:
+    if counter[0] != 0 and factored_out[s] != 0:
         return
     first = surface_start[s]
     n = surface_start[s + 1] - first
     base = matrix_start[s]
     ok = int(1)  # noqa: UP018 -- Warp needs int() for a variable a loop changes
-    if wake[s][3] == 0.0:  # no relative wind, no wake direction: no circulation
+    if wake[s][3] == 0.0:  # no relative wind, no wake direction: no circulation (tried again next step)
         ok = 0
+    scale = float(0.0)  # noqa: UP018
+    for e in range(n * n):
+        scale = wp.max(scale, wp.abs(matrix_out[base + wp.int64(e)]))
+    tiny = 1.0e-6 * scale  # a pivot below this is singular in float32: no circulation rather than a huge one
     k = int(0)  # noqa: UP018
     while k < n and ok == 1:
         p = int(k)
@@ -250,7 +253,7 @@ def _factor(
                 p = r
             r += 1
         pivot_out[first + k] = p
-        if not (big > 1.0e-12):  # also catches NaN
+        if not (big > tiny):  # also catches NaN
             ok = 0
         else:
             if p != k:
@@ -615,6 +618,7 @@ def vortex_air_force(
             arrays["surface_start"],
             arrays["matrix_start"],
             sc.counter,
+            sc.factored,
             sc.corners,
             sc.point,
             sc.normal,

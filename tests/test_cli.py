@@ -142,8 +142,9 @@ def test_run_figures_are_the_sweep_metrics_and_spread_over_worlds(capsys):
 
 
 def test_bare_warpsim_shows_its_help(capsys):
-    """Issue 36: a bare `warpsim` printed an error about a missing COMMAND; it now shows what it can do."""
-    assert main([]) == 0
+    """Issue 36: a bare `warpsim` printed an error about a missing COMMAND; it now shows what it can do, and (issue
+    55) exits with the usage's code, 2, as a command run without what it needs does."""
+    assert main([]) == 2
     out = capsys.readouterr().out
     assert out.startswith("usage: warpsim") and "run" in out and "sweep" in out
 
@@ -175,3 +176,19 @@ def test_a_bare_built_in_name_is_the_built_in_beside_a_file_of_that_name(tmp_pat
     assert descriptor.resolve("flag")[2] == "built-in flag"
     assert main(["run", "./flag", "--seconds", "0.1"]) == 2
     assert "not valid TOML" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv", [["schema"], ["list"], ["info", "kite"]])
+def test_a_full_standard_output_is_one_line_and_exit_4(argv):
+    """`warpsim schema > /dev/full` (and list, info) ended in an OSError traceback and exit 1; the documented code
+    for an output that cannot be written is 4."""
+    import subprocess
+    import sys
+
+    with open("/dev/full", "w") as full:
+        done = subprocess.run(
+            [sys.executable, "-m", "warpsim", *argv], stdout=full, stderr=subprocess.PIPE, text=True, timeout=120
+        )
+    assert done.returncode == 4, done.stderr
+    assert done.stderr.count("\n") == 1 and "could not write to standard output" in done.stderr
+

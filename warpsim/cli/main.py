@@ -53,35 +53,76 @@ def main(argv: list[str] | None = None) -> int:
         sys.stderr.write("warpsim: interrupted\n")
         return EXIT_INTERRUPTED
     except BrokenPipeError:  # the reader went away (`warpsim list | head`): nothing more to say
-        import os
-
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error when Python flushes
+        _silence_stdout()
         return 0
+
+
+class StdoutWriteError(OSError):
+    """Standard output could not take what a command printed (a full disk or an I/O error under a redirection)."""
+
+
+class _Stdout:
+    """Standard output for the length of a command: a failed write or flush (other than a closed pipe) becomes
+    :class:`StdoutWriteError`, which the command line answers with one line and exit code 4."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def _guard(self, call, *args):
+        try:
+            return call(*args)
+        except BrokenPipeError:
+            raise
+        except OSError as err:
+            raise StdoutWriteError(f"could not write to standard output ({err.strerror or err})") from None
+
+    def write(self, text):
+        return self._guard(self._stream.write, text)
+
+    def flush(self):
+        return self._guard(self._stream.flush)
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+def _silence_stdout() -> None:
+    """Point standard output at /dev/null, so that Python's own flush at exit raises no second error."""
+    import os
+
+    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def _main(argv: list[str] | None) -> int:
     parser = build_parser()
-    if not (sys.argv[1:] if argv is None else argv):  # a bare `warpsim`: what it can do, not an error
+    if not (sys.argv[1:] if argv is None else argv):  # a bare `warpsim`: what it can do, and the usage's exit code
         parser.print_help()
-        return 0
+        return EXIT_USAGE
     args = parser.parse_args(argv)
     from ..physics import _warp
 
     _warp.init()  # quietly: no banner, module load lines or CUDA-driver note on a CPU machine
+    stdout, sys.stdout = sys.stdout, _Stdout(sys.stdout)
     try:
-        return _module(args.command).command(args)
+        code = _module(args.command).command(args)
+        sys.stdout.flush()  # a full disk under a redirection shows here, not in Python's own flush at exit
+        return code
     except Exception as err:  # noqa: BLE001 - only the errors _exit_code knows are answered; the rest re-raised
         code = _exit_code(err)
         if code is None:
             raise
+        if isinstance(err, StdoutWriteError):
+            _silence_stdout()
         sys.stderr.write(f"warpsim {args.command}: error: {one_line(str(err))}\n")
         return code
+    finally:
+        sys.stdout = stdout
 
 
 def _exit_code(err: Exception) -> int | None:
     """The exit code of an error a command let through: 2 for a user's mistake (a bad scene, option, recording,
-    table or output path; no display), 4 for an output that could not be written; None for anything else (a bug:
-    its traceback is shown)."""
+    table or output path; no display), 4 for an output (standard output too) that could not be written; None for
+    anything else (a bug: its traceback is shown)."""
     from ..io import OutputPathError, OutputWriteError
     from ..io.hdf5 import RecordingError
     from ..scene.descriptor import DescriptorError
@@ -89,7 +130,7 @@ def _exit_code(err: Exception) -> int | None:
     from ..sweeps.plot import PlotError
     from ..viewer.backend import ViewerUnavailableError
 
-    if isinstance(err, OutputWriteError):
+    if isinstance(err, OutputWriteError | StdoutWriteError):
         return EXIT_OUTPUT
     usage = (
         DescriptorError,

@@ -24,6 +24,9 @@ wp.config.log_level = wp.LOG_WARNING  # before Warp initialises: no per-module l
 
 from .suite import CASES, Options, constraint_rate  # noqa: E402
 
+DEFAULT_JSON = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results.json")
+"""Where a whole run writes its results."""
+
 
 def machine() -> dict:
     """Where the numbers were measured: CPU, cores, Python, NumPy and Warp versions, the Warp device."""
@@ -164,8 +167,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--json",
         metavar="PATH",
-        default="benchmarks/results.json",
-        help="where to write the results (default benchmarks/results.json)",
+        default=None,
+        help="where to write the results (default: benchmarks/results.json for a whole run; a run of a few cases "
+        "(-k) writes none unless given one, so that it cannot replace the whole run's file with its subset)",
     )
     args = parser.parse_args(argv)
     if args.list:
@@ -197,6 +201,8 @@ def main(argv: list[str] | None = None) -> int:
         rows.append(row)
         print(f" {time.perf_counter() - start:.1f} s", file=sys.stderr)
     print(table(rows))
+    if args.json is None and not args.select:
+        args.json = DEFAULT_JSON
     if args.json:
         with open(args.json, "w", encoding="utf-8") as f:
             json.dump(

@@ -50,3 +50,17 @@ def test_euler_needs_a_smaller_step_than_verlet():
     euler = largest_stable_dt(scene("flag", {"flag": PAPER_FLAG, "solver": {"method": "euler"}}), "cpu")
     assert verlet is not None and euler is not None
     assert euler <= verlet / 10
+
+
+def test_a_run_of_a_few_cases_leaves_the_whole_runs_results_alone(monkeypatch, tmp_path, capsys):
+    """`python -m benchmarks -k hang-glider` replaced the tracked benchmarks/results.json with its 4-row subset: a
+    selection writes no file unless given --json."""
+    import benchmarks.__main__ as runner
+
+    (tmp_path / "benchmarks").mkdir()
+    target = tmp_path / "benchmarks" / "results.json"  # where the runner once wrote, relative to the working folder
+    target.write_text("the whole run's rows")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(runner, "DEFAULT_JSON", str(target))
+    assert main(["-k", "euler-vs-verlet", "--min-time", "0.01"]) == 0
+    assert target.read_text() == "the whole run's rows"

@@ -229,7 +229,7 @@ def test_csv_table_and_h5_per_chunk(cluster, tmp_path, reference):
     back["blowup_reason"] = back["blowup_reason"].astype(object).where(back["blowup_reason"].notna(), "")
     _same(back, reference)
     files = sorted((tmp_path / "rec").glob("*.h5"))
-    assert [f.name for f in files] == ["cases-000000-000003.h5", "cases-000004-000005.h5"]
+    assert [f.name for f in files] == ["s.csv-cases-000000-000003.h5", "s.csv-cases-000004-000005.h5"]
     with Recording(files[1]) as recording:
         model = recording.build_model()
         assert [r.name for r in model.objects] == ["kite_w0", "kite_w1"]
@@ -674,15 +674,15 @@ def test_a_full_disk_under_the_sweep_is_exit_4_and_one_line(where, tmp_path, mon
 
 
 def test_h5_dir_never_touches_a_recording_a_run_is_writing(tmp_path, monkeypatch, capsys):
-    """With `run --h5 DIR/cases-000000-000002.h5` writing, a sweep with --h5-dir DIR removed that file and wrote its
-    chunk in its place. The sweep now looks for a writer's lock before it starts (and each chunk's recorder takes
-    the lock before it truncates); a folder under a file is said before anything runs."""
+    """With `run --h5 DIR/t.parquet-cases-000000-000002.h5` writing, a sweep with --h5-dir DIR removed that file and
+    wrote its chunk in its place. The sweep now looks for a writer's lock before it starts (and each chunk's recorder
+    takes the lock before it truncates); a folder under a file is said before anything runs."""
     from warpsim.io.hdf5 import claim
 
     ran = _here(monkeypatch)
     rec_dir = tmp_path / "recs"
     rec_dir.mkdir()
-    live = rec_dir / "cases-000000-000002.h5"
+    live = rec_dir / "t.parquet-cases-000000-000002.h5"
     live.write_bytes(b"a live run's frames")
     lock = claim(live, create=False)  # what `warpsim run --h5` holds while it writes
     try:
@@ -882,3 +882,23 @@ def test_heat_map_labels_share_their_decimals_and_read_on_their_cells():
     assert [(r, c, t) for r, c, t, _ in labels] == [(0, 0, "36.9"), (0, 1, "54.0"), (1, 1, "55.5")]
     assert [colour for *_, colour in labels] == ["white", "black", "black"]  # viridis: dark purple to yellow
     assert [t for *_, t, _ in cell_labels(np.array([[0.0123, 0.5]]), lambda v: (0, 0, 0, 1))] == ["0.012", "0.500"]
+
+
+def test_two_sweeps_sharing_an_h5_dir_keep_their_own_recordings(tmp_path, monkeypatch):
+    """Two sweeps with different --out and the same --h5-dir wrote `cases-000000-000002.h5` each, the second over the
+    first's: each sweep's recordings are named after its table."""
+    from warpsim.io.recording import Recording
+
+    _here(monkeypatch)
+    rec_dir = tmp_path / "recs"
+    assert main(_quick(tmp_path / "a.parquet", "--chunk", "3", "--h5-dir", str(rec_dir), "--quiet")) == 0
+    argv = ["sweep", "kite", "--vary", "wind.speed=5.0,7.0,9.0", "--seconds", "0.05", "--out", str(tmp_path / "b.csv")]
+    assert main([*argv, "--chunk", "3", "--h5-dir", str(rec_dir), "--quiet"]) == 0
+    names = sorted(f.name for f in rec_dir.glob("*.h5"))
+    assert names == ["a.parquet-cases-000000-000002.h5", "b.csv-cases-000000-000002.h5"]
+    winds = []
+    for name in names:
+        with Recording(rec_dir / name) as recording:
+            winds.append(recording.descriptor("test")["worlds"]["wind"]["speed"])
+    assert winds == [[4.0, 6.0, 8.0], [5.0, 7.0, 9.0]]
+

@@ -198,10 +198,17 @@ class SweepPlan:
         return merge("sweep", self.base, {**shared, "worlds": worlds})
 
     def chunks(
-        self, size: int, skip: set[int] = frozenset(), device: str = "cpu", h5_dir: Path | None = None
+        self,
+        size: int,
+        skip: set[int] = frozenset(),
+        device: str = "cpu",
+        h5_dir: Path | None = None,
+        h5_prefix: str = "cases",
     ) -> list[ChunkTask]:
         """The tasks of every case not in ``skip``, ``size`` cases each at most. Cases that differ in a key one
-        launch cannot vary between worlds (solver, air, terrain, ground) go to different chunks."""
+        launch cannot vary between worlds (solver, air, terrain, ground) go to different chunks. With ``h5_dir``,
+        each task records its chunk there as ``{h5_prefix}-{first case:06d}-{last case:06d}.h5`` (a sweep's prefix
+        names its table, so that two sweeps sharing the folder never write each other's recordings)."""
         groups: dict[tuple, list[int]] = {}
         for i, values in enumerate(self.cases):
             if i in skip:
@@ -213,7 +220,7 @@ class SweepPlan:
             for start in range(0, len(members), size):
                 indices = members[start : start + size]
                 columns = [{a.name: self.cases[i][k] for k, a in enumerate(self.axes)} for i in indices]
-                h5 = str(Path(h5_dir) / f"cases-{indices[0]:06d}-{indices[-1]:06d}.h5") if h5_dir else None
+                h5 = str(Path(h5_dir) / f"{h5_prefix}-{indices[0]:06d}-{indices[-1]:06d}.h5") if h5_dir else None
                 tasks.append(
                     ChunkTask(
                         self._chunk_descriptor(indices),

@@ -92,6 +92,12 @@ def _owning(out: Path | None):
         lock.release()
 
 
+def recording_prefix(out) -> str:
+    """The name the ``--h5-dir`` recordings of a sweep writing the table ``out`` start with: the table's name
+    (``tour.parquet`` -> ``tour.parquet-cases``), or ``cases`` without a table."""
+    return f"{Path(out).name}-cases" if out is not None else "cases"
+
+
 def _run_owned(
     plan, out, workers, scheduler, chunk, device, h5_dir, restart, on_progress, log, threads=None
 ) -> SweepOutcome:
@@ -109,7 +115,8 @@ def _run_owned(
         if todo:
             client, own_client, used = cluster.connect(scheduler, workers)
             size = chunk or max(1, min(MAX_CHUNK, math.ceil(len(todo) / (4 * max(used, 1)))))
-            tasks = plan.chunks(size, set(range(len(plan.cases))) - set(todo), device, h5_dir)
+            prefix = recording_prefix(out)
+            tasks = plan.chunks(size, set(range(len(plan.cases))) - set(todo), device, h5_dir, prefix)
             chunks.check_recordings_free(tasks)
             if threads is None:
                 threads = 1 if scheduler is not None else max(1, available_cores() // max(used, 1))

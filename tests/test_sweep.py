@@ -902,3 +902,13 @@ def test_two_sweeps_sharing_an_h5_dir_keep_their_own_recordings(tmp_path, monkey
             winds.append(recording.descriptor("test")["worlds"]["wind"]["speed"])
     assert winds == [[4.0, 6.0, 8.0], [5.0, 7.0, 9.0]]
 
+
+def test_a_fifo_at_the_dask_log_is_one_line_not_a_hang(tmp_path, monkeypatch, capsys):
+    """A FIFO planted at OUT.dask.log blocked the sweep for ever in open(), holding OUT's lock: one line, exit 2."""
+    _here(monkeypatch)
+    out = tmp_path / "t.parquet"
+    os.mkfifo(tmp_path / "t.parquet.dask.log")
+    assert main(_quick(out, "--quiet")) == 2
+    err = capsys.readouterr().err
+    assert "dask.log" in err and "not a regular file" in err and err.count("\n") == 1
+

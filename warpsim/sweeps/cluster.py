@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import time
 from pathlib import Path
 
@@ -51,7 +52,19 @@ def _log_to(path) -> list:
     import logging
 
     flags = os.O_WRONLY | os.O_CREAT | os.O_APPEND | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
-    handler = logging.StreamHandler(open(os.open(path, flags, 0o666), "a", encoding="utf-8"))  # noqa: SIM115
+    # non-blocking: a FIFO planted there would block the open (the sweep holding its table's lock) until a reader came
+    with contextlib.suppress(FileNotFoundError):
+        if not stat.S_ISREG(os.lstat(path).st_mode):
+            raise SweepError(f"{path}: is not a regular file (a pipe or a device); remove it, Dask's log goes there")
+    try:
+        fd = os.open(path, flags | os.O_NONBLOCK, 0o666)
+    except OSError as err:
+        raise SweepError(f"{path}: Dask's log cannot be written there ({err.strerror or err})") from None
+    if not stat.S_ISREG(os.fstat(fd).st_mode):
+        os.close(fd)
+        raise SweepError(f"{path}: is not a regular file (a pipe or a device); remove it, Dask's log goes there")
+    os.set_blocking(fd, True)
+    handler = logging.StreamHandler(open(fd, "a", encoding="utf-8"))  # noqa: SIM115
     handler.setFormatter(logging.Formatter("%(asctime)s %(process)d %(name)s %(levelname)s: %(message)s"))
     saved = []
     for logger in dask_loggers():

@@ -476,6 +476,23 @@ def test_ctrl_c_during_start_up_is_one_line(delay, tmp_path):
             assert r.frame_count >= 1
 
 
+def test_sigterm_as_the_recording_is_created_leaves_no_empty_file(tmp_path):
+    """SIGTERM in the first moments of `run --h5` (the file created, the recording not yet written) ended the process
+    at once and left a 0-byte file that every reader called 'not an HDF5 file'; SIGINT there removed it. SIGTERM now
+    does what SIGINT does: whenever it lands, the file is absent or a readable recording."""
+    path = tmp_path / "k.h5"
+    proc = _start("run", "kite", "--seconds", "5", "--h5", path, cwd=tmp_path)
+    deadline = time.monotonic() + 120
+    while not path.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.001)
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=120)
+    assert "Traceback" not in err and proc.returncode in (0, EXIT_INTERRUPTED), err
+    if path.exists():
+        with Recording(path) as r:
+            assert r.frame_count >= 1
+
+
 def test_empty_and_skeleton_recordings_are_refused(tmp_path, capsys):
     d = defaults("flag")
     empty = tmp_path / "empty.h5"

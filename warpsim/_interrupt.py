@@ -35,7 +35,10 @@ def _raise_outside_finalisers(signum, frame) -> None:
 
 def interruptible() -> None:
     """Called by a command just before it first creates or opens an output: when :func:`exit_at_once` handles
-    Ctrl-C (the ``warpsim`` process), Ctrl-C raises ``KeyboardInterrupt`` from now on, so that the outputs are
-    closed or removed; in any other caller (a test calling :func:`warpsim.cli.main`) nothing changes."""
+    Ctrl-C (the ``warpsim`` process), Ctrl-C and SIGTERM raise ``KeyboardInterrupt`` from now on, so that the
+    outputs are closed or removed (SIGTERM's default ended the process at once and left a just-created recording
+    empty); in any other caller (a test calling :func:`warpsim.cli.main`) nothing changes."""
     if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is exit_at_once:
         signal.signal(signal.SIGINT, _raise_outside_finalisers)
+        if signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
+            signal.signal(signal.SIGTERM, _raise_outside_finalisers)

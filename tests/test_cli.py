@@ -192,3 +192,15 @@ def test_a_full_standard_output_is_one_line_and_exit_4(argv):
     assert done.returncode == 4, done.stderr
     assert done.stderr.count("\n") == 1 and "could not write to standard output" in done.stderr
 
+
+def test_a_run_off_a_terminal_says_it_is_alive(monkeypatch, capsys):
+    """Off a terminal (a log, CI, `| tee`) `run` printed nothing for its whole length: it now writes a progress line
+    at an interval (10 s of wall time; here every call), each on a line of its own, no carriage returns."""
+    import warpsim.cli.run as run_command
+
+    monkeypatch.setattr(run_command, "LOG_PROGRESS_INTERVAL", 0.0)
+    assert main(["run", "hang-glider", "--seconds", "30"]) == 0  # progress comes at most 5 times a wall second
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if "steps/s" in line and "t =" in line]
+    assert lines and "\r" not in err
+

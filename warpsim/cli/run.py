@@ -82,7 +82,7 @@ def command(args) -> int:
             summary = sim.run(
                 run.seconds,
                 on_frame=on_frame,
-                on_progress=_progress(sim) if not args.quiet and sys.stderr.isatty() else None,
+                on_progress=_progress(sim) if not args.quiet else None,
                 realtime=args.realtime,
                 stop=stop,
                 before=RecordedControls(sim, run.controls) if run.controls is not None else None,
@@ -247,12 +247,24 @@ def _start(run: _RunInputs, device: str, args):
     return sim
 
 
+LOG_PROGRESS_INTERVAL = 10.0
+"""Wall seconds between two progress lines when stderr is not a terminal (a log file, CI, ``| tee``)."""
+
+
 def _progress(sim):
-    """A progress line on stderr, rewritten in place."""
+    """Progress on stderr: one line rewritten in place on a terminal; elsewhere a new line every
+    :data:`LOG_PROGRESS_INTERVAL` wall seconds (a log shows the run is alive without a line per frame)."""
+    tty = sys.stderr.isatty()
+    last = {"wall": 0.0}
 
     def progress(t, total, steps, wall):
         rate = steps / wall if wall > 0 else 0.0
-        sys.stderr.write(f"\r  t = {t:8.2f} s  ({100 * steps * sim.dt / total:5.1f}%)  {rate:10,.0f} steps/s")
+        text = f"  t = {t:8.2f} s  ({100 * steps * sim.dt / total:5.1f}%)  {rate:10,.0f} steps/s"
+        if tty:
+            sys.stderr.write("\r" + text)
+        elif wall - last["wall"] >= LOG_PROGRESS_INTERVAL:
+            last["wall"] = wall
+            sys.stderr.write(text + "\n")
         sys.stderr.flush()
 
     return progress
@@ -349,7 +361,7 @@ def add_parser(sub) -> None:
         help="simulate a scene",
         description="Simulate a scene and print a summary: "
         "simulated time, steps, wall time, steps per second, real-time factor, worst stick "
-        "stretch. Shows progress on a terminal; Ctrl-C stops cleanly.",
+        "stretch. Shows progress on a terminal (in a log or a pipe, a line every 10 s); Ctrl-C stops cleanly.",
     )
     run.add_argument("scene", metavar="SCENE", nargs="?", help="the scene (not with --resume or --replay)")
     run.add_argument(

@@ -28,7 +28,7 @@ SCENES = {
     "amplitude": ("[scene]\nobject = 'kite'\n[terrain]\nkind = 'procedural'\namplitude = 1e29\n", "terrain.amplitude"),
     "anchor": ("[scene]\nobject = 'kite'\n[[controls]]\ntime = 0.0\nanchor = [1e308, 0]\n", "anchor components"),
     "wind": ("[scene]\nobject = 'kite'\n[[controls]]\ntime = 0.0\nwind = [0, 1e300, 0]\n", "wind components"),
-    "huge_value": ("[scene]\nobject = 'kite'\n[kite]\nspan = '" + "x" * 5_000_000 + "'\n", "characters ..."),
+    "huge_value": ("[scene]\nobject = 'kite'\n[kite]\nspan = '" + "x" * 5_000_000 + "'\n", "may hold at most"),
     "worlds": ("[scene]\nobject = 'kite'\n[worlds]\ncount = 65536\n", "is more than the 1,048,576"),
     "flag": ("[scene]\nobject = 'flag'\n[flag]\nresolution = 2048\n", "is more than the 1,048,576"),
 }
@@ -96,3 +96,19 @@ def test_model_build_is_linear_in_nails():
     sim = Simulation(d)
     assert sim.model.nail_count >= 10_000
     assert time.monotonic() - start < 60
+
+
+def test_a_huge_scene_or_stored_descriptor_is_one_line(tmp_path, capsys):
+    """An 8 MB scene file (hundreds of thousands of controls) or a 20 MB descriptor stored in a recording kept every
+    command busy for minutes: a descriptor holds at most MAX_TEXT characters, refused in one line, exit 2."""
+    from warpsim.cli import main
+    from warpsim.scene.descriptor import MAX_TEXT
+
+    big = tmp_path / "big.toml"
+    rows = "".join(f'[[controls]]\ntime = {k}.0\nwind = [4.0, 0.0, 0.0]\n' for k in range(MAX_TEXT // 40))
+    big.write_text('[scene]\nobject = "kite"\n' + rows)
+    assert big.stat().st_size > MAX_TEXT
+    for argv in (["info", str(big)], ["run", str(big), "--seconds", "0.01"]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert "at most" in err and err.count("\n") == 1, err

@@ -330,6 +330,8 @@ def _check_sweep(where: str, sweep, descriptor: dict) -> dict:
 
 
 MAX_DEPTH = 8  # a descriptor's deepest nesting is 4 ([worlds] -> wind -> velocity -> numbers)
+MAX_TEXT = 1 << 20
+"""The most characters a descriptor's text may hold (a scene file, or the one a recording stores)."""
 
 
 def _depth(value, level: int = 0) -> int:
@@ -348,6 +350,11 @@ def _depth(value, level: int = 0) -> int:
 def load_text(text: str, where: str) -> dict:
     """Parse and validate descriptor ``text``; ``where`` names its origin in error messages."""
     text = text.removeprefix("\ufeff")  # a UTF-8 byte-order mark, as some editors write
+    if len(text) > MAX_TEXT:  # an 8 MB scene (hundreds of thousands of controls) kept every command busy for minutes
+        raise DescriptorError(
+            f"{where}: {len(text):,} characters; a scene descriptor may hold at most {MAX_TEXT:,} (a longer schedule "
+            "or world list belongs in a sweep)"
+        )
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
@@ -409,6 +416,10 @@ def _files_beside(descriptor: dict, scene: Path) -> dict:
 def _read_text(path: Path) -> str:
     """A scene file's text; unreadable or non-UTF-8 files are descriptor errors."""
     try:
+        if path.stat().st_size > 4 * MAX_TEXT:  # not read at all: no text of that many bytes can pass
+            raise DescriptorError(
+                f"{path}: {path.stat().st_size:,} bytes; a scene descriptor may hold at most {MAX_TEXT:,} characters"
+            )
         return path.read_text(encoding="utf-8")
     except UnicodeDecodeError:
         raise DescriptorError(f"{path}: not a text file (a scene descriptor is UTF-8 TOML)") from None

@@ -21,6 +21,7 @@ from pxr import Usd, UsdGeom
 
 from warpsim.cli import EXIT_INTERRUPTED, EXIT_OUTPUT, EXIT_USAGE, main
 from warpsim.io import remove_stale_temporaries, temporary_path
+from warpsim.io.h5format import descriptor_digest
 from warpsim.io.h5safe import writer_active
 from warpsim.io.hdf5 import H5Recorder
 from warpsim.io.recording import Recording
@@ -547,6 +548,7 @@ def test_recordings_declaring_more_than_they_hold_are_refused_before_any_build(t
         d = load_text(str(f.attrs["descriptor"]), "test")
         d["worlds"] = {"count": 4096}
         f.attrs["descriptor"] = to_toml(d)
+        f.attrs["descriptor_sha256"] = descriptor_digest(to_toml(d))  # as a careful forger would
     chunked = _crafted(tmp_path, "chunked.h5")
     with h5py.File(chunked, "r+") as f:
         times = f["time"][()]
@@ -736,3 +738,22 @@ def test_a_replay_of_controls_its_scene_lacks_is_one_line(tmp_path, capsys):
     assert main(["run", "--replay", str(path), "--quiet"]) == EXIT_USAGE
     err = capsys.readouterr().err
     assert "pitch" in err and err.count("\n") == 1, err
+
+
+def test_a_recording_whose_descriptor_was_changed_is_refused(tmp_path, capsys):
+    """A recording whose stored descriptor was swapped for another object's was replayed with exit 0, flying the
+    other object; an edited one (another wind) was accepted by replay, resume, convert and render. The descriptor's
+    sha256 is stored beside it: each command refuses the changed one in one line, exit 2."""
+    path = _crafted(tmp_path, "flag.h5")
+    with h5py.File(path, "r+") as f:
+        d = load_text(str(f.attrs["descriptor"]), "test")
+        d["wind"]["velocity"] = [9.0, 0.0, 0.0]
+        f.attrs["descriptor"] = to_toml(d)
+    for argv in (
+        ["run", "--replay", str(path), "--quiet"],
+        ["run", "--resume", str(path), "--seconds", "0.2", "--quiet"],
+        ["convert", str(path), str(tmp_path / "out.usda")],
+    ):
+        assert main(argv) == EXIT_USAGE
+        err = capsys.readouterr().err
+        assert "was changed after its frames were recorded" in err and err.count("\n") == 1, err

@@ -165,3 +165,12 @@ def _reading(path):
         raise
     except (OSError, RuntimeError, KeyError, ValueError, TypeError, IndexError, AttributeError) as err:
         raise RecordingError(f"{path}: damaged or not a warpsim recording ({reason(err)})") from None
+
+
+def descriptor_digest(text: str) -> str:
+    """The sha256 (hex) of a recording's descriptor text, stored beside it (``descriptor_sha256``): a descriptor
+    edited or swapped afterwards (another object, another wind) no longer matches its frames and is refused."""
+    import hashlib
+
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+

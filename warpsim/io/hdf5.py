@@ -72,6 +72,7 @@ from .h5format import (
     _reading,
     check_recording_path,
     claim,
+    descriptor_digest,
     signals_held,
 )
 from .h5safe import (
@@ -208,6 +209,7 @@ class H5Recorder(FrameOutput):
                 "format": FORMAT,
                 "format_version": FORMAT_VERSION,
                 "descriptor": descriptor_text,
+                "descriptor_sha256": descriptor_digest(descriptor_text),
                 "scene": scene,
                 "solver": json.dumps(descriptor["solver"]),
                 "warpsim_version": __version__,

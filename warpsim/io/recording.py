@@ -21,6 +21,7 @@ from .h5format import (
     _frame_layout,
     _newest_checkpoint,
     _reading,
+    descriptor_digest,
 )
 from .h5safe import LockedError, WriterLock, clear_status_flags, open_for_reading, status_flags, writer_active
 
@@ -81,6 +82,12 @@ class Recording:
         if missing:
             raise RecordingError(f"{path}: incomplete warpsim recording (missing {', '.join(missing[:4])})")
         self.descriptor_text = str(f.attrs["descriptor"])
+        stored = f.attrs.get("descriptor_sha256")  # recordings before 2026-11-28 hold none
+        if stored is not None and str(stored) != descriptor_digest(self.descriptor_text):
+            raise RecordingError(
+                f"{path}: its scene descriptor was changed after its frames were recorded (its sha256 does not "
+                "match); the frames belong to the scene they were flown in: record it again"
+            )
         self.scene = str(f.attrs.get("scene", ""))
         self.frame_interval = float(f.attrs["frame_interval"])
         if not (np.isfinite(self.frame_interval) and self.frame_interval > 0):

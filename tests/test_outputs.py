@@ -236,3 +236,27 @@ def test_bad_output_paths_and_recordings(argv, message, tmp_path, capsys):
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1, err
     assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing half-written left behind
+
+
+def test_a_huge_terrain_is_sampled_in_the_stage(tmp_path, monkeypatch):
+    """An 8192^2 terrain in `--usd` or `convert` grew past 6 GB and ended in a MemoryError traceback: a stage draws
+    the ground with at most STAGE_TERRAIN_SIDE samples a side, its edges and heights where they are sampled kept."""
+    import numpy as np
+    from pxr import Usd, UsdGeom
+
+    import warpsim.io.usd as usd
+    from warpsim.cli import main
+
+    monkeypatch.setattr(usd, "STAGE_TERRAIN_SIDE", 33)
+    heights = np.add.outer(np.linspace(0.0, 5.0, 301), np.linspace(0.0, 2.0, 257))
+    np.save(tmp_path / "ground.npy", heights)
+    scene = tmp_path / "s.toml"
+    scene.write_text(f'[scene]\nobject = "kite"\n[terrain]\nkind = "file"\nfile = "{tmp_path / "ground.npy"}"\n')
+    out = tmp_path / "s.usda"
+    assert main(["run", str(scene), "--seconds", "0.05", "--quiet", "--usd", str(out)]) == 0
+    stage = Usd.Stage.Open(str(out))  # held: the prim lives as long as its stage
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/World/Terrain"))
+    points = np.array(mesh.GetPointsAttr().Get())
+    assert len(points) == 33 * 33
+    assert points[:, 2].min() == pytest.approx(heights.min(), abs=1e-5)
+    assert points[:, 2].max() == pytest.approx(heights.max(), abs=1e-5)

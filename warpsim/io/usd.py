@@ -2,7 +2,7 @@
 
 Layout: stage metadata ``upAxis = Z``, ``metersPerUnit = 1``, ``timeCodesPerSecond`` = the frame rate
 (one time code per output frame, frame ``k`` at time code ``k``), start/end time codes; ``/World`` is the
-default prim. ``/World/Terrain`` is a static mesh of the heightfield. Each object is an Xform
+default prim. ``/World/Terrain`` is a static mesh of the heightfield (at most ``STAGE_TERRAIN_SIDE`` samples a side). Each object is an Xform
 ``/World/<object>`` holding:
 
 * one Mesh per triangle part (sail, keel, canopy, cloth): topology written once, ``points`` and
@@ -62,6 +62,17 @@ def _prim_name(text: str) -> str:
     return name if name and not name[0].isdigit() else f"_{name}"
 
 
+STAGE_TERRAIN_SIDE = 1025
+"""The most terrain samples a side that a stage draws (the simulation itself uses every one)."""
+
+
+def _samples(count: int, most: int) -> np.ndarray:
+    """Indices of at most ``most`` evenly spread samples of ``count``, the first and the last among them."""
+    if count <= most:
+        return np.arange(count)
+    return np.unique(np.round(np.linspace(0, count - 1, most)).astype(np.int64))
+
+
 class UsdWriter(FrameOutput):
     """Write the frames of a run as an animated USD stage.
 
@@ -100,11 +111,14 @@ class UsdWriter(FrameOutput):
         self.closed = False
 
     def _terrain(self, terrain) -> None:
-        ny, nx = terrain.heights.shape
-        xs = terrain.origin[0] + terrain.cell[0] * np.arange(nx)
-        ys = terrain.origin[1] + terrain.cell[1] * np.arange(ny)
+        # a picture of the ground, sampled to at most STAGE_TERRAIN_SIDE points a side (every edge sample kept): an
+        # 8192^2 terrain grew a stage past 6 GB and ended in a MemoryError
+        rows, cols = (_samples(n, STAGE_TERRAIN_SIDE) for n in terrain.heights.shape)
+        ny, nx = len(rows), len(cols)
+        xs = terrain.origin[0] + terrain.cell[0] * cols
+        ys = terrain.origin[1] + terrain.cell[1] * rows
         gx, gy = np.meshgrid(xs, ys)
-        points = np.stack([gx, gy, terrain.heights], axis=-1).reshape(-1, 3)
+        points = np.stack([gx, gy, terrain.heights[np.ix_(rows, cols)]], axis=-1).reshape(-1, 3)
         i = np.arange(ny - 1)[:, None] * nx + np.arange(nx - 1)[None, :]
         quads = np.stack([i, i + 1, i + nx + 1, i + nx], axis=-1).reshape(-1)
         mesh = UsdGeom.Mesh.Define(self.stage, "/World/Terrain")

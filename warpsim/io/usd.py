@@ -2,8 +2,8 @@
 
 Layout: stage metadata ``upAxis = Z``, ``metersPerUnit = 1``, ``timeCodesPerSecond`` = the frame rate
 (one time code per output frame, frame ``k`` at time code ``k``), start/end time codes; ``/World`` is the
-default prim. ``/World/Terrain`` is a static mesh of the heightfield (at most ``STAGE_TERRAIN_SIDE`` samples a side). Each object is an Xform
-``/World/<object>`` holding:
+default prim. ``/World/Terrain`` is a static mesh of the heightfield (at most ``STAGE_TERRAIN_SIDE`` samples a
+side). Each object is an Xform ``/World/<object>`` holding:
 
 * one Mesh per triangle part (sail, keel, canopy, cloth): topology written once, ``points`` and
   ``extent`` time-sampled at every frame;

@@ -70,3 +70,30 @@ def test_axis_units_of_swept_keys():
     assert key_unit("hang_glider.pilot_mass") == "kg" and key_unit("air.density") == "kg/m^3"
     assert key_unit("kite.tow_point") == "" and key_unit("nosuch.key") == ""
     assert axis_label("wind.speed", "m/s") == "wind.speed [m/s]" and axis_label("glide", "-") == "glide"
+
+
+def test_a_kite_recording_plots_its_line_pull(tmp_path):
+    """The kite's headline figure could not be drawn from its recording (`--metric line_pull`: no such figure): it
+    is measured from the rope's sag, so from the recorded positions, as the run itself measures it."""
+    from warpsim.io.hdf5 import H5Recorder
+    from warpsim.objects.kite import anchor_pull
+    from warpsim.physics.config import GRAVITY
+    from warpsim.run.simulation import Simulation
+    from warpsim.scene.descriptor import defaults, to_toml
+    from warpsim.sweeps.plot import recording_series
+
+    path = tmp_path / "kite.h5"
+    sim = Simulation(defaults("kite"))
+    pulls = []
+    with H5Recorder(path, sim.model, sim.descriptor, sim.checkpoint, to_toml(sim.descriptor), "kite") as recorder:
+
+        def on_frame(frame):
+            recorder.write(frame)
+            pulls.append(anchor_pull(sim.model.objects[0], frame.positions, sim.model.particle_free_mass, GRAVITY))
+
+        sim.run(12.0, on_frame=on_frame)
+    time, series, _, _ = recording_series(path, ["line_pull"])
+    late = time >= 8.0
+    assert np.nanmean(series["line_pull"][late, 0]) == pytest.approx(np.nanmean(np.array(pulls)[late]), rel=1e-6)
+    assert 5.0 < np.nanmean(series["line_pull"][late, 0]) < 30.0
+    assert main(["plot", str(path), str(tmp_path / "pull.png"), "--metric", "line_pull"]) == 0

@@ -226,10 +226,11 @@ RECORDED = {
 
 def recording_metrics(kind: str) -> dict[str, tuple[str, str]]:
     """What ``warpsim plot REC.h5 --metric`` draws for an object of ``kind``: name -> (unit, meaning): its
-    :data:`warpsim.run.figures.FIGURES` but ``line_pull`` (the air forces are not recorded), then :data:`RECORDED`."""
+    :data:`warpsim.run.figures.FIGURES` (all measured from positions, the kite's line pull from its rope's sag),
+    then :data:`RECORDED`."""
     from ..run.figures import FIGURES, figure_names
 
-    out = {name: (FIGURES[name][0], FIGURES[name][2]) for name in figure_names(kind) if name != "line_pull"}
+    out = {name: (FIGURES[name][0], FIGURES[name][2]) for name in figure_names(kind)}
     return {**out, **RECORDED}
 
 

@@ -15,6 +15,17 @@ def test_list(capsys):
     assert main(["list"]) == 0
     out = capsys.readouterr().out
     assert "flag" in out and "built-in objects" in out
+    # each scene's folder once, then its name and its summary: after `pip install .` every line held the full
+    # site-packages path (issue 55)
+    from warpsim.scene.dirs import scene_dirs
+
+    scene_lines = [line for line in out.splitlines() if line.startswith("  ") and ".toml" in line]
+    assert scene_lines == [] and any(f"scenes in {d}" in out for d in scene_dirs())
+    assert any(
+        line.split()[0] == "parachute_ringslot" and "ringslot" in line.split(None, 1)[1]
+        for line in out.splitlines()
+        if line.strip()
+    )
 
 
 def test_info(capsys):
@@ -203,4 +214,3 @@ def test_a_run_off_a_terminal_says_it_is_alive(monkeypatch, capsys):
     err = capsys.readouterr().err
     lines = [line for line in err.splitlines() if "steps/s" in line and "t =" in line]
     assert lines and "\r" not in err
-

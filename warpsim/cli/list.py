@@ -18,8 +18,20 @@ def command(args) -> int:
             print(f"scenes in {directory}:")
             width = max(len(f.stem) for f in files)
             for f in files:
-                print(f"  {f.stem:<{width}}  {f}")
+                print(f"  {f.stem:<{width}}  {_summary(f)}")
     return 0
+
+
+def _summary(path, width: int = 90) -> str:
+    """A scene file's first comment line (its author's summary), cut to ``width`` characters; empty without one.
+    The folder is said once above the names (a wheel's scenes sit deep in site-packages)."""
+    try:
+        with open(path, encoding="utf-8") as file:
+            first = file.readline().strip()
+    except (OSError, UnicodeDecodeError):
+        return ""
+    text = first.lstrip("#").strip() if first.startswith("#") else ""
+    return text if len(text) <= width else text[: width - 3].rstrip() + "..."
 
 
 def add_parser(sub) -> None:

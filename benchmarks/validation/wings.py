@@ -144,3 +144,23 @@ def lifting_line(aspect_ratio: float, terms: int = 60) -> tuple[float, float]:
     a = np.linalg.solve(rows, mu * np.sin(theta))  # per radian of angle of attack
     delta = float((n[1:] * (a[1:] / a[0]) ** 2).sum())
     return math.pi * aspect_ratio * float(a[0]), 1.0 / (1.0 + delta)
+
+
+def tuck(aspect_ratio: float) -> float:
+    """Lift slope [1/rad] of a flat rectangular wing from Tuck's accurate solution of the lifting-surface integral
+    equation, as its large-aspect-ratio expansion (E. O. Tuck, J. Austral. Math. Soc. B 35, 1993, 127-144):
+    ``2 pi - (pi / A)(ln A + 2.5620) + (1.404 / A^2)(ln A + 3.645)``; for aspect ratios of about 4 and more."""
+    a = float(aspect_ratio)
+    return 2.0 * math.pi - math.pi / a * (math.log(a) + 2.5620) + 1.404 / a**2 * (math.log(a) + 3.645)
+
+
+def lifting_line_roll(aspect_ratio: float, terms: int = 60) -> float:
+    """Roll damping ``C_l_p`` (per unit ``p b / 2V``) of a flat rectangular wing by Prandtl's lifting line: the
+    antisymmetric load of a rolling wing in Glauert's series of even sines (Anderson 5.3.2; Phillips, *Mechanics of
+    Flight*, 2004, 6.5), ``C_l = -(pi A / 4) A_2``."""
+    theta = np.arange(1, terms + 1) * (0.5 * math.pi / (terms + 1))  # one half-span, the root (pi/2) left out
+    n = 2 * np.arange(1, terms + 1)
+    mu = 2.0 * math.pi / (4.0 * aspect_ratio)
+    rows = np.sin(np.outer(theta, n)) * (mu * n[None, :] + np.sin(theta)[:, None])
+    a = np.linalg.solve(rows, mu * np.sin(theta) * np.cos(theta))  # local angle of attack (p b / 2V) cos(theta)
+    return -0.25 * math.pi * aspect_ratio * abs(float(a[0]))  # the moment opposes the roll: negative

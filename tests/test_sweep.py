@@ -600,6 +600,12 @@ SPOILS = {
     "axis of the wrong type": lambda d, rows: [d, json.dumps({**rows[0], "wind.speed": {"a": 1}})],
     "metric missing": lambda d, rows: [d, json.dumps({k: v for k, v in rows[0].items() if k != "altitude_mean"})],
     "row not a dict": lambda d, rows: [d, "[1, 2, 3]"],
+    # issue 55: these passed the check and ended the sweep in a 43-52-line traceback after all its cases ran
+    "window frames NaN": lambda d, rows: [d, json.dumps({**rows[0], "window_frames": float("nan")})],
+    "window frames text": lambda d, rows: [d, json.dumps({**rows[0], "window_frames": "abc"})],
+    "metric text in a number column": lambda d, rows: [d, json.dumps({**rows[0], "altitude_mean": "high"})],
+    "blew_up text": lambda d, rows: [d, json.dumps({**rows[0], "blew_up": "maybe"})],
+    "axis value NaN": lambda d, rows: [d, json.dumps({**rows[0], "wind.speed": float("nan")})],
 }
 
 

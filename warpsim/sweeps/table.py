@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 from pathlib import Path
 
@@ -30,10 +31,26 @@ def _check_plain_file(path: Path, links: bool = False) -> None:
 
 
 def _plain_value(value, depth: int = 0) -> bool:
-    """True for what a swept value may be in a row: a number, a boolean, text, or a short list of them."""
-    if isinstance(value, (bool, int, float, str)):
+    """True for what a swept value may be in a row: a finite number, a boolean, text, or a short list of them."""
+    if isinstance(value, float):
+        return math.isfinite(value)
+    if isinstance(value, (bool, int, str)):
         return True
     return isinstance(value, list) and depth < 2 and len(value) <= 16 and all(_plain_value(v, depth + 1) for v in value)
+
+
+_METRIC_TYPES = {"window_frames": (int,), "blew_up": (bool,), "blowup_reason": (str,)}
+"""The metrics that are not a number (or None, NaN): what each row must hold in them, so the table can be written."""
+
+
+def _metric_value(name: str, value) -> bool:
+    """True when ``value`` fits metric ``name``'s column (an int that is not a bool, a bool, text, or a number)."""
+    types = _METRIC_TYPES.get(name)
+    if types is None:  # a measured figure: a number, None or NaN
+        return value is None or (isinstance(value, (int, float)) and not isinstance(value, bool))
+    if types == (int,):
+        return isinstance(value, int) and not isinstance(value, bool)
+    return isinstance(value, types)
 
 
 def _check_row(row, axes: list[str], metrics: tuple[str, ...], source: Path, number: int) -> None:
@@ -46,9 +63,9 @@ def _check_row(row, axes: list[str], metrics: tuple[str, ...], source: Path, num
         if missing:
             problem = f"lacks {', '.join(missing[:3])}"
         elif not all(_plain_value(row[a]) for a in axes):
-            problem = "has a swept value that is not a number, text or list"
-        elif not all(row[m] is None or isinstance(row[m], (bool, int, float, str)) for m in metrics):
-            problem = "has a metric that is not a number or text"
+            problem = "has a swept value that is not a finite number, text or list"
+        elif not all(_metric_value(m, row[m]) for m in metrics):
+            problem = "has a metric that is not of its column's type"
     if problem:
         raise SweepError(
             f"{source}: row {number + 1} {problem}; the file is not this sweep's or is spoiled: choose another "

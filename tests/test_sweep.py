@@ -918,3 +918,32 @@ def test_a_fifo_at_the_dask_log_is_one_line_not_a_hang(tmp_path, monkeypatch, ca
     err = capsys.readouterr().err
     assert "dask.log" in err and "not a regular file" in err and err.count("\n") == 1
 
+
+
+def test_a_cluster_without_workers_is_given_up_after_its_grace(monkeypatch):
+    """Killing the local cluster's workers again and again left no worker, and the sweep waited silently for ever:
+    a cluster that has had no worker for NO_WORKER_GRACE seconds stops the sweep (its finished rows kept, one line
+    naming the cause); a worker back in time resets the watch."""
+    from warpsim.sweeps import cluster
+
+    monkeypatch.setattr(cluster, "NO_WORKER_GRACE", 0.2)
+    monkeypatch.setattr(cluster, "WATCH_INTERVAL", 0.0)
+
+    class Client:
+        workers: dict = {}
+
+        def nthreads(self):
+            return self.workers
+
+    client, watch = Client(), {}
+    cluster._watch_workers(client, watch)  # none: the watch starts
+    time.sleep(0.1)
+    client.workers = {"tcp://127.0.0.1:1": 1}
+    cluster._watch_workers(client, watch)  # one came back in time
+    client.workers = {}
+    cluster._watch_workers(client, watch)
+    time.sleep(0.1)
+    cluster._watch_workers(client, watch)  # 0.1 s without one since it left: still waiting
+    time.sleep(0.15)
+    with pytest.raises(cluster.NoWorkerError, match="no worker for 0.2 s"):
+        cluster._watch_workers(client, watch)

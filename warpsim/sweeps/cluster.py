@@ -5,6 +5,7 @@ chunks and keeps their rows as they finish. This package's only Dask imports are
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import stat
 import time
@@ -207,6 +208,39 @@ def local_cluster(count: int, log: Path | None = None):
 POLL = 0.02
 """[s] how long a running sweep waits, when no chunk has finished, before it looks again (Ctrl-C wakes it)."""
 
+NO_WORKER_GRACE = 60.0
+"""[s] how long a sweep waits with no worker in its cluster (killed again and again, out of memory) before it
+stops: a nanny restarts a killed worker within seconds, so a minute without one is a cluster that will not come
+back."""
+
+WATCH_INTERVAL = 1.0
+"""[s] between two looks at the cluster's workers."""
+
+
+class NoWorkerError(Exception):
+    """The cluster had no worker for :data:`NO_WORKER_GRACE` seconds."""
+
+
+def _watch_workers(client, state: dict) -> None:
+    """Raise :class:`NoWorkerError` when ``client``'s cluster has had no worker for :data:`NO_WORKER_GRACE` seconds
+    (looked at every :data:`WATCH_INTERVAL`; ``state`` keeps the times between calls)."""
+    now = time.monotonic()
+    if now - state.get("looked", -math.inf) < WATCH_INTERVAL:
+        return
+    state["looked"] = now
+    try:
+        workers = len(client.nthreads())
+    except Exception:  # noqa: BLE001 - a scheduler that does not answer has no worker for us either
+        workers = 0
+    if workers:
+        state.pop("since", None)
+        return
+    since = state.setdefault("since", now)
+    if now - since >= NO_WORKER_GRACE:
+        raise NoWorkerError(
+            f"the cluster has had no worker for {NO_WORKER_GRACE:g} s (its workers died: killed, or out of memory)"
+        )
+
 
 def run_tasks(client, tasks: list[ChunkTask], results: Results, total: int, started: float, on_progress) -> None:
     import uuid
@@ -219,6 +253,7 @@ def run_tasks(client, tasks: list[ChunkTask], results: Results, total: int, star
         for task in tasks
     ]
     finished, done = as_completed(futures), 0
+    watch: dict = {}
     try:
         with _ctrl_c_flag() as stop:
             while not finished.is_empty():
@@ -235,6 +270,10 @@ def run_tasks(client, tasks: list[ChunkTask], results: Results, total: int, star
                 if stop.is_set():
                     raise KeyboardInterrupt
                 if not batch:
+                    try:
+                        _watch_workers(client, watch)
+                    except NoWorkerError as err:
+                        raise TaskFailedError() from err
                     stop.wait(POLL)
     finally:
         client.cancel(futures)

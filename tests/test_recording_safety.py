@@ -779,3 +779,18 @@ def test_a_recording_whose_descriptor_was_changed_is_refused(tmp_path, capsys):
         assert main(argv) == EXIT_USAGE
         err = capsys.readouterr().err
         assert "was changed after its frames were recorded" in err and err.count("\n") == 1, err
+
+
+def test_a_crafted_checkpoint_frame_number_is_one_line(tmp_path, capsys):
+    """A checkpoint's frame number set to 2**62 (its digest recomputed) ended `run --resume` in a 27-line ValueError:
+    a checkpoint past the frames the file holds is one line, exit 2, for every reader."""
+    path = _crafted(tmp_path, "frame.h5")
+    with Recording(path) as r:
+        cp, slot = r.checkpoint(), r._slot
+    with h5py.File(path, "r+") as f:
+        f[f"checkpoint/slot{slot}/frame"][0] = 2**62
+        f[f"checkpoint/slot{slot}/digest"][...] = cp.digest(2**62)
+    for argv in (["run", "--resume", str(path), "--seconds", "0.2", "--quiet"], ["convert", str(path), str(tmp_path / "o.usda")]):
+        assert main(argv) == EXIT_USAGE
+        err = capsys.readouterr().err
+        assert "its checkpoint is of frame" in err and err.count("\n") == 1, err

@@ -100,6 +100,10 @@ class Recording:
         if self._checkpoint is not None and self._checkpoint.q.shape != (n, 3):
             raise RecordingError(f"{path}: the checkpoint holds {self._checkpoint.q.shape[0]} particles, not {n}")
         written = min(f[name].shape[0] for name in _FRAME_DATASETS)
+        if self.checkpoint_frame >= written:  # a checkpoint is saved after its frame is written: a crafted number
+            raise RecordingError(
+                f"{path}: its checkpoint is of frame {self.checkpoint_frame:,}, but it holds {written:,} frames"
+            )
         self.frame_count = min(written, self.checkpoint_frame + 1)
         self._check_stored(n)
         if self.owner and self.frame_count:  # a resume appends: read what it will rewrite now, not half-way through

@@ -790,7 +790,8 @@ def test_a_crafted_checkpoint_frame_number_is_one_line(tmp_path, capsys):
     with h5py.File(path, "r+") as f:
         f[f"checkpoint/slot{slot}/frame"][0] = 2**62
         f[f"checkpoint/slot{slot}/digest"][...] = cp.digest(2**62)
-    for argv in (["run", "--resume", str(path), "--seconds", "0.2", "--quiet"], ["convert", str(path), str(tmp_path / "o.usda")]):
+    resume = ["run", "--resume", str(path), "--seconds", "0.2", "--quiet"]
+    for argv in (resume, ["convert", str(path), str(tmp_path / "o.usda")]):
         assert main(argv) == EXIT_USAGE
         err = capsys.readouterr().err
         assert "its checkpoint is of frame" in err and err.count("\n") == 1, err

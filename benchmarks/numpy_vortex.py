@@ -2,7 +2,9 @@
 
 The same lattice, wake, cut-off core, solve, Kutta-Joukowski edge forces and section polar, written with whole-array
 NumPy operations in float64 and ``np.linalg.solve`` (LAPACK's LU with partial pivoting) instead of the kernels'
-float32 and their own elimination: the two agree to float32 rounding, which the tests check. Uniform wind (no
+float32 and their own elimination: the two agree to float32 rounding, which the tests check. It takes from the model
+only the surfaces as declared (their triangles and trailing edges) and finds their edges, neighbours and far corners
+itself (:func:`edge_table`), so the host topology of :mod:`warpsim.physics.lattice` is checked too. Uniform wind (no
 shear profile) only.
 """
 
@@ -67,6 +69,38 @@ def _bound_of_trailing(x, corners, trailing, core2):
     return v
 
 
+def edge_table(tris: np.ndarray, panel_tri: np.ndarray, surface_start: np.ndarray, panel_trailing: np.ndarray):
+    """The loaded edges of the lifting surfaces, found here from the triangles themselves (not from
+    :mod:`warpsim.physics.lattice`, so that its topology is checked too): ``(panels [E, 2], corner [E], particles
+    [E, 2], opposite [E, 2])`` with panels ``(first, second)`` (second -1 on the boundary, ``TRAILING`` on a trailing
+    edge), the edge's index in its first panel, its particles in that panel's direction and each panel's far corner
+    (-1: none)."""
+    found: dict = {}
+    for s in range(len(surface_start) - 1):
+        for v in range(surface_start[s], surface_start[s + 1]):
+            tri = tris[panel_tri[v]]
+            for e in range(3):
+                a, b, c = int(tri[e]), int(tri[(e + 1) % 3]), int(tri[(e + 2) % 3])
+                found.setdefault((s, min(a, b), max(a, b)), []).append((v, e, a, b, c))
+    panels, corner, particles, opposite = [], [], [], []
+    for held in found.values():
+        v, e, a, b, c = held[0]
+        if len(held) == 2:
+            second, far = held[1][0], held[1][4]
+        else:
+            second, far = (TRAILING if (panel_trailing[v] >> e) & 1 else -1), -1
+        panels.append((v, second))
+        corner.append(e)
+        particles.append((a, b))
+        opposite.append((c, far))
+    return (
+        np.array(panels).reshape(-1, 2),
+        np.array(corner),
+        np.array(particles).reshape(-1, 2),
+        np.array(opposite).reshape(-1, 2),
+    )
+
+
 def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, scale: float = 1.0):
     """The vortex law's forces on ``model`` at positions ``q`` and ``q_prev`` ``[P, 3]`` [m] for steps of ``dt`` [s],
     in a uniform ``wind`` ``[W, 3]`` [m/s] per world: ``(particle_force [P, 3], tri_force {triangle: per-vertex force
@@ -81,7 +115,10 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, sca
     gamma = np.zeros(lat.panel_count)
     stall = np.zeros(lat.panel_count)
     tri_force = {}
-    induced = np.zeros((lat.edge_count, 3))
+    edge_panels, edge_corner, edge_particles, edge_opposite = edge_table(
+        tris, lat.panel_tri, lat.surface_start, lat.panel_trailing
+    )
+    induced = np.zeros((len(edge_corner), 3))
     wake_dir = np.zeros((lat.surface_count, 3))
     for s in range(lat.surface_count):
         v0, v1 = lat.surface_start[s], lat.surface_start[s + 1]
@@ -104,8 +141,8 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, sca
             core2 = CORE_FRACTION**2 * area.sum() / (v1 - v0)
             a = (ring_velocities(point, corners, trailing, d, core2) * n[:, None, :]).sum(-1)
             gamma[v0:v1] = np.linalg.solve(a, -(w * n).sum(1))
-            mine = (lat.edge_panels[:, 0] >= v0) & (lat.edge_panels[:, 0] < v1) & (lat.edge_panels[:, 1] == TRAILING)
-            p, k = lat.edge_panels[mine, 0] - v0, lat.edge_corner[mine]
+            mine = (edge_panels[:, 0] >= v0) & (edge_panels[:, 0] < v1) & (edge_panels[:, 1] == TRAILING)
+            p, k = edge_panels[mine, 0] - v0, edge_corner[mine]
             mid = 0.5 * (corners[p, k] + corners[p, (k + 1) % 3])
             legs = ring_velocities(mid, corners, trailing, d, core2) - ring_velocities(
                 mid, corners, 0 * trailing, d, core2
@@ -126,22 +163,22 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, sca
                     force = force + n[row] * (np.sign(wn) / (0.222 + 0.283 / sin_a) * speed * speed * sigma)
             stall[v0 + row] = sigma
             tri_force[int(t)] = force * (0.5 * rho * area[row] * scale / 3.0)
-    g = gamma[lat.edge_panels[:, 0]].copy()
-    sigma = stall[lat.edge_panels[:, 0]].copy()
-    inner = lat.edge_panels[:, 1] >= 0
-    g[inner] -= gamma[lat.edge_panels[inner, 1]]
-    sigma[inner] = 0.5 * (sigma[inner] + stall[lat.edge_panels[inner, 1]])
-    a, b = lat.edge_particles[:, 0], lat.edge_particles[:, 1]
+    g = gamma[edge_panels[:, 0]].copy()
+    sigma = stall[edge_panels[:, 0]].copy()
+    inner = edge_panels[:, 1] >= 0
+    g[inner] -= gamma[edge_panels[inner, 1]]
+    sigma[inner] = 0.5 * (sigma[inner] + stall[edge_panels[inner, 1]])
+    a, b = edge_particles[:, 0], edge_particles[:, 1]
     moved = (q[a] - q_prev[a]) + (q[b] - q_prev[b])
     velocity = wind[world[a]] - moved / (2.0 * dt)
     edge = q[b] - q[a]
-    shed = lat.edge_panels[:, 1] == TRAILING
+    shed = edge_panels[:, 1] == TRAILING
     velocity[shed], edge[shed] = induced[shed], -edge[shed]  # the wake's downwash on the trailing edges
     edge_force = np.cross(velocity, edge) * (rho * g * scale * (1.0 - sigma))[:, None]
     # each load a quarter of the way to the far corner of the panel downstream (none on the trailing edges)
-    d = wake_dir[lat.panel_surface[lat.edge_panels[:, 0]]]
+    d = wake_dir[lat.panel_surface[edge_panels[:, 0]]]
     mid = 0.5 * (q[a] + q[b])
-    far = lat.edge_opposite
+    far = edge_opposite
     ahead = ((q[far[:, 0]] - mid) * d).sum(1)
     behind = np.where(far[:, 1] >= 0, ((q[np.maximum(far[:, 1], 0)] - mid) * d).sum(1), -np.inf)
     side = np.where(ahead > 0, 1, 0)

@@ -93,6 +93,13 @@ def plate_normal_coefficient(sin_alpha: float) -> float:
 
 
 @wp.func
+def stall_blend(angle: float, stall_angle: float) -> float:
+    """Share (0-1) of a sail's load that the separated flow carries at ``angle`` [rad] of attack against its stall
+    angle [rad]: the ``sail`` law's logistic blend of sharpness :data:`STALL_SHARPNESS` (the vortex law's too)."""
+    return 1.0 / (1.0 + wp.exp(-STALL_SHARPNESS * (angle - stall_angle)))
+
+
+@wp.func
 def sail_force(
     n: wp.vec3, area: float, w_rel: wp.vec3, span: wp.vec3, air_density: float, loading: float, coef: wp.vec4
 ) -> wp.vec3:
@@ -128,7 +135,7 @@ def sail_force(
     separated = wp.vec3(0.0)
     if sin_a > 1.0e-6:
         separated = n * (wp.sign(wn) * plate_normal_coefficient(sin_a) * speed * speed)
-    sigma = 1.0 / (1.0 + wp.exp(-STALL_SHARPNESS * (wp.asin(sin_a) - coef[3])))
+    sigma = stall_blend(wp.asin(sin_a), coef[3])
     force += attached * (1.0 - sigma) + separated * sigma
     return force * (0.5 * air_density * area * (loading + (1.0 - loading) * sin_a))
 

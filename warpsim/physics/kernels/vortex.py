@@ -47,7 +47,7 @@ import numpy as np
 import warp as wp
 
 from .. import lattice
-from .aero import STALL_SHARPNESS, plate_normal_coefficient, wind_at
+from .aero import plate_normal_coefficient, stall_blend, wind_at
 from .collision import HeightfieldData, terrain_height
 
 wp.set_module_options({"enable_backward": False})
@@ -414,7 +414,7 @@ def _polar(
         # the stall: the angle of the local wind to the sail's mean plane, not to this panel's own slope (a
         # cambered sail's aft panels face the wind more steeply than its sections' angle of attack)
         sin_s = wp.min(wp.abs(wp.dot(plane[panel_surface[v]], w)) / speed, 1.0)
-        sigma = 1.0 / (1.0 + wp.exp(-STALL_SHARPNESS * (wp.asin(sin_s) - coef[3])))
+        sigma = stall_blend(wp.asin(sin_s), coef[3])
         wn = wp.dot(n, w) / speed
         sin_a = wp.min(wp.abs(wn), 1.0)
         if sin_a > 1.0e-6:

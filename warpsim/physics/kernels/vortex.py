@@ -542,7 +542,7 @@ class VortexScratch:
     wind at each centroid [m/s]), ``wake [S]`` (wake direction and squared core [m^2]), ``plane [S]`` (each sail's
     area-weighted mean normal), ``matrix`` (each surface's influence matrix, then its LU factors), ``pivot [V]``
     (the factors' row swaps), ``factored [S]`` (1 where the factors hold), ``counter [1]`` (steps since the last
-    factorisation, modulo ``interval``), ``gamma [V]`` (circulations [m^2/s]), ``stall [V]`` (separated-flow blend,
+    factorisation, modulo the steps in ``air.vortex_interval``), ``gamma [V]`` (circulations [m^2/s]), ``stall [V]`` (separated-flow blend,
     0-1), ``induced [E]`` (the wake's downwash at each trailing edge's midpoint [m/s]), ``edge_force [E]`` [N],
     ``edge_side [E]`` (0: the load stays on the edge; 1, 2: its first or second panel is downstream).
     """
@@ -565,7 +565,6 @@ class VortexScratch:
         self.pivot = wp.zeros(v, dtype=wp.int32, device=device)
         self.factored = wp.zeros(s, dtype=wp.int32, device=device)
         self.counter = wp.zeros(1, dtype=wp.int32, device=device)
-        self.interval = 1
 
 
 def vortex_air_force(
@@ -580,7 +579,7 @@ def vortex_air_force(
     if lat.panel_count == 0:
         return
     arrays, dev, rho, scale = model.vortex_arrays, model.device, float(model.air_density), float(air.scale)
-    scratch.interval = max(1, int(round(float(air.vortex_interval) / float(dt))))
+    interval = max(1, int(round(float(air.vortex_interval) / float(dt))))  # steps between factorisations
     shear = (float(wind.shear_exponent), float(wind.reference_height))
     sc = scratch
     wp.launch(
@@ -696,4 +695,4 @@ def vortex_air_force(
         outputs=[particle_air_out],
         device=dev,
     )
-    wp.launch(_tick, dim=1, inputs=[sc.interval], outputs=[sc.counter], device=dev)
+    wp.launch(_tick, dim=1, inputs=[interval], outputs=[sc.counter], device=dev)

@@ -542,9 +542,10 @@ class VortexScratch:
     wind at each centroid [m/s]), ``wake [S]`` (wake direction and squared core [m^2]), ``plane [S]`` (each sail's
     area-weighted mean normal), ``matrix`` (each surface's influence matrix, then its LU factors), ``pivot [V]``
     (the factors' row swaps), ``factored [S]`` (1 where the factors hold), ``counter [1]`` (steps since the last
-    factorisation, modulo the steps in ``air.vortex_interval``), ``gamma [V]`` (circulations [m^2/s]), ``stall [V]`` (separated-flow blend,
-    0-1), ``induced [E]`` (the wake's downwash at each trailing edge's midpoint [m/s]), ``edge_force [E]`` [N],
-    ``edge_side [E]`` (0: the load stays on the edge; 1, 2: its first or second panel is downstream).
+    factorisation, modulo the steps in ``air.vortex_interval``), ``gamma [V]`` (circulations [m^2/s]), ``stall [V]``
+    (separated-flow blend, 0-1), ``induced [E]`` (the wake's downwash at each trailing edge's midpoint [m/s]),
+    ``edge_force [E]`` [N], ``edge_side [E]`` (0: the load stays on the edge; 1, 2: its first or second panel is
+    downstream).
     """
 
     def __init__(self, model):

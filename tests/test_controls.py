@@ -1,12 +1,17 @@
 """Control schedules ([[controls]]), gusts, and how bad control entries are reported."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 from warpsim.cli import main
+from warpsim.physics.config import WindConfig
+from warpsim.physics.kernels.controls import advance_gusts
+from warpsim.physics.model import Gusts
 from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
-from warpsim.scene.controls import ControlError, ControlSchedule, Gusts
+from warpsim.scene.controls import ControlError, ControlSchedule
 from warpsim.scene.descriptor import DescriptorError, load_text
 
 
@@ -71,14 +76,35 @@ def test_pitch_schedule_drives_the_glider():
     np.testing.assert_allclose(rest, control_rest_lengths(rec, 1.0, 0.0), rtol=1e-6)
 
 
-def test_gusts_are_seeded_and_have_the_asked_strength():
-    a, b, c = (Gusts([6.0, 0.0, 0.0], 0.25, 2.0, seed) for seed in (7, 7, 8))
-    wa = np.array([a.advance(0.1) for _ in range(20000)])
-    wb = np.array([b.advance(0.1) for _ in range(20000)])
-    assert np.array_equal(wa, wb) and not np.array_equal(wa[:10], [c.advance(0.1) for _ in range(10)])
-    assert wa[:, 0].mean() == pytest.approx(6.0, abs=0.2)
-    assert wa[:, 0].std() == pytest.approx(0.25 * 6.0, rel=0.15)
-    assert wa[:, 2].std() == pytest.approx(0.5 * 0.25 * 6.0, rel=0.15)
+def _gust_winds(seeds, steps: int, dt: float = 0.05, intensity: float = 0.25, period: float = 2.0) -> np.ndarray:
+    """``[steps, W, 3]`` the winds [m/s] the step's gust process blows in 6 m/s, one world per seed."""
+    import warp as wp
+
+    winds = [
+        WindConfig(velocity=(6.0, 0.0, 0.0), gust_intensity=intensity, gust_period=period, gust_seed=s) for s in seeds
+    ]
+    control = SimpleNamespace(gusts=Gusts.start(winds, "cpu"), wind=wp.zeros(len(seeds), dtype=wp.vec3, device="cpu"))
+    model = SimpleNamespace(device="cpu")
+    out = []
+    for _ in range(steps):
+        advance_gusts(model, control, dt)
+        out.append(control.wind.numpy().copy())
+    return np.array(out)
+
+
+def test_gusts_are_seeded_and_have_the_asked_strength_and_correlation_time():
+    """The per-step process against the Ornstein-Uhlenbeck process it stands for: mean, standard deviation
+    (half vertically) and autocorrelation exp(-lag / period), over 20,000 steps of 0.05 s (500 periods)."""
+    w = _gust_winds([7, 7, 8, 9], 20000)
+    assert np.array_equal(w[:, 0], w[:, 1]) and not np.array_equal(w[:10, 0], w[:10, 2])
+    a = w[:, 0]
+    assert a[:, 0].mean() == pytest.approx(6.0, abs=0.2)
+    assert a[:, 0].std() == pytest.approx(0.25 * 6.0, rel=0.1)
+    assert a[:, 2].std() == pytest.approx(0.5 * 0.25 * 6.0, rel=0.1)
+    u = w - w.mean(axis=0)
+    lag = 40  # 2 s = one period; averaged over the three worlds' six independent horizontal series
+    rho = np.mean(u[lag:] * u[:-lag], axis=0) / u.var(axis=0)
+    assert rho[1:, :2].mean() == pytest.approx(np.exp(-1.0), abs=0.05)
 
 
 def test_gusty_scene_changes_the_wind_each_frame():
@@ -128,17 +154,19 @@ def test_a_control_ramps_instead_of_jolting_the_frame(rate):
 
 
 def test_the_schedule_and_a_resume_ramp_as_the_api_does():
-    """A control scheduled at 5 s moves the arms exactly as the same control set from the API at 5 s; a run
+    """A control scheduled at 5 s moves the arms exactly as the same control set from the API at 5 s (the schedule
+    acts at its own step, inside a frame: 5 s is not a whole number of the scene's 3-step frames); a run
     checkpointed half-way through the ramp and restored goes on bit for bit."""
     base = descriptor.resolve("hang-glider")[0]
     scheduled = descriptor.merge("test", base, {"controls": [{"time": 5.0, "roll": -1.0, "pitch": 0.5}]})
     a, b = Simulation(scheduled), Simulation(base)
-    for _ in range(int(round(5.0 / (a.steps_per_frame * a.dt)))):
-        a.apply_schedule()
+    at = int(round(5.0 / a.dt))
+    assert at % a.steps_per_frame != 0
+    for _ in range(at // a.steps_per_frame + 1):  # frame by frame, past 5 s
         a.step(a.steps_per_frame)
-        b.step(b.steps_per_frame)
-    a.apply_schedule()
+    b.step(at)
     b.set_controls(roll=-1.0, pitch=0.5)
+    b.step(a.steps_taken - at)
     ra, _ = _arm_history(a, 20)
     rb, _ = _arm_history(b, 20)
     assert np.array_equal(ra, rb) and not np.array_equal(ra[0], ra[-1])
@@ -148,3 +176,38 @@ def test_the_schedule_and_a_resume_ramp_as_the_api_does():
     rb, _ = _arm_history(b, 40)
     rc, _ = _arm_history(c, 40)
     assert np.array_equal(rb, rc) and np.array_equal(b.state.positions(), c.state.positions())
+
+
+def _flown(scene: str, fps: int, seconds: float, overrides: dict | None = None, viewer: bool = False) -> np.ndarray:
+    """The positions [m] after ``seconds`` of ``scene`` recorded (or drawn, ``viewer``) at ``fps``."""
+    d = descriptor.merge("test", descriptor.resolve(scene)[0], {"scene": {"fps": fps}, **(overrides or {})})
+    sim = Simulation(d)
+    if viewer:
+        from warpsim.viewer import NullBackend, Viewer
+
+        v = Viewer(sim, NullBackend(), say=lambda line: None)
+        while sim.steps_taken < int(round(seconds / sim.dt)):
+            v.advance()
+    else:
+        sim.run(seconds)
+    return sim.state.positions()
+
+
+GLIDE = [{"time": 0.13, "pitch": 0.0}, {"time": 0.61, "pitch": 1.0, "ramp": True}]
+
+
+@pytest.mark.parametrize(
+    ("scene", "overrides", "other"),
+    [
+        ("scenes/kite_gusty.toml", {}, {"wind": {"gust_seed": 5}}),  # gusts
+        ("scenes/hang_glider_dive.toml", {"controls": GLIDE}, {"controls": GLIDE[:1] + [{**GLIDE[1], "time": 0.6}]}),
+    ],
+)
+def test_a_flight_is_the_same_bit_for_bit_at_any_frame_rate_and_in_the_viewer(scene, overrides, other):
+    """Gusts step with the solver and the schedule acts on the step grid (an entry at 0.13 s and a ramp, neither on
+    a frame boundary of 10, 30 or 60 fps): the recorder's and the viewer's frame rates do not change the flight,
+    while another seed or a ramp 0.01 s shorter does."""
+    flights = [_flown(scene, fps, 0.96, overrides) for fps in (10, 30, 60)]
+    flights.append(_flown(scene, 24, 0.96, overrides, viewer=True))  # frames of 0.04 s
+    assert all(np.array_equal(flights[0], f) for f in flights[1:])
+    assert not np.array_equal(flights[0], _flown(scene, 30, 0.96, other))

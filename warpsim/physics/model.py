@@ -6,6 +6,7 @@ Units are SI throughout: metres, kilograms, seconds; Z is up. Device arrays are 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -314,7 +315,8 @@ class Control:
         nail_target_goal: ``[max(nail_count, 1)]`` float64 vec3d where the controlled nails (the kite's anchor) move
             to, at most ``SolverConfig.nail_rate`` [m/s]; None: controls write ``nail_target`` at once.
         nail_target: ``[max(nail_count, 1)]`` float64 vec3d nail positions [m] (the kite's rope anchor moves).
-        wind: ``[world_count]`` vec3 wind velocity [m/s] at the reference height.
+        wind: ``[world_count]`` vec3 wind velocity [m/s] at the reference height (with gusts, what they blow now).
+        gusts: the worlds' gust processes (:class:`Gusts`), advanced every step; None when no world has gusts.
     """
 
     stick_rest: wp.array
@@ -322,6 +324,7 @@ class Control:
     wind: wp.array
     stick_rest_target: wp.array | None = None
     nail_target_goal: wp.array | None = None
+    gusts: Gusts | None = None
 
     def set_wind(self, wind) -> None:
         """Set the wind [m/s]: one 3-vector for every world, or an array ``[world_count, 3]``."""
@@ -329,3 +332,51 @@ class Control:
         if w.shape == (3,):
             w = np.tile(w, (self.wind.shape[0], 1))
         self.wind.assign(w)
+
+
+@dataclass
+class Gusts:
+    """Every world's gusts, in device arrays the step advances (:func:`warpsim.physics.kernels.controls.advance_gusts`):
+    the wind is ``mean + intensity * |mean| * (g_x, g_y, g_z / 2)``, ``g`` an Ornstein-Uhlenbeck process of unit
+    variance and correlation time ``period``, stepped with the solver's ``dt`` so that the gusts a flight meets do not
+    depend on how often it is drawn or recorded.
+
+    Attributes:
+        mean: ``[W]`` vec3 mean wind [m/s] the gusts blow around (the ``wind`` control sets it).
+        intensity: ``[W]`` float32 gusts' standard deviation as a fraction of the mean speed (0: no gusts there).
+        period: ``[W]`` float32 correlation time [s] (> 0).
+        seed: ``[W]`` int32 seed of each world's random numbers.
+        g: ``[W]`` vec3d the process's current value (dimensionless).
+        step: ``[W]`` int32 steps each process has taken (the counter of its random numbers).
+    """
+
+    mean: wp.array
+    intensity: wp.array
+    period: wp.array
+    seed: wp.array
+    g: wp.array
+    step: wp.array
+
+    @classmethod
+    def start(cls, winds, device) -> Gusts | None:
+        """The gusts of worlds blowing ``winds`` (their :class:`~warpsim.physics.config.WindConfig`), at their
+        stationary start (``g`` drawn from each world's seed); None when no world has gusts."""
+        if not any(w.gust_intensity > 0.0 for w in winds):
+            return None
+        g0 = np.array([np.random.default_rng(w.gust_seed).standard_normal(3) for w in winds])
+
+        def array(values, dtype):
+            return wp.array(np.asarray(values), dtype=dtype, device=device)
+
+        return cls(
+            mean=array([w.velocity for w in winds], wp.vec3),
+            intensity=array([w.gust_intensity for w in winds], wp.float32),
+            period=array([w.gust_period for w in winds], wp.float32),
+            seed=array([w.gust_seed % 2**31 for w in winds], wp.int32),
+            g=array(g0, wp.vec3d),
+            step=array(np.zeros(len(winds)), wp.int32),
+        )
+
+    def view(self, first: int, end: int) -> Gusts:
+        """The gusts of worlds ``first`` to ``end - 1`` (views of the same arrays)."""
+        return Gusts(*(getattr(self, f.name)[first:end] for f in dataclasses.fields(self)))

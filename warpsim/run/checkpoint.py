@@ -15,7 +15,6 @@ import numpy as np
 
 from ..scene.controls import UNIT_CONTROLS, VECTOR_CONTROLS
 
-_MASK64 = (1 << 64) - 1
 DIGEST_BYTES = 32  # sha256
 
 
@@ -38,9 +37,8 @@ class Checkpoint:
         wind: ``[W, 3]`` float32 current wind of each world [m/s].
         gust_active: ``[W]`` uint8, 1 where the world has gusts.
         gust_g: ``[W, 3]`` float64 the gust processes' current values (dimensionless).
-        gust_mean: ``[W, 3]`` float64 the mean wind the gusts blow around [m/s].
-        gust_rng: ``[W, 6]`` uint64 PCG64 states: state (high, low 64 bits), increment (high, low),
-            ``has_uint32``, ``uinteger``.
+        gust_mean: ``[W, 3]`` float32 the mean wind the gusts blow around [m/s].
+        gust_step: ``[W]`` int32 the gust processes' step counts (the counters of their random numbers).
         control_set: ``[C]`` uint8, 1 where the control has been set (is in force).
         control_value: ``[C, 3]`` float64 value in force (scalars in column 0; NaN padding).
         scheduled_set: ``[C]`` uint8, 1 where the schedule has set the control.
@@ -61,7 +59,7 @@ class Checkpoint:
     gust_active: np.ndarray
     gust_g: np.ndarray
     gust_mean: np.ndarray
-    gust_rng: np.ndarray
+    gust_step: np.ndarray
     control_set: np.ndarray
     control_value: np.ndarray
     scheduled_set: np.ndarray
@@ -106,28 +104,6 @@ class Checkpoint:
             raise ValueError(
                 f"checkpoint time {float(self.time[0]):.6g} s is not its {int(self.steps[0])} steps of {dt:g} s"
             )
-
-
-def pack_rng(state: dict) -> np.ndarray:
-    """A PCG64 ``bit_generator.state`` dict as ``[6]`` uint64 (see :attr:`Checkpoint.gust_rng`)."""
-    if state.get("bit_generator") != "PCG64":
-        raise ValueError(f"gusts use {state.get('bit_generator')!r}; checkpoints store PCG64 states")
-    s, inc = int(state["state"]["state"]), int(state["state"]["inc"])
-    return np.array(
-        [s >> 64, s & _MASK64, inc >> 64, inc & _MASK64, int(state["has_uint32"]), int(state["uinteger"])],
-        dtype=np.uint64,
-    )
-
-
-def unpack_rng(packed: np.ndarray) -> dict:
-    """The ``bit_generator.state`` dict of a :func:`pack_rng` array."""
-    v = [int(x) for x in packed]
-    return {
-        "bit_generator": "PCG64",
-        "state": {"state": (v[0] << 64) | v[1], "inc": (v[2] << 64) | v[3]},
-        "has_uint32": v[4],
-        "uinteger": v[5],
-    }
 
 
 def pack_controls(names: tuple[str, ...], values: dict) -> tuple[np.ndarray, np.ndarray]:

@@ -1,4 +1,5 @@
-"""The inputs of a running scene: the controls in force, the descriptor's schedule and every world's gusts.
+"""The inputs of a running scene: the controls in force, the descriptor's schedule and every world's gusts, all on
+the solver's step grid.
 
 :class:`Inputs` turns ``set(pitch=0.5)`` calls (from a script, the schedule or, later, a keyboard) into the
 :class:`~warpsim.physics.model.Control` arrays the kernels read, through each object's ``apply_controls``
@@ -11,9 +12,9 @@ import numpy as np
 
 from ..objects import registry
 from ..physics.config import WindConfig
-from ..physics.model import Control, Model
-from ..scene.controls import ControlSchedule, Gusts, check_value
-from .checkpoint import pack_controls, pack_rng, unpack_controls, unpack_rng
+from ..physics.model import Control, Gusts, Model
+from ..scene.controls import ControlSchedule, check_value
+from .checkpoint import pack_controls, unpack_controls
 
 
 def control_names(model: Model) -> tuple[str, ...]:
@@ -21,30 +22,41 @@ def control_names(model: Model) -> tuple[str, ...]:
     return registry.control_names(record.kind for record in model.objects)
 
 
+SCHEDULE_INTERVAL = 0.02
+"""How often [s] of simulated time a ramped schedule entry moves its controls (between its entries' own times, at
+which a schedule always acts); the object's own ramps (``solver.control_rate``) smooth the steps between."""
+
+
 class Inputs:
     """Controls, schedule and gusts of one scene, written into its ``control`` arrays.
 
+    The schedule acts on the solver's step grid, never on the output frames': an entry takes effect at the first
+    step at or after its time, and a ramp moves every :data:`SCHEDULE_INTERVAL`. The gusts advance with every step
+    (:class:`~warpsim.physics.model.Gusts`). So a flight is the same whatever its frame rate.
+
     Args:
-        model: the scene's model. control: its :class:`~warpsim.physics.model.Control` (written in place).
-        winds: the :class:`~warpsim.physics.config.WindConfig` of every world (their velocity is set now; gusts start
-            where ``gust_intensity > 0``).
+        model: the scene's model. control: its :class:`~warpsim.physics.model.Control` (written in place; its
+            ``gusts`` are started here where some world has ``gust_intensity > 0``).
+        winds: the :class:`~warpsim.physics.config.WindConfig` of every world (their velocity is set now).
         schedule: the descriptor's :class:`~warpsim.scene.controls.ControlSchedule` (may be empty).
+        dt: the solver's step [s] (the grid the schedule acts on).
     """
 
-    def __init__(self, model: Model, control: Control, winds: list[WindConfig], schedule: ControlSchedule):
+    def __init__(self, model: Model, control: Control, winds: list[WindConfig], schedule: ControlSchedule, dt: float):
         self.model = model
         self.control = control
         self.names = control_names(model)
         self.schedule = schedule
-        # per world: the gusts blowing there (None = steady wind)
-        self.gusts: list[Gusts | None] = [
-            Gusts(w.velocity, w.gust_intensity, w.gust_period, w.gust_seed) if w.gust_intensity > 0.0 else None
-            for w in winds
-        ]
+        self.dt = float(dt)
+        control.gusts = Gusts.start(winds, model.device)
         control.set_wind(np.array([w.velocity for w in winds]))
         self.in_force: dict = {}  # every control set so far, by name
         self.scheduled: dict = {}  # the schedule's last values, so that held values are not set again
-        self.version = 0  # counts the changes to the controls, gusts and control arrays (what a save must follow)
+        self.version = 0  # counts the changes to the controls and control arrays (what a save must follow)
+        times = schedule.change_times(SCHEDULE_INTERVAL) if schedule else np.zeros(0)
+        self.change_steps = np.unique(np.ceil(np.asarray(times) / self.dt - 1e-6).astype(np.int64))
+        """The steps at which the schedule changes something (sorted)."""
+        self._changes = set(self.change_steps.tolist())
 
     def set(self, **values) -> None:
         """Set controls (see :meth:`warpsim.run.simulation.Simulation.set_controls`); ``ValueError`` for a control this
@@ -56,9 +68,9 @@ class Inputs:
         self.version += 1
         if "wind" in values:
             self.control.set_wind(values["wind"])
-            for gusts in self.gusts:
-                if gusts is not None:
-                    gusts.mean = np.asarray(values["wind"], dtype=np.float64)
+            if self.control.gusts is not None:  # the mean the gusts blow around
+                mean = np.tile(np.asarray(values["wind"], dtype=np.float32), (self.control.wind.shape[0], 1))
+                self.control.gusts.mean.assign(mean)
         self.in_force.update(values)
         if set(values) <= {"wind"}:
             return
@@ -78,44 +90,42 @@ class Inputs:
         rest.assign(targets["stick_rest"])
         nails.assign(targets["nail_target"])
 
-    def frame_start(self, time: float, interval: float) -> None:
-        """Apply the schedule at ``time`` [s] and advance the gusts by ``interval`` [s] (one frame).
-
-        With gusts, a scheduled ``wind`` sets the mean the gusts blow around. Scheduled controls act on every
-        world.
-        """
-        values = self.schedule.at(time + 1e-9) if self.schedule else {}
-        if any(g is not None for g in self.gusts):
-            if "wind" in values:
-                mean = tuple(float(v) for v in values.pop("wind"))
-                if self.scheduled.get("wind") != mean:
-                    self.set(wind=mean)
-                    self.scheduled["wind"] = mean
-            self.version += 1
-            winds = self.control.wind.numpy().copy()
-            for k, gusts in enumerate(self.gusts):
-                if gusts is not None:
-                    winds[k] = gusts.advance(interval)
-            self.control.set_wind(winds)
+    def apply_schedule(self, step: int) -> None:
+        """At a solver step where the schedule changes something (:meth:`due`), apply it as it stands then (time
+        ``step * dt``): the controls whose scheduled value differs from the last one it set (scheduled controls act
+        on every world). At any other step nothing is done: a ramp moves on its own grid, not at frame starts."""
+        if step not in self._changes:
+            return
+        values = self.schedule.at(step * self.dt + 1e-9)
         changed = {k: v for k, v in values.items() if self.scheduled.get(k) != v}
         if changed:
             self.set(**changed)
             self.scheduled.update(changed)
 
+    def due(self, step: int) -> bool:
+        """Whether the schedule changes something at solver step ``step``."""
+        return step in self._changes
+
+    def next_change(self, step: int) -> int | None:
+        """The first step after ``step`` at which the schedule changes something, or None."""
+        k = int(np.searchsorted(self.change_steps, step, side="right"))
+        return int(self.change_steps[k]) if k < len(self.change_steps) else None
+
     def save(self) -> dict[str, np.ndarray]:
         """The checkpoint fields of the inputs (gusts and controls; see :class:`~warpsim.run.checkpoint.Checkpoint`)."""
-        worlds = len(self.gusts)
+        worlds = self.control.wind.shape[0]
+        gusts = self.control.gusts
         out = {
             "gust_active": np.zeros(worlds, dtype=np.uint8),
             "gust_g": np.zeros((worlds, 3), dtype=np.float64),
-            "gust_mean": np.zeros((worlds, 3), dtype=np.float64),
-            "gust_rng": np.zeros((worlds, 6), dtype=np.uint64),
+            "gust_mean": np.zeros((worlds, 3), dtype=np.float32),
+            "gust_step": np.zeros(worlds, dtype=np.int32),
         }
-        for k, gusts in enumerate(self.gusts):
-            if gusts is not None:
-                out["gust_active"][k] = 1
-                out["gust_g"][k], out["gust_mean"][k] = gusts.g, gusts.mean
-                out["gust_rng"][k] = pack_rng(gusts.rng.bit_generator.state)
+        if gusts is not None:
+            out["gust_active"][:] = gusts.intensity.numpy() > 0.0
+            out["gust_g"][:] = gusts.g.numpy()
+            out["gust_mean"][:] = gusts.mean.numpy()
+            out["gust_step"][:] = gusts.step.numpy()
         out["control_set"], out["control_value"] = pack_controls(self.names, self.in_force)
         out["scheduled_set"], out["scheduled_value"] = pack_controls(self.names, self.scheduled)
         return out
@@ -123,11 +133,11 @@ class Inputs:
     def load(self, checkpoint) -> None:
         """Continue from the inputs saved in ``checkpoint`` (its control arrays are restored by the caller)."""
         self.version += 1
-        for k, gusts in enumerate(self.gusts):
-            if gusts is not None and checkpoint.gust_active[k]:
-                gusts.g = checkpoint.gust_g[k].copy()
-                gusts.mean = checkpoint.gust_mean[k].copy()
-                gusts.rng.bit_generator.state = unpack_rng(checkpoint.gust_rng[k])
+        gusts = self.control.gusts
+        if gusts is not None:
+            gusts.g.assign(checkpoint.gust_g)
+            gusts.mean.assign(checkpoint.gust_mean)
+            gusts.step.assign(checkpoint.gust_step)
         names = checkpoint.control_names
         self.in_force = unpack_controls(names, checkpoint.control_set, checkpoint.control_value)
         self.scheduled = unpack_controls(names, checkpoint.scheduled_set, checkpoint.scheduled_value)

@@ -113,7 +113,7 @@ class Simulation:
             schedule = ControlSchedule(descriptor.get("controls", []), control_names(self.model), where)
         except ControlError as err:
             raise DescriptorError(str(err)) from None
-        self.inputs = Inputs(self.model, self.control, winds, schedule)
+        self.inputs = Inputs(self.model, self.control, winds, schedule, self.dt)
         self.contacts = GroundContacts(self.model)
         self._groups = split_worlds(self, threads, where)
         self.threads = len(self._groups)
@@ -165,13 +165,23 @@ class Simulation:
         return self.inputs.names
 
     def apply_schedule(self) -> None:
-        """Apply the descriptor's ``[[controls]]`` schedule at the current time and advance the gusts one frame."""
+        """Apply the descriptor's ``[[controls]]`` schedule when it changes something at the current step (:meth:`step`
+        does this itself at every such step)."""
         self._release()
-        self.inputs.frame_start(self.state.time, self.steps_per_frame * self.dt)
+        self.inputs.apply_schedule(self.steps_taken)
 
     def step(self, count: int = 1) -> None:
-        """Take ``count`` solver steps of ``dt`` (each group on its own thread)."""
+        """Take ``count`` solver steps of ``dt`` (each group on its own thread), applying the schedule at the steps
+        where it changes something; the gusts advance with every step."""
         self._release()
+        end = self.steps_taken + count
+        while self.steps_taken < end:
+            self.inputs.apply_schedule(self.steps_taken)
+            change = self.inputs.next_change(self.steps_taken)
+            self._solver_steps(end - self.steps_taken if change is None else min(end, change) - self.steps_taken)
+
+    def _solver_steps(self, count: int) -> None:
+        """Take ``count`` solver steps, the inputs as they are."""
         if len(self._groups) == 1:
             for _ in range(count):
                 self.solver.step(self.state, self.control, self.dt)
@@ -244,7 +254,10 @@ class Simulation:
         the slot that is not the last good frame's."""
         self._release()
         slot = self._good.free_slot
-        if count == self.steps_per_frame and self._groups[0].graphs is not None:
+        self.inputs.apply_schedule(self.steps_taken)
+        change = self.inputs.next_change(self.steps_taken)
+        steady = change is None or change >= self.steps_taken + count  # no scheduled change inside the frame
+        if count == self.steps_per_frame and self._groups[0].graphs is not None and steady:
             self._replay(slot)
             for _ in range(count):  # the same sum of dt as the solver keeps step by step
                 self.state.time += self.dt
@@ -260,7 +273,8 @@ class Simulation:
         """Make ``frame``, the last one measured and just checked, the last good frame, with the controls in force
         now."""
         self._good = GoodFrame(frame.index, frame.time, frame.steps, self._good.free_slot)
-        if self._saved_version != self.inputs.version:  # the controls changed since the last good frame
+        # the controls changed since the last good frame (the gusts change with every step)
+        if self._saved_version != self.inputs.version or self.control.gusts is not None:
             self._saved_version = self.inputs.version
             c = self.control
             saved = (c.stick_rest_target, c.nail_target_goal, c.wind)
@@ -305,18 +319,17 @@ class Simulation:
     def advance(self, limit: int | None = None, before: Callable[[int], None] | None = None) -> Frame:
         """Step to the end of the current frame (at most ``limit`` steps) and return that frame, checked.
 
-        At a frame start the schedule and gusts move (:meth:`apply_schedule`), then ``before(index)`` is called
-        with the index of the frame about to be stepped (a keyboard or a recorded flight sets its controls
-        there, through :meth:`set_controls`). A bad frame is not returned: the state goes back to the last good
-        frame (see :meth:`start_frames`, which must have been called once) and :class:`BlowUpError` is raised,
-        its ``summary`` None.
+        The schedule acts at its own steps and the gusts at every step (:meth:`step`), whatever the frames; at a
+        frame start ``before(index)`` is called with the index of the frame about to be stepped (a keyboard or a
+        recorded flight sets its controls there, through :meth:`set_controls`). A bad frame is not returned: the
+        state goes back to the last good frame (see :meth:`start_frames`, which must have been called once) and
+        :class:`BlowUpError` is raised, its ``summary`` None.
         """
         spf = self.steps_per_frame
         into = self.steps_taken % spf
-        if into == 0:  # a frame starts: controls and gusts move
+        if into == 0 and before is not None:  # a frame starts: a keyboard or a recorded flight sets its controls
             self.apply_schedule()
-            if before is not None:
-                before(self.steps_taken // spf + 1)
+            before(self.steps_taken // spf + 1)
         n = spf - into if limit is None else min(spf - into, limit)
         self._step_frame(n)
         frame = self._hand_out(-(-self.steps_taken // spf))
@@ -372,7 +385,8 @@ class Simulation:
         """Run for ``seconds`` of simulated time, calling ``on_frame`` on the initial and every later frame.
 
         Frames lie on a fixed grid: frame ``k`` ends after ``k * steps_per_frame`` steps counted from the
-        start of the scene; controls and gusts change at frame starts (``before``: see :meth:`advance`). A run
+        start of the scene; the schedule and gusts act on the step grid, ``before``'s controls at frame starts (see
+        :meth:`advance`). A run
         that ends between two grid points emits a last, shorter frame with the next index; a run continued
         from there (after :meth:`restore`) first completes that frame and emits it again under the same index,
         so a run cut in two and continued gives the same frames, bit for bit, as one run. When continuing, the

@@ -14,12 +14,11 @@ A descriptor may hold ``[[controls]]`` entries, each a time and any of the objec
 
 Each control keeps its last value until an entry changes it. ``ramp = true`` on an entry makes every
 control it names move linearly from its value at the previous entry naming it, so that it arrives at
-``time``; otherwise the value jumps at ``time``. The runner applies the schedule once per output frame.
+``time``; otherwise the value jumps at ``time``. The runner applies the schedule on the solver's step grid: an
+entry at the first step at or after its time, a ramp every ``warpsim.run.inputs.SCHEDULE_INTERVAL`` (never at
+output frames, so the frame rate does not change a flight).
 
-Gusts (``[wind] gust_intensity > 0``): the wind is ``mean + intensity * |mean| * (g_x, g_y, g_z / 2)``,
-where ``g`` is a seeded 3-D Ornstein-Uhlenbeck process of unit variance and correlation time
-``gust_period`` [s], advanced once per frame (vertical gusts are half as strong, as near the ground);
-the same seed gives the same gusts.
+Gusts (``[wind] gust_intensity > 0``) are stepped with the solver: see :class:`warpsim.physics.model.Gusts`.
 """
 
 from __future__ import annotations
@@ -127,6 +126,16 @@ class ControlSchedule:
     def __bool__(self) -> bool:
         return bool(self.keyframes)
 
+    def change_times(self, interval: float) -> np.ndarray:
+        """The times [s] at which :meth:`at` may change: every entry's time, and every ``interval`` [s] from the
+        start of a ramp to its end (sorted, possibly repeated)."""
+        times = [f.time for f in self.keyframes]
+        for frames in self._by_name.values():
+            for a, b in zip(frames, frames[1:], strict=False):
+                if b.ramp and b.time > a.time:
+                    times.extend(np.arange(a.time, b.time, interval).tolist())
+        return np.sort(np.asarray(times, dtype=np.float64))
+
     def at(self, t: float) -> dict:
         """Control values at time ``t`` [s]; controls no entry has set yet are absent."""
         out = {}
@@ -147,34 +156,3 @@ def _lerp(a, b, s: float):
     if isinstance(a, tuple):
         return tuple(x + (y - x) * s for x, y in zip(a, b, strict=True))
     return a + (b - a) * s
-
-
-class Gusts:
-    """Seeded gusty wind around a mean: ``mean + intensity * |mean| * (g_x, g_y, g_z / 2)``, ``g`` an
-    Ornstein-Uhlenbeck process of unit variance and correlation time ``period`` [s].
-
-    Args:
-        mean: mean wind [m/s], 3 numbers.
-        intensity: gust strength as a fraction of the mean (0 = steady wind).
-        period: correlation time of the gusts [s] (> 0).
-        seed: random seed; the same seed and frame interval give the same wind.
-    """
-
-    def __init__(self, mean, intensity: float, period: float, seed: int):
-        if not period > 0.0:
-            raise ValueError(f"gust period must be positive, got {period}")
-        self.mean = np.asarray(mean, dtype=np.float64)
-        self.intensity = float(intensity)
-        self.period = float(period)
-        self.rng = np.random.default_rng(seed)
-        self.g = self.rng.standard_normal(3)
-
-    def advance(self, interval: float) -> np.ndarray:
-        """Advance the gusts by ``interval`` [s] and return the wind [m/s] now."""
-        decay = math.exp(-interval / self.period)
-        self.g = self.g * decay + math.sqrt(1.0 - decay * decay) * self.rng.standard_normal(3)
-        return self.wind()
-
-    def wind(self) -> np.ndarray:
-        """The current wind [m/s]."""
-        return self.mean + self.intensity * np.linalg.norm(self.mean) * self.g * np.array([1.0, 1.0, 0.5])

@@ -80,7 +80,6 @@ def run_chunk(task: ChunkTask) -> list[dict]:
                 write_frame(recorder, frame)
             if sim.steps_taken >= total or not live.any():
                 break
-            sim.apply_schedule()
             sim.step(min(spf, total - sim.steps_taken))
             index += 1
             frame = sim.frame(index)

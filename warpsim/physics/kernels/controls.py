@@ -65,3 +65,47 @@ def ramp_nail_targets(model, control, nails: wp.array, most: float) -> None:
             [control.nail_target],
             device=model.device,
         )
+
+
+@wp.kernel
+def _advance_gusts(
+    mean: wp.array(dtype=wp.vec3),
+    intensity: wp.array(dtype=wp.float32),
+    period: wp.array(dtype=wp.float32),
+    seed: wp.array(dtype=wp.int32),
+    dt: float,
+    g_out: wp.array(dtype=wp.vec3d),
+    step_out: wp.array(dtype=wp.int32),
+    wind_out: wp.array(dtype=wp.vec3),
+):
+    w = wp.tid()
+    strength = intensity[w]
+    if strength <= 0.0:
+        return
+    decay = wp.exp(-dt / period[w])
+    step = step_out[w]
+    rng = wp.rand_init(seed[w], step)  # counter-based: the same seed and step count draw the same numbers
+    noise = wp.vec3d(wp.float64(wp.randn(rng)), wp.float64(wp.randn(rng)), wp.float64(wp.randn(rng)))
+    g = g_out[w] * wp.float64(decay) + noise * wp.float64(wp.sqrt(1.0 - decay * decay))
+    g_out[w] = g
+    step_out[w] = (step + 1) % 2147483647
+    m = mean[w]
+    gust = wp.vec3(g) * (strength * wp.length(m))
+    wind_out[w] = m + wp.vec3(gust[0], gust[1], 0.5 * gust[2])
+
+
+def advance_gusts(model, control, dt: float) -> None:
+    """Advance every gusty world's gust process by one step of ``dt`` [s] and write its wind into ``control.wind``
+    (``mean + intensity * |mean| * (g_x, g_y, g_z / 2)``, ``g`` an Ornstein-Uhlenbeck process of unit variance and
+    correlation time ``period``, drawn from counter-based random numbers of the world's seed and its gust step
+    count); worlds without gusts keep their wind. Nothing is launched when ``control.gusts`` is None."""
+    gusts = control.gusts
+    if gusts is None:
+        return
+    wp.launch(
+        _advance_gusts,
+        gusts.g.shape[0],
+        [gusts.mean, gusts.intensity, gusts.period, gusts.seed, float(dt)],
+        [gusts.g, gusts.step, control.wind],
+        device=model.device,
+    )

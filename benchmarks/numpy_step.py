@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from warpsim.physics.atmosphere import isa
 from warpsim.physics.kernels.aero import STALL_SHARPNESS, AeroModel
 from warpsim.physics.kernels.collision import CollisionMode
 from warpsim.physics.kernels.constraints import chebyshev_weights
@@ -61,7 +62,7 @@ class NumpyVerlet:
         self.nailed = nail >= 0
         self.nail_of = nail[self.nailed]
         self.gravity = np.array(m.gravity, dtype=F32)
-        self.air_density = F32(m.air_density)
+        self.air_worlds = solver.world_start.numpy()  # where each world's particles start (its air's density)
         self.tris = m.tri_indices.numpy().reshape(-1, 3)[: m.tri_count]
         self.tri_loading = m.tri_loading.numpy()[: m.tri_count]
         self.tri_world = m.particle_world_np[self.tris[:, 0]] if m.tri_count else np.zeros(0, dtype=np.int32)
@@ -113,6 +114,7 @@ class NumpyVerlet:
             self.world_start = np.zeros(1, dtype=np.int32)
             self.world_particles = np.zeros(0, dtype=np.int32)
             self.world_free = np.zeros(0, dtype=np.int32)
+        self.density = self.world_density()
 
     # ------------------------------------------------------------------ pieces
     def _sum_per_particle(self, index: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -173,7 +175,7 @@ class NumpyVerlet:
             self._canopy_force(force, cross, area, velocity, a, b, c)
             return self._sum_per_particle(t.ravel(), np.repeat(force, 3, axis=0))
         if self.air.model == AeroModel.PAPER:
-            mag = self.air_density * wn * np.abs(wn) * area
+            mag = self.density[self.tri_world] * wn * np.abs(wn) * area
         else:
             speed = _length(w)
             sin_alpha = np.abs(wn) / np.where(speed > 0, speed, F32(1.0))
@@ -181,7 +183,8 @@ class NumpyVerlet:
             sa = np.where(live, sin_alpha, F32(1.0))
             c_n = (F32(1.0) / (F32(0.222) + F32(0.283) / sa)) * (self.tri_loading + (F32(1.0) - self.tri_loading) * sa)
             sign = np.where(wn < 0, F32(-1.0), F32(1.0))  # wp.sign: 1 at zero
-            mag = np.where(live, F32(0.5) * self.air_density * speed * speed * area * c_n * sign, F32(0.0))
+            rho = self.density[self.tri_world]
+            mag = np.where(live, F32(0.5) * rho * speed * speed * area * c_n * sign, F32(0.0))
         force = np.where(ok[:, None], n * mag[:, None], F32(0.0)) * (F32(self.air.scale) / F32(3.0))
         self._canopy_force(force, cross, area, velocity, a, b, c)
         return self._sum_per_particle(t.ravel(), np.repeat(force, 3, axis=0))
@@ -214,7 +217,7 @@ class NumpyVerlet:
             row = min(int(x), len(table) - 2)
             frac = min(x - row, 1.0)
             coef = table[row] * (1.0 - frac) + table[row + 1] * frac
-            q = 0.5 * float(self.air_density) * speed * speed
+            q = 0.5 * float(self.density[self.tri_world[ids[0]]]) * speed * speed
             pressure = q * coef[0] * nominal / projected0
             across = w - axis * (w @ axis)
             side = np.zeros(3)
@@ -263,7 +266,8 @@ class NumpyVerlet:
         separated = np.where((sin_a > F32(1e-6))[:, None], separated, F32(0.0))
         sigma = one / (one + np.exp(-F32(STALL_SHARPNESS) * (np.arcsin(sin_a) - stall)))
         force = force + (attached * (one - sigma)[:, None] + separated * sigma[:, None])  # the kernel's +=
-        scale = F32(0.5) * self.air_density * area * (self.tri_loading + (one - self.tri_loading) * sin_a)
+        rho = self.density[self.tri_world]
+        scale = F32(0.5) * rho * area * (self.tri_loading + (one - self.tri_loading) * sin_a)
         return np.where(live[:, None], force * scale[:, None], F32(0.0)).astype(F32)
 
     def body_drag(self) -> np.ndarray:
@@ -281,7 +285,8 @@ class NumpyVerlet:
             w = w * ((h / F32(shear.reference_height)) ** F32(shear.shear_exponent))[:, None]
         w = w - _f32(x - self.q_prev[i]) / self.dt
         speed = _length(w)
-        out[i] = w * (F32(0.5) * self.air_density * speed * self.drag_area * F32(self.air.scale))[:, None]
+        rho = self.density[self.particle_world[i]]
+        out[i] = w * (F32(0.5) * rho * speed * self.drag_area * F32(self.air.scale))[:, None]
         return out
 
     def verlet(self, force: np.ndarray) -> None:
@@ -382,8 +387,24 @@ class NumpyVerlet:
         p[:, 2] = np.maximum(p[:, 2], hb)
         x[below] = p
 
+    def world_density(self) -> np.ndarray:
+        """``[W]`` float32 each world's air density [kg/m^3], as
+        :func:`warpsim.physics.kernels.controls.update_air_density` (the scene's fixed density, or the standard
+        atmosphere's at the mean height of at most about 64 of the world's particles, summed in order in float64)."""
+        air, start = self.air, self.air_worlds
+        if air.density > 0.0:
+            return np.full(len(start) - 1, air.density, dtype=F32)
+        out = np.zeros(len(start) - 1, dtype=F32)
+        for w in range(len(start) - 1):
+            count = int(start[w + 1] - start[w])
+            z = self.q[start[w] : start[w + 1] : max(count // 64, 1), 2]
+            mean = np.cumsum(z)[-1] / len(z) if len(z) else 0.0  # in order, as the kernel sums
+            out[w] = F32(isa(mean + air.elevation, air.temperature_offset)[2])
+        return out
+
     def step(self) -> None:
         """One step of ``dt``: air force, Verlet, constraints (and the momentum kept), terrain (the paper's order)."""
+        self.density = self.world_density()
         self.verlet(self.air_force() + self.body_drag())
         predicted = self.q
         self.project()

@@ -101,15 +101,15 @@ def edge_table(tris: np.ndarray, panel_tri: np.ndarray, surface_start: np.ndarra
     )
 
 
-def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, scale: float = 1.0):
+def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, density, scale: float = 1.0):
     """The vortex law's forces on ``model`` at positions ``q`` and ``q_prev`` ``[P, 3]`` [m] for steps of ``dt`` [s],
-    in a uniform ``wind`` ``[W, 3]`` [m/s] per world: ``(particle_force [P, 3], tri_force {triangle: per-vertex force
-    [3]}, gamma [V])``, as the kernels write them into ``particle_air`` and ``tri_force`` [N] and their circulations
-    [m^2/s]."""
+    in a uniform ``wind`` ``[W, 3]`` [m/s] and air of ``density`` ``[W]`` [kg/m^3] per world: ``(particle_force
+    [P, 3], tri_force {triangle: per-vertex force [3]}, gamma [V])``, as the kernels write them into ``particle_air``
+    and ``tri_force`` [N] and their circulations [m^2/s]."""
     lat = model.lattice
     tris = model.tri_indices_np
     sail = model.tri_sail.numpy().astype(np.float64)
-    rho = float(model.air_density)
+    rho_world = np.broadcast_to(np.asarray(density, dtype=np.float64), (model.world_count,))
     wind = np.asarray(wind, dtype=np.float64).reshape(-1, 3)
     world = model.particle_world_np
     gamma = np.zeros(lat.panel_count)
@@ -162,6 +162,7 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, sca
                 if sin_a > 1e-6:
                     force = force + n[row] * (np.sign(wn) / (0.222 + 0.283 / sin_a) * speed * speed * sigma)
             stall[v0 + row] = sigma
+            rho = rho_world[world[tris[int(t)][0]]]
             tri_force[int(t)] = force * (0.5 * rho * area[row] * scale / 3.0)
     g = gamma[edge_panels[:, 0]].copy()
     sigma = stall[edge_panels[:, 0]].copy()
@@ -174,7 +175,7 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, sca
     edge = q[b] - q[a]
     shed = edge_panels[:, 1] == TRAILING
     velocity[shed], edge[shed] = induced[shed], -edge[shed]  # the wake's downwash on the trailing edges
-    edge_force = np.cross(velocity, edge) * (rho * g * scale * (1.0 - sigma))[:, None]
+    edge_force = np.cross(velocity, edge) * (rho_world[world[a]] * g * scale * (1.0 - sigma))[:, None]
     # each load a quarter of the way to the far corner of the panel downstream (none on the trailing edges)
     d = wake_dir[lat.panel_surface[edge_panels[:, 0]]]
     mid = 0.5 * (q[a] + q[b])

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import warp as wp
 
+from warpsim.physics.config import AIR_DENSITY
 from warpsim.run.simulation import BlowUpError, Simulation
 from warpsim.scene import descriptor
 
@@ -257,6 +258,7 @@ def case_c_reference(name: str) -> Callable[[Options], dict]:
         if c_reference.compiler() is None:
             return {"case": case, "skipped": "no C compiler (cc, gcc or clang) on the PATH"}
         desc = flag(int(name.split("-")[1])) if name.startswith("flag-") else scene(name)
+        desc = descriptor.merge("c", desc, {"air": {"density": AIR_DENSITY}})  # the C has a fixed density (the paper's)
         row = measure(case, desc, opts)
         sim = Simulation(desc, device="cpu")
         with tempfile.TemporaryDirectory() as tmp:

@@ -9,6 +9,7 @@ import pytest
 
 from benchmarks import c_reference
 from benchmarks.__main__ import main
+from warpsim.physics.config import AIR_DENSITY
 from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
 
@@ -49,7 +50,8 @@ GROUND = {"terrain": {"kind": "procedural", "amplitude": 5.0}, "flag": {"design"
     ],
 )
 def test_c_step_agrees_with_warpsim(program, scene, override, steps):
-    sim = Simulation(descriptor.merge("test", descriptor.resolve(scene)[0], override), device="cpu")
+    fixed = descriptor.merge("test", descriptor.resolve(scene)[0], {"air": {"density": AIR_DENSITY}})  # the C's air
+    sim = Simulation(descriptor.merge("test", fixed, override), device="cpu")
     start = sim.state.positions().copy()
     seconds, q, spent = c_reference.run(program, sim, steps, parts=True)
     sim.step(steps)

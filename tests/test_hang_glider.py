@@ -151,7 +151,7 @@ def test_pilot_moving_alone_does_not_move_or_spin_the_glider(mass_splitting, kee
     momentum projection 1e-10 m.
     """
     d = defaults("hang-glider")
-    d["air"]["density"] = 0.0
+    d["air"]["scale"] = 0.0  # vacuum
     d["terrain"]["kind"] = "flat"
     d["hang_glider"]["speed"] = 0.0
     d["solver"]["mass_splitting"] = mass_splitting

@@ -114,7 +114,8 @@ def test_numpy_reference_agrees_with_the_kernels():
     vortex_air_force(
         m, sim.state, sim.control, sim.dt, sim.solver.air, WindConfig(), VortexScratch(m), tri_force, particle
     )
-    ref_particle, ref_tri, _ = vortex_forces(m, q, q_prev, sim.dt, wind, scale=float(sim.solver.air.scale))
+    density = sim.control.air_density.numpy()
+    ref_particle, ref_tri, _ = vortex_forces(m, q, q_prev, sim.dt, wind, density, scale=float(sim.solver.air.scale))
     scale = np.abs(ref_particle).max()
     assert np.abs(particle.numpy() - ref_particle).max() < 2e-4 * scale
     got = tri_force.numpy()
@@ -211,7 +212,7 @@ def test_factors_are_reused_between_rebuilds_and_rebuilt_on_schedule():
         sim.state.particle_q.assign(q)
         vortex_air_force(m, sim.state, sim.control, dt, air, WindConfig(), scratch, tri_force, particle)
         q_prev = sim.state.particle_q_prev.numpy()
-        ref, _, _ = vortex_forces(m, q, q_prev, dt, wind)
+        ref, _, _ = vortex_forces(m, q, q_prev, dt, wind, sim.control.air_density.numpy())
         errors.append(np.abs(particle.numpy() - ref).max() / np.abs(ref).max())
     assert errors[0] < 2e-4 and errors[3] < 2e-4  # factorised at calls 0 and 3
     assert 1e-3 < errors[1] < 0.2 and 1e-3 < errors[2] < 0.2  # old factors, this step's normal wash

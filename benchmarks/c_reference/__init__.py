@@ -54,6 +54,8 @@ def export(sim: Simulation, path: Path) -> None:
         raise ValueError("the C reference has no wind shear: set wind.shear_exponent = 0")
     if ref.canopies:
         raise ValueError("the C reference has no whole-canopy air force: set parachute.canopy = paper")
+    if ref.air.density <= 0.0:
+        raise ValueError("the C reference has a fixed air density, not the standard atmosphere: set air.density")
     laws = {AeroModel.PAPER: 0, AeroModel.PLATE: 1, AeroModel.SAIL: 2}
     n = ref.n
     nail_of = np.full(n, -1, dtype=np.int32)
@@ -62,7 +64,7 @@ def export(sim: Simulation, path: Path) -> None:
     ints = [n, len(ref.ends), len(ref.tris), len(ref.drag_particles), len(ref.omegas), ny, nx]
     ints += [laws[ref.air.model], 0 if ref.ground.collision == CollisionMode.NORMAL else 1, len(ref.nail_target)]
     ints += [len(ref.world_free)]
-    floats = [ref.dt, ref.air_density, ref.air.scale, ref.relaxation, ref.damping, *ref.gravity, ref.ground.friction]
+    floats = [ref.dt, ref.air.density, ref.air.scale, ref.relaxation, ref.damping, *ref.gravity, ref.ground.friction]
     floats += [*ref.origin[:2], *ref.cell[:2], STALL_SHARPNESS]
     i32, f32, f64 = np.int32, F32, np.float64  # positions and nail targets are double, as in warpsim
     arrays = [

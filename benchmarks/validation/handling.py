@@ -13,6 +13,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from warpsim.physics.atmosphere import scene_density
 from warpsim.physics.model import AIR_DENSITY, GRAVITY
 from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
@@ -433,7 +434,7 @@ def pitch_derivatives(scene: str | dict, solver: dict | None = None, settle: flo
     sim.state.particle_q_prev.assign(q_prev)
     l_alpha, m_alpha = (lift_a - lift) / step, (moment_a - moment) / step
     l_q, m_q = (lift_q - lift) / step, (moment_q - moment) / step
-    dynamic = 0.5 * sim.model.air_density * speed**2 * wing_area(scene)
+    dynamic = 0.5 * float(sim.control.air_density.numpy()[0]) * speed**2 * wing_area(scene)
     return {
         "speed": speed,
         "cl": lift / dynamic,
@@ -461,7 +462,7 @@ def lift_slope_flight(scene: str | dict, solver: dict | None = None, bars=(-0.4,
     ``SM = C_L (m_pilot / m) dx / (a |dalpha|)``, the static margin with every contribution (sail, pilot's drag,
     pendulum) in it. Returns ``slope``, ``static_margin`` and each ``cl``, ``alpha`` [deg] and ``pilot`` [m]."""
     d = scene_descriptor(scene, solver)
-    rho = float(d.get("air", {}).get("density", AIR_DENSITY))
+    rho = scene_density(d["air"], d["hang_glider"]["altitude"])  # where it is launched
     load = wing_loading(d)
     g = d["hang_glider"]
     share = g["pilot_mass"] / (g["glider_mass"] + g["pilot_mass"] + g["control_frame_mass"])
@@ -594,7 +595,7 @@ def dive_band(
     of their phugoid periods to Lanchester's. With ``period_ratio`` (a measured phugoid period
     over Lanchester's) it adds ``lag`` = ``period_ratio^2 - 1`` and ``predicted`` [m], the point mass with that lag."""
     d = scene_descriptor(scene)
-    rho = float(d.get("air", {}).get("density", AIR_DENSITY))
+    rho = scene_density(d["air"], d["hang_glider"]["altitude"])  # where it is launched
     load = wing_loading(d)
     cl = 2.0 * load * GRAVITY / (rho * trim_speed**2)
     out = {

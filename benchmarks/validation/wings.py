@@ -48,7 +48,6 @@ def _finish(builder: ModelBuilder, tris, span: float, area: float, chord: float,
     builder.set_triangle_sail(tris, (0.0, 0.0, 0.0, math.radians(60.0)))  # no profile drag, stall far away
     builder.add_lifting_surface(tris, trailing_edges(points, tri_idx[tris], (1.0, 0.0, 0.0)))
     model = builder.finalize(device)
-    model.air_density = 1.0
     return Wing(model, area, span, chord, np.asarray(ref, dtype=np.float64))
 
 
@@ -95,6 +94,7 @@ def loads(wing: Wing, alpha_deg: float, beta_deg: float = 0.0, p: float = 0.0, r
     state.particle_q.assign(q)
     state.particle_q_prev.assign(q - moving * dt)
     control.wind.assign(np.array([wind], dtype=np.float32))
+    control.air_density.fill_(1.0)
     tri_force = wp.zeros(m.tri_count, dtype=wp.vec3, device=m.device)
     particle = wp.zeros(m.particle_count, dtype=wp.vec3, device=m.device)
     vortex_air_force(

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..physics.atmosphere import scene_density
 from ..physics.config import GRAVITY
 from ..physics.model import Model, ObjectRecord
 from .hang_glider import bank
@@ -175,7 +176,8 @@ def flag_caveat(descriptor: dict) -> str:
         )
     speed = float(np.linalg.norm(descriptor["wind"]["velocity"]))
     spacing = float(flag["width"]) / (resolution - 1)
-    length = (bending / (float(descriptor["air"]["density"]) * max(speed, 1e-3) ** 2)) ** (1.0 / 3.0)
+    density = scene_density(descriptor["air"], 0.0)  # a flag flies near the ground
+    length = (bending / (density * max(speed, 1e-3) ** 2)) ** (1.0 / 3.0)
     if resolution < 17 or spacing > length:
         finest = max(17, int(np.ceil(float(flag["width"]) / length)) + 1)
         alike = ", 8 % with every stick alike" if float(flag["shear_compliance"]) <= 0.0 else ""

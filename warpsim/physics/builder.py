@@ -8,7 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 import warp as wp
 
-from .config import AIR_DENSITY, GRAVITY
+from .config import GRAVITY
 from .kernels.aero import sail_coefficients
 from .kernels.bending import stable_dt
 from .kernels.vortex import lattice_arrays
@@ -37,9 +37,8 @@ class ModelBuilder(MeshShapes):
     All positions are in metres, masses in kilograms. Indices returned by ``add_*`` are global.
     """
 
-    def __init__(self, gravity: float = GRAVITY, air_density: float = AIR_DENSITY):
+    def __init__(self, gravity: float = GRAVITY):
         self.gravity = float(gravity)
-        self.air_density = float(air_density)
         self.particle_q: list[Sequence[float]] = []
         self.particle_qd: list[Sequence[float]] = []
         self.particle_mass: list[float] = []
@@ -426,7 +425,6 @@ class ModelBuilder(MeshShapes):
         m.terrain = self.terrain if self.terrain is not None else Heightfield.flat()
         m.terrain_data = m.terrain.device_data(device)
         m.gravity = wp.vec3(0.0, 0.0, -self.gravity)
-        m.air_density = self.air_density
         m.objects = list(self.objects)
         return m
 

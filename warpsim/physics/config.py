@@ -215,7 +215,13 @@ class AirConfig(Checked):
         model: the air-force law, :class:`~warpsim.physics.kernels.aero.AeroModel` (``paper``, ``plate``, ``sail``,
             ``vortex``).
         scale: multiplier on the air force (1 = the model as written; 0 = no air).
-        density: air density [kg/m^3] (the paper's 1.294217666).
+        density: air density [kg/m^3] fixed for the whole flight (default: the paper's 1.294217666, the air its
+            four designs were built and measured in); 0 = the International Standard Atmosphere's at each world's
+            altitude, every step (:mod:`warpsim.physics.atmosphere`), with ``elevation`` and ``temperature_offset``.
+        elevation: altitude above mean sea level [m] of the scene's z = 0 (the terrain's and the objects' heights
+            add to it).
+        temperature_offset: the day's temperature off the standard atmosphere's at every altitude [K] (ISA+15 is a
+            hot day; the pressure stays the standard's).
         vortex_interval: ``vortex`` law: how often [s] the lattice's influence matrix is rebuilt and factorised
             (0 = every step); the circulations are solved from those factors every step
             (:mod:`warpsim.physics.kernels.vortex`).
@@ -223,7 +229,9 @@ class AirConfig(Checked):
 
     model: AeroModel = choice(AeroModel.PAPER, AeroModel)
     scale: float = number(1.0, NON_NEGATIVE)
-    density: float = number(AIR_DENSITY, NON_NEGATIVE)
+    density: float = number(AIR_DENSITY, Bounds(0.0, 100.0))
+    elevation: float = number(0.0, Bounds(-2000.0, 20000.0))
+    temperature_offset: float = number(0.0, Bounds(-70.0, 50.0))
     vortex_interval: float = number(0.1, Bounds(0.0, 10.0))
 
 

@@ -187,8 +187,6 @@ class Model:
     """Device view of :attr:`terrain` for the kernels."""
     gravity: wp.vec3
     """Gravity vector [m/s^2] (Z up)."""
-    air_density: float
-    """[kg/m^3]."""
     objects: list[ObjectRecord]
     """The :class:`ObjectRecord` of every object built into the model, world by world."""
 
@@ -198,7 +196,6 @@ class Model:
         self.canopy_count = 0
         self.world_count = 1
         self.gravity = wp.vec3(0.0, 0.0, -GRAVITY)
-        self.air_density = AIR_DENSITY
         self.objects = []
 
     # ------------------------------------------------------------------ construction of runtime data
@@ -230,6 +227,7 @@ class Model:
                 device=self.device,
             ),
             wind=wp.zeros(self.world_count, dtype=wp.vec3, device=self.device),
+            air_density=wp.full(self.world_count, AIR_DENSITY, dtype=wp.float32, device=self.device),
         )
         c.nail_target_goal = wp.clone(c.nail_target)
         return c
@@ -317,11 +315,14 @@ class Control:
         nail_target: ``[max(nail_count, 1)]`` float64 vec3d nail positions [m] (the kite's rope anchor moves).
         wind: ``[world_count]`` vec3 wind velocity [m/s] at the reference height (with gusts, what they blow now).
         gusts: the worlds' gust processes (:class:`Gusts`), advanced every step; None when no world has gusts.
+        air_density: ``[world_count]`` float32 density of each world's air [kg/m^3], set by every step
+            (:func:`warpsim.physics.kernels.controls.update_air_density`).
     """
 
     stick_rest: wp.array
     nail_target: wp.array
     wind: wp.array
+    air_density: wp.array
     stick_rest_target: wp.array | None = None
     nail_target_goal: wp.array | None = None
     gusts: Gusts | None = None

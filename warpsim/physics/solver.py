@@ -22,7 +22,7 @@ from .kernels.bending import bending_force
 from .kernels.canopy import canopy_air_force
 from .kernels.collision import collide_heightfield
 from .kernels.constraints import make_projector
-from .kernels.controls import advance_gusts, ramp_nail_targets, ramp_rest_lengths
+from .kernels.controls import advance_gusts, ramp_nail_targets, ramp_rest_lengths, update_air_density
 from .kernels.momentum import MomentumKeeper
 from .kernels.springs import integrate_euler_springs
 from .kernels.verlet import integrate_verlet
@@ -96,7 +96,15 @@ class _Solver:
         nails = np.unique(np.concatenate([np.zeros(0, np.int32), *(r.controlled_nails() for r in model.objects)]))
         self.control_nails = wp.array(nails.astype(np.int32), dtype=wp.int32, device=model.device)
         """``[N]`` the nails the controls move (the kites' anchors; they ramp: :func:`ramp_nail_targets`)."""
+        worlds = np.searchsorted(model.particle_world_np, np.arange(model.world_count + 1)).astype(np.int32)
+        self.world_start = wp.array(worlds, dtype=wp.int32, device=model.device)
+        """``[W + 1]`` where each world's particles start (worlds are built one after another)."""
         self._graphs: dict = {}
+
+    def update_air(self, state: State, control: Control) -> None:
+        """Set every world's air density [kg/m^3] in ``control.air_density`` for ``state`` (each step does this
+        first; see :func:`~warpsim.physics.kernels.controls.update_air_density`)."""
+        update_air_density(self.model, state, self.air, self.world_start, control.air_density)
 
     def _launch(self, state: State, control: Control, dt: float) -> None:
         raise NotImplementedError
@@ -197,6 +205,7 @@ class SolverVerlet(_Solver):
     def _launch(self, state: State, control: Control, dt: float) -> None:
         m, cfg = self.model, self.config
         self._ramp_controls(control, dt)
+        self.update_air(state, control)
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
         canopy_air_force(m, state, control, dt, self.air, self.wind, self.canopy_side, self.canopy_load, self.tri_force)
         self._vortex(state, control, dt)
@@ -225,6 +234,7 @@ class SolverEuler(_Solver):
     def _launch(self, state: State, control: Control, dt: float) -> None:
         m, cfg = self.model, self.config
         self._ramp_controls(control, dt)
+        self.update_air(state, control)
         triangle_air_force(m, state, control, dt, self.air, self.wind, self.tri_force)
         canopy_air_force(m, state, control, dt, self.air, self.wind, self.canopy_side, self.canopy_load, self.tri_force)
         self._vortex(state, control, dt)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 import warp as wp
 
+from ..physics import atmosphere
 from ..physics.config import WindConfig, from_section
 from ..physics.kernels import frame as frame_kernels
 from ..physics.solver import SOLVERS, load_modules, make_solver
@@ -106,6 +107,9 @@ class Simulation:
             raise DescriptorError(f"{where}: [solver]: {err}") from None
         self.state = self.model.state(self.dt)
         self.control = self.model.control()
+        if cfg.air.density == 0.0 and cfg.air.scale > 0.0:  # the standard atmosphere: every object must start in it
+            _check_altitudes(self.model, cfg.air.elevation, where)
+        self.solver.update_air(self.state, self.control)
         self.steps_taken = 0
         self.world_count = self.model.world_count
         winds = [from_section(WindConfig, world_descriptor(descriptor, k)["wind"]) for k in range(self.world_count)]
@@ -446,3 +450,20 @@ class Simulation:
 def _nothing() -> None:
     """A dead weak reference: no frame handed out."""
     return None
+
+
+def _check_altitudes(model, elevation: float, where: str) -> None:
+    """``DescriptorError`` (one line) when an object starts, or the terrain lies, outside the standard atmosphere
+    (``elevation`` [m]: the altitude of z = 0)."""
+    z = np.asarray(model.particle_q0, dtype=np.float64)[:, 2]
+    heights = model.terrain.heights
+    for what, value in (
+        ("the lowest particle", z.min()),
+        ("the highest particle", z.max()),
+        ("the terrain's lowest point", float(np.min(heights))),
+        ("the terrain's highest point", float(np.max(heights))),
+    ):
+        try:
+            atmosphere.check_altitude(float(value) + elevation, what)
+        except ValueError as err:
+            raise DescriptorError(f"{where}: [air] elevation = {elevation:g} m: {err}") from None

@@ -88,7 +88,7 @@ def build_model(
     name, as in the whole batch: a part of a batch that threads step apart from the rest.
     """
     kind = descriptor["scene"]["object"]
-    builder = ModelBuilder(air_density=descriptor["air"]["density"])
+    builder = ModelBuilder()
     if terrain is None:
         terrain = make_terrain(from_section(TerrainConfig, descriptor["terrain"]), where)
     builder.set_terrain(terrain)

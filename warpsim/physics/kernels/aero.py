@@ -180,7 +180,7 @@ def _triangle_air_force(
     particle_q_prev: wp.array(dtype=wp.vec3d),
     wind: wp.array(dtype=wp.vec3),
     dt: float,
-    air_density: float,
+    world_density: wp.array(dtype=wp.float32),
     aero_model: int,
     aero_scale: float,
     shear_exponent: float,
@@ -202,7 +202,9 @@ def _triangle_air_force(
     velocity = wp.vec3(moved) / (3.0 * dt)
     centre = (a + b + c) / wp.float64(3.0)
     height = float(centre[2] - terrain_height(hf, centre[0], centre[1]))
-    w = wind_at(wind[particle_world[idx[0]]], height, shear_reference_height, shear_exponent)
+    world = particle_world[idx[0]]
+    w = wind_at(wind[world], height, shear_reference_height, shear_exponent)
+    air_density = world_density[world]
     n = cross / cross_len
     if aero_model == AeroModel.SAIL or aero_model == AeroModel.VORTEX:
         ends = tri_span[t]
@@ -225,7 +227,7 @@ def _body_drag(
     particle_q_prev: wp.array(dtype=wp.vec3d),
     wind: wp.array(dtype=wp.vec3),
     dt: float,
-    air_density: float,
+    world_density: wp.array(dtype=wp.float32),
     aero_scale: float,
     shear_exponent: float,
     shear_reference_height: float,
@@ -239,7 +241,7 @@ def _body_drag(
         wind[particle_world[i]], float(x[2] - terrain_height(hf, x[0], x[1])), shear_reference_height, shear_exponent
     )
     w = w - wp.vec3(x - particle_q_prev[i]) / dt
-    drag = w * (0.5 * air_density * wp.length(w) * drag_area[k] * aero_scale)
+    drag = w * (0.5 * world_density[particle_world[i]] * wp.length(w) * drag_area[k] * aero_scale)
     if accumulate != 0:
         drag += particle_air_out[i]
     particle_air_out[i] = drag
@@ -286,7 +288,7 @@ def triangle_air_force(model, state, control, dt: float, air, wind, tri_force_ou
             state.particle_q_prev,
             control.wind,
             float(dt),
-            float(model.air_density),
+            control.air_density,
             int(air.model),
             float(air.scale),
             float(wind.shear_exponent),
@@ -318,7 +320,7 @@ def body_drag(model, state, control, dt: float, air, wind, particle_air_out: wp.
             state.particle_q_prev,
             control.wind,
             float(dt),
-            float(model.air_density),
+            control.air_density,
             float(air.scale),
             float(wind.shear_exponent),
             float(wind.reference_height),

@@ -51,7 +51,7 @@ def _canopy_load(
     particle_q_prev: wp.array(dtype=wp.vec3d),
     wind: wp.array(dtype=wp.vec3),
     dt: float,
-    air_density: float,
+    world_density: wp.array(dtype=wp.float32),
     shear_exponent: float,
     shear_reference_height: float,
     canopy_side_out: wp.array(dtype=wp.vec3),
@@ -97,7 +97,7 @@ def _canopy_load(
     row = wp.min(int(x), TABLE_ROWS - 2)
     frac = wp.min(x - float(row), 1.0)
     coef = canopy_table[c * TABLE_ROWS + row] * (1.0 - frac) + canopy_table[c * TABLE_ROWS + row + 1] * frac
-    q = 0.5 * air_density * speed * speed
+    q = 0.5 * world_density[particle_world[first]] * speed * speed
     pressure = q * coef[0] * params[0] / params[1]  # along axis-oriented normals [Pa]
     across = w - axis * wp.dot(w, axis)
     across_len = wp.length(across)
@@ -159,7 +159,7 @@ def canopy_air_force(
             state.particle_q_prev,
             control.wind,
             float(dt),
-            float(model.air_density),
+            control.air_density,
             float(wind.shear_exponent),
             float(wind.reference_height),
         ],

@@ -1,10 +1,13 @@
-"""Controls that ramp: the control sticks' rest lengths and the controlled nails' targets move toward what the
-controls ask by at most a rate per step (``solver.control_rate`` [m/s], ``solver.nail_rate`` [m/s]), so that a
-pilot's weight shift or a walked kite anchor moves as a person does, not in one step."""
+"""The inputs a step moves before its forces: the control sticks' rest lengths and the controlled nails' targets move
+toward what the controls ask by at most a rate per step (``solver.control_rate`` [m/s], ``solver.nail_rate`` [m/s]),
+so that a pilot's weight shift or a walked kite anchor moves as a person does, not in one step; every world's gusts
+advance by the step; every world's air density is taken from the standard atmosphere at its altitude."""
 
 from __future__ import annotations
 
 import warp as wp
+
+from .. import atmosphere
 
 wp.set_module_options({"enable_backward": False})  # forward-only: halves compile time
 
@@ -107,5 +110,78 @@ def advance_gusts(model, control, dt: float) -> None:
         gusts.g.shape[0],
         [gusts.mean, gusts.intensity, gusts.period, gusts.seed, float(dt)],
         [gusts.g, gusts.step, control.wind],
+        device=model.device,
+    )
+
+
+_T0 = wp.constant(atmosphere.SEA_LEVEL_TEMPERATURE)
+_P0 = wp.constant(atmosphere.SEA_LEVEL_PRESSURE)
+_R = wp.constant(atmosphere.GAS_CONSTANT)
+_LAPSE = wp.constant(atmosphere.LAPSE_RATE)
+_H11 = wp.constant(atmosphere.TROPOPAUSE)
+_LOW = wp.constant(atmosphere.LOWEST)
+_HIGH = wp.constant(atmosphere.HIGHEST)
+_G = wp.constant(atmosphere.GRAVITY)
+_EARTH = wp.constant(atmosphere.EARTH_RADIUS)
+
+
+@wp.func
+def isa_density(altitude: float, temperature_offset: float) -> float:
+    """Density [kg/m^3] of the standard atmosphere at ``altitude`` [m above sea level, geometric, clamped to -2 km to
+    20 km] on a day ``temperature_offset`` [K] off the standard (:func:`warpsim.physics.atmosphere.isa`)."""
+    z = wp.clamp(altitude, _LOW, _HIGH)
+    h = _EARTH * z / (_EARTH + z)  # geopotential
+    exponent = _G / (_R * _LAPSE)
+    t11 = _T0 - _LAPSE * _H11
+    p = float(0.0)  # noqa: UP018
+    t = float(0.0)  # noqa: UP018
+    if h < _H11:
+        t = _T0 - _LAPSE * h
+        p = _P0 * wp.pow(t / _T0, exponent)
+    else:
+        t = t11
+        p = _P0 * wp.pow(t11 / _T0, exponent) * wp.exp(-_G * (h - _H11) / (_R * t11))
+    return p / (_R * (t + temperature_offset))
+
+
+@wp.kernel
+def _air_density(
+    world_start: wp.array(dtype=wp.int32),
+    particle_q: wp.array(dtype=wp.vec3d),
+    fixed: float,
+    elevation: float,
+    temperature_offset: float,
+    density_out: wp.array(dtype=wp.float32),
+):
+    w = wp.tid()
+    if fixed > 0.0:
+        density_out[w] = fixed
+        return
+    first = world_start[w]
+    count = world_start[w + 1] - first
+    stride = wp.max(count / 64, 1)  # at most about 64 particles' heights
+    total = wp.float64(0.0)
+    taken = int(0)  # noqa: UP018
+    k = first
+    while k < first + count:
+        total += particle_q[k][2]
+        taken += 1
+        k += stride
+    z = float(0.0)  # noqa: UP018
+    if taken > 0:
+        z = float(total / wp.float64(taken))
+    density_out[w] = isa_density(z + elevation, temperature_offset)
+
+
+def update_air_density(model, state, air, world_start: wp.array, density_out: wp.array) -> None:
+    """Write each world's air density [kg/m^3] into ``density_out`` (``[W]``): ``air.density`` where the scene fixes
+    it, else the standard atmosphere's at the mean altitude of the world's particles (``world_start``, ``[W + 1]``,
+    where each world's particles start), ``air.elevation`` [m] above sea level at z = 0, on a day
+    ``air.temperature_offset`` [K] off the standard (:mod:`warpsim.physics.atmosphere`)."""
+    wp.launch(
+        _air_density,
+        density_out.shape[0],
+        [world_start, state.particle_q, float(air.density), float(air.elevation), float(air.temperature_offset)],
+        [density_out],
         device=model.device,
     )

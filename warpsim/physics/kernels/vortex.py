@@ -396,7 +396,9 @@ def _polar(
     normal: wp.array(dtype=wp.vec4),
     panel_wind: wp.array(dtype=wp.vec3),
     plane: wp.array(dtype=wp.vec3),
-    air_density: float,
+    tri_indices: wp.array(dtype=wp.vec3i),
+    particle_world: wp.array(dtype=wp.int32),
+    world_density: wp.array(dtype=wp.float32),
     aero_scale: float,
     stall_out: wp.array(dtype=wp.float32),
     tri_force_out: wp.array(dtype=wp.vec3),
@@ -420,6 +422,7 @@ def _polar(
         if sin_a > 1.0e-6:
             force += n * (wp.sign(wn) * plate_normal_coefficient(sin_a) * speed * speed * sigma)
     stall_out[v] = sigma
+    air_density = world_density[particle_world[tri_indices[t][0]]]
     tri_force_out[t] = force * (0.5 * air_density * nv[3] * aero_scale / 3.0)
 
 
@@ -436,7 +439,7 @@ def _edge_force(
     particle_q_prev: wp.array(dtype=wp.vec3d),
     wind: wp.array(dtype=wp.vec3),
     dt: float,
-    air_density: float,
+    world_density: wp.array(dtype=wp.float32),
     aero_scale: float,
     shear_exponent: float,
     shear_reference_height: float,
@@ -454,6 +457,7 @@ def _edge_force(
     a = particle_q[ends[0]]
     b = particle_q[ends[1]]
     edge_side_out[e] = 0
+    air_density = world_density[particle_world[ends[0]]]
     if panels[1] == TRAILING:  # the wake's downwash on the circulation it carries away: induced drag (Trefftz)
         edge_force_out[e] = wp.cross(induced[e], wp.vec3(a - b)) * (air_density * g * aero_scale * (1.0 - sigma))
         return
@@ -579,7 +583,7 @@ def vortex_air_force(
     lat = model.lattice
     if lat.panel_count == 0:
         return
-    arrays, dev, rho, scale = model.vortex_arrays, model.device, float(model.air_density), float(air.scale)
+    arrays, dev, rho, scale = model.vortex_arrays, model.device, control.air_density, float(air.scale)
     interval = max(1, int(round(float(air.vortex_interval) / float(dt))))  # steps between factorisations
     shear = (float(wind.shear_exponent), float(wind.reference_height))
     sc = scratch
@@ -660,7 +664,18 @@ def vortex_air_force(
     wp.launch(
         _polar,
         dim=lat.panel_count,
-        inputs=[arrays["panel_tri"], arrays["panel_surface"], model.tri_sail, sc.normal, sc.wind, sc.plane, rho, scale],
+        inputs=[
+            arrays["panel_tri"],
+            arrays["panel_surface"],
+            model.tri_sail,
+            sc.normal,
+            sc.wind,
+            sc.plane,
+            model.tri_indices,
+            model.particle_world,
+            rho,
+            scale,
+        ],
         outputs=[sc.stall, tri_force_out],
         device=dev,
     )

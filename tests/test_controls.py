@@ -193,6 +193,7 @@ def _flown(scene: str, fps: int, seconds: float, overrides: dict | None = None, 
     return sim.state.positions()
 
 
+TURBULENT = {"wind": {"turbulence_intensity": 0.15}}
 GLIDE = [{"time": 0.13, "pitch": 0.0}, {"time": 0.61, "pitch": 1.0, "ramp": True}]
 
 
@@ -200,6 +201,7 @@ GLIDE = [{"time": 0.13, "pitch": 0.0}, {"time": 0.61, "pitch": 1.0, "ramp": True
     ("scene", "overrides", "other"),
     [
         ("scenes/kite_gusty.toml", {}, {"wind": {"gust_seed": 5}}),  # gusts
+        ("kite", TURBULENT, {"wind": {**TURBULENT["wind"], "turbulence_seed": 4}}),  # frozen turbulence
         ("scenes/hang_glider_dive.toml", {"controls": GLIDE}, {"controls": GLIDE[:1] + [{**GLIDE[1], "time": 0.6}]}),
     ],
 )

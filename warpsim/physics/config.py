@@ -246,6 +246,12 @@ class WindConfig(Checked):
         gust_intensity: gusts' standard deviation as a fraction of the mean speed (0 = steady).
         gust_period: gusts' correlation time [s].
         gust_seed: seed of the gusts' random numbers.
+        turbulence_intensity: standard deviation of the frozen turbulence's every component over the wind's speed at
+            the reference height (0 = none; IEC 61400-1's class A is 0.16 at 15 m/s; see
+            :mod:`warpsim.physics.turbulence`).
+        turbulence_length: the turbulence's longitudinal integral length scale [m] (von Kármán's; IEC 61400-1's
+            isotropic model takes 3.5 x 0.7 x the height below 60 m: 24.5 m at 10 m).
+        turbulence_seed: where the world enters the scene's turbulence field.
     """
 
     velocity: tuple[float, float, float] = number((4.0, 0.5, 0.0), Bounds(-200.0, 200.0))
@@ -254,6 +260,9 @@ class WindConfig(Checked):
     gust_intensity: float = number(0.0, NON_NEGATIVE)
     gust_period: float = number(2.0, POSITIVE)
     gust_seed: int = number(0, NON_NEGATIVE)
+    turbulence_intensity: float = number(0.0, Bounds(0.0, 1.0))
+    turbulence_length: float = number(24.5, Bounds(0.5, 2000.0))
+    turbulence_seed: int = number(0, NON_NEGATIVE)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -228,6 +228,7 @@ class Model:
             ),
             wind=wp.zeros(self.world_count, dtype=wp.vec3, device=self.device),
             air_density=wp.full(self.world_count, AIR_DENSITY, dtype=wp.float32, device=self.device),
+            turbulence=Turbulence.off(self.world_count, self.device),
         )
         c.nail_target_goal = wp.clone(c.nail_target)
         return c
@@ -317,12 +318,14 @@ class Control:
         gusts: the worlds' gust processes (:class:`Gusts`), advanced every step; None when no world has gusts.
         air_density: ``[world_count]`` float32 density of each world's air [kg/m^3], set by every step
             (:func:`warpsim.physics.kernels.controls.update_air_density`).
+        turbulence: every world's frozen turbulence (:class:`Turbulence`; :meth:`Turbulence.off` when none).
     """
 
     stick_rest: wp.array
     nail_target: wp.array
     wind: wp.array
     air_density: wp.array
+    turbulence: Turbulence
     stick_rest_target: wp.array | None = None
     nail_target_goal: wp.array | None = None
     gusts: Gusts | None = None
@@ -381,3 +384,71 @@ class Gusts:
     def view(self, first: int, end: int) -> Gusts:
         """The gusts of worlds ``first`` to ``end - 1`` (views of the same arrays)."""
         return Gusts(*(getattr(self, f.name)[first:end] for f in dataclasses.fields(self)))
+
+
+
+@dataclass
+class Turbulence:
+    """Every world's frozen turbulence (:mod:`warpsim.physics.turbulence`): one field shared by the worlds, each world
+    entering it at its own point and carried through it by its wind, stepped with the solver
+    (:func:`warpsim.physics.kernels.controls.advance_turbulence`).
+
+    Attributes:
+        data: the :class:`~warpsim.physics.kernels.aero.TurbulenceData` the air kernels sample (field, shift, scale).
+        intensity: ``[W]`` float32 each world's turbulence intensity (standard deviation over the wind's speed at the
+            reference height; 0: none).
+        field: the host :class:`~warpsim.physics.turbulence.Field` (None when no world has turbulence).
+    """
+
+    data: object
+    intensity: wp.array
+    field: object = None
+
+    @classmethod
+    def off(cls, worlds: int, device) -> Turbulence:
+        """No turbulence in any of ``worlds`` worlds (a 2x2x2 zero field the kernels never read: their scale is 0)."""
+        from .kernels.aero import TurbulenceData
+
+        data = TurbulenceData()
+        data.velocity = wp.zeros((2, 2, 2), dtype=wp.vec3, device=device)
+        data.inv_cell = 1.0
+        data.shift = wp.zeros(worlds, dtype=wp.vec3d, device=device)
+        data.scale = wp.zeros(worlds, dtype=wp.float32, device=device)
+        return cls(data, wp.zeros(worlds, dtype=wp.float32, device=device))
+
+    @classmethod
+    def start(cls, winds, device) -> Turbulence:
+        """The turbulence of worlds blowing ``winds`` (their :class:`~warpsim.physics.config.WindConfig`): the field of
+        their ``turbulence_length`` (``ValueError`` when turbulent worlds differ in it), each world at the entry point
+        of its ``turbulence_seed``; :meth:`off` when no world has turbulence."""
+        from . import turbulence
+        from .kernels.aero import TurbulenceData
+
+        turbulent = [w for w in winds if w.turbulence_intensity > 0.0]
+        if not turbulent:
+            return cls.off(len(winds), device)
+        lengths = sorted({w.turbulence_length for w in turbulent})
+        if len(lengths) > 1:
+            raise ValueError(
+                f"worlds share one turbulence field: give them one wind.turbulence_length (got {lengths}); vary "
+                "wind.turbulence_seed or wind.turbulence_intensity instead"
+            )
+        field = turbulence.field(lengths[0])
+        data = TurbulenceData()
+        data.velocity = wp.array(field.velocity, dtype=wp.vec3, device=device)
+        data.inv_cell = 1.0 / field.cell
+        shift = np.array([turbulence.world_offset(w.turbulence_seed, field) for w in winds])
+        data.shift = wp.array(shift, dtype=wp.vec3d, device=device)
+        intensity = np.array([w.turbulence_intensity for w in winds], dtype=np.float32)
+        speed = np.linalg.norm(np.array([w.velocity for w in winds], dtype=np.float32), axis=1)
+        data.scale = wp.array(intensity * speed, dtype=wp.float32, device=device)
+        return cls(data, wp.array(intensity, dtype=wp.float32, device=device), field)
+
+    def view(self, first: int, end: int) -> Turbulence:
+        """The turbulence of worlds ``first`` to ``end - 1`` (views of the same arrays, the same field)."""
+        from .kernels.aero import TurbulenceData
+
+        data = TurbulenceData()
+        data.velocity, data.inv_cell = self.data.velocity, self.data.inv_cell
+        data.shift, data.scale = self.data.shift[first:end], self.data.scale[first:end]
+        return Turbulence(data, self.intensity[first:end], self.field)

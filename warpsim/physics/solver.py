@@ -22,7 +22,13 @@ from .kernels.bending import bending_force
 from .kernels.canopy import canopy_air_force
 from .kernels.collision import collide_heightfield
 from .kernels.constraints import make_projector
-from .kernels.controls import advance_gusts, ramp_nail_targets, ramp_rest_lengths, update_air_density
+from .kernels.controls import (
+    advance_gusts,
+    advance_turbulence,
+    ramp_nail_targets,
+    ramp_rest_lengths,
+    update_air_density,
+)
 from .kernels.momentum import MomentumKeeper
 from .kernels.springs import integrate_euler_springs
 from .kernels.verlet import integrate_verlet
@@ -138,8 +144,10 @@ class _Solver:
 
     def _ramp_controls(self, control: Control, dt: float) -> None:
         """Move the control sticks' rest lengths toward their targets, at most ``control_rate * dt`` [m], and the
-        controlled nails toward theirs, at most ``nail_rate * dt`` [m]; advance the gusts by ``dt``."""
+        controlled nails toward theirs, at most ``nail_rate * dt`` [m]; advance the gusts and the turbulence by
+        ``dt``."""
         advance_gusts(self.model, control, dt)
+        advance_turbulence(self.model, control, dt)
         ramp_rest_lengths(self.model, control, self.control_sticks, self.config.control_rate * dt)
         ramp_nail_targets(self.model, control, self.control_nails, self.config.nail_rate * dt)
 

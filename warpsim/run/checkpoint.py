@@ -39,6 +39,7 @@ class Checkpoint:
         gust_g: ``[W, 3]`` float64 the gust processes' current values (dimensionless).
         gust_mean: ``[W, 3]`` float32 the mean wind the gusts blow around [m/s].
         gust_step: ``[W]`` int32 the gust processes' step counts (the counters of their random numbers).
+        turbulence_shift: ``[W, 3]`` float64 where each world is in the scene's turbulence field [m] (zeros without).
         control_set: ``[C]`` uint8, 1 where the control has been set (is in force).
         control_value: ``[C, 3]`` float64 value in force (scalars in column 0; NaN padding).
         scheduled_set: ``[C]`` uint8, 1 where the schedule has set the control.
@@ -60,6 +61,7 @@ class Checkpoint:
     gust_g: np.ndarray
     gust_mean: np.ndarray
     gust_step: np.ndarray
+    turbulence_shift: np.ndarray
     control_set: np.ndarray
     control_value: np.ndarray
     scheduled_set: np.ndarray

@@ -67,6 +67,7 @@ def split_worlds(sim, threads: int, where: str) -> list[WorldGroup]:
             nail_target_goal=c.nail_target_goal[n : n + model.nail_count] if model.nail_count else None,
             wind=c.wind[first:end],
             air_density=c.air_density[first:end],
+            turbulence=c.turbulence.view(first, end),
             gusts=None if c.gusts is None else c.gusts.view(first, end),
         )
         if control.nail_target is None:  # a model without nails keeps one unused target

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..objects import registry
 from ..physics.config import WindConfig
-from ..physics.model import Control, Gusts, Model
+from ..physics.model import Control, Gusts, Model, Turbulence
 from ..scene.controls import ControlSchedule, check_value
 from .checkpoint import pack_controls, unpack_controls
 
@@ -49,6 +49,7 @@ class Inputs:
         self.schedule = schedule
         self.dt = float(dt)
         control.gusts = Gusts.start(winds, model.device)
+        control.turbulence = Turbulence.start(winds, model.device)
         control.set_wind(np.array([w.velocity for w in winds]))
         self.in_force: dict = {}  # every control set so far, by name
         self.scheduled: dict = {}  # the schedule's last values, so that held values are not set again
@@ -120,6 +121,7 @@ class Inputs:
             "gust_g": np.zeros((worlds, 3), dtype=np.float64),
             "gust_mean": np.zeros((worlds, 3), dtype=np.float32),
             "gust_step": np.zeros(worlds, dtype=np.int32),
+            "turbulence_shift": self.control.turbulence.data.shift.numpy().astype(np.float64),
         }
         if gusts is not None:
             out["gust_active"][:] = gusts.intensity.numpy() > 0.0
@@ -138,6 +140,7 @@ class Inputs:
             gusts.g.assign(checkpoint.gust_g)
             gusts.mean.assign(checkpoint.gust_mean)
             gusts.step.assign(checkpoint.gust_step)
+        self.control.turbulence.data.shift.assign(checkpoint.turbulence_shift)
         names = checkpoint.control_names
         self.in_force = unpack_controls(names, checkpoint.control_set, checkpoint.control_value)
         self.scheduled = unpack_controls(names, checkpoint.scheduled_set, checkpoint.scheduled_value)

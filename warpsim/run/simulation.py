@@ -117,7 +117,10 @@ class Simulation:
             schedule = ControlSchedule(descriptor.get("controls", []), control_names(self.model), where)
         except ControlError as err:
             raise DescriptorError(str(err)) from None
-        self.inputs = Inputs(self.model, self.control, winds, schedule, self.dt)
+        try:
+            self.inputs = Inputs(self.model, self.control, winds, schedule, self.dt)
+        except ValueError as err:  # worlds that cannot share a turbulence field
+            raise DescriptorError(f"{where}: [wind]: {err}") from None
         self.contacts = GroundContacts(self.model)
         self._groups = split_worlds(self, threads, where)
         self.threads = len(self._groups)

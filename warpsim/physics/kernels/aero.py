@@ -159,6 +159,61 @@ def normal_force(
     return n * (0.5 * air_density * speed * speed * area * c_n * wp.sign(wn))
 
 
+@wp.struct
+class TurbulenceData:
+    """A frozen turbulence field on the device (:mod:`warpsim.physics.turbulence`) and where each world is in it.
+
+    Attributes:
+        velocity: ``[nx, ny, nz]`` vec3 the periodic field (unit standard deviation per component).
+        inv_cell: 1 / the grid spacing [1/m].
+        shift: ``[W]`` vec3d what each world adds to a position to find it in the field [m] (its entry point, less
+            the distance the mean wind has carried the field).
+        scale: ``[W]`` float32 each world's turbulence standard deviation [m/s] (0: none).
+    """
+
+    velocity: wp.array3d(dtype=wp.vec3)
+    inv_cell: float
+    shift: wp.array(dtype=wp.vec3d)
+    scale: wp.array(dtype=wp.float32)
+
+
+@wp.func
+def _wrap(i: int, n: int) -> int:
+    return ((i % n) + n) % n
+
+
+@wp.func
+def turbulence_at(turb: TurbulenceData, world: int, x: wp.vec3d) -> wp.vec3:
+    """The turbulence [m/s] world ``world`` has at ``x`` [m] now (trilinear in the periodic field; zero without)."""
+    s = turb.scale[world]
+    if s == 0.0:
+        return wp.vec3(0.0)
+    p = (x + turb.shift[world]) * wp.float64(turb.inv_cell)
+    fx = wp.floor(p[0])
+    fy = wp.floor(p[1])
+    fz = wp.floor(p[2])
+    tx = float(p[0] - fx)
+    ty = float(p[1] - fy)
+    tz = float(p[2] - fz)
+    nx = turb.velocity.shape[0]
+    ny = turb.velocity.shape[1]
+    nz = turb.velocity.shape[2]
+    i0 = _wrap(int(fx), nx)
+    j0 = _wrap(int(fy), ny)
+    k0 = _wrap(int(fz), nz)
+    i1 = (i0 + 1) % nx
+    j1 = (j0 + 1) % ny
+    k1 = (k0 + 1) % nz
+    v = turb.velocity
+    low = (v[i0, j0, k0] * (1.0 - tx) + v[i1, j0, k0] * tx) * (1.0 - ty) + (
+        v[i0, j1, k0] * (1.0 - tx) + v[i1, j1, k0] * tx
+    ) * ty
+    high = (v[i0, j0, k1] * (1.0 - tx) + v[i1, j0, k1] * tx) * (1.0 - ty) + (
+        v[i0, j1, k1] * (1.0 - tx) + v[i1, j1, k1] * tx
+    ) * ty
+    return (low * (1.0 - tz) + high * tz) * s
+
+
 @wp.func
 def wind_at(wind: wp.vec3, height_above_ground: float, reference_height: float, shear_exponent: float) -> wp.vec3:
     """Wind [m/s] at a height above the terrain [m] under a power-law shear profile."""
@@ -179,6 +234,7 @@ def _triangle_air_force(
     particle_q: wp.array(dtype=wp.vec3d),
     particle_q_prev: wp.array(dtype=wp.vec3d),
     wind: wp.array(dtype=wp.vec3),
+    turb: TurbulenceData,
     dt: float,
     world_density: wp.array(dtype=wp.float32),
     aero_model: int,
@@ -203,7 +259,7 @@ def _triangle_air_force(
     centre = (a + b + c) / wp.float64(3.0)
     height = float(centre[2] - terrain_height(hf, centre[0], centre[1]))
     world = particle_world[idx[0]]
-    w = wind_at(wind[world], height, shear_reference_height, shear_exponent)
+    w = wind_at(wind[world], height, shear_reference_height, shear_exponent) + turbulence_at(turb, world, centre)
     air_density = world_density[world]
     n = cross / cross_len
     if aero_model == AeroModel.SAIL or aero_model == AeroModel.VORTEX:
@@ -226,6 +282,7 @@ def _body_drag(
     particle_q: wp.array(dtype=wp.vec3d),
     particle_q_prev: wp.array(dtype=wp.vec3d),
     wind: wp.array(dtype=wp.vec3),
+    turb: TurbulenceData,
     dt: float,
     world_density: wp.array(dtype=wp.float32),
     aero_scale: float,
@@ -237,9 +294,9 @@ def _body_drag(
     k = wp.tid()
     i = drag_particles[k]
     x = particle_q[i]
-    w = wind_at(
-        wind[particle_world[i]], float(x[2] - terrain_height(hf, x[0], x[1])), shear_reference_height, shear_exponent
-    )
+    world = particle_world[i]
+    w = wind_at(wind[world], float(x[2] - terrain_height(hf, x[0], x[1])), shear_reference_height, shear_exponent)
+    w += turbulence_at(turb, world, x)
     w = w - wp.vec3(x - particle_q_prev[i]) / dt
     drag = w * (0.5 * world_density[particle_world[i]] * wp.length(w) * drag_area[k] * aero_scale)
     if accumulate != 0:
@@ -287,6 +344,7 @@ def triangle_air_force(model, state, control, dt: float, air, wind, tri_force_ou
             state.particle_q,
             state.particle_q_prev,
             control.wind,
+            control.turbulence.data,
             float(dt),
             control.air_density,
             int(air.model),
@@ -319,6 +377,7 @@ def body_drag(model, state, control, dt: float, air, wind, particle_air_out: wp.
             state.particle_q,
             state.particle_q_prev,
             control.wind,
+            control.turbulence.data,
             float(dt),
             control.air_density,
             float(air.scale),

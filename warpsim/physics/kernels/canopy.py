@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import warp as wp
 
-from .aero import wind_at
+from .aero import TurbulenceData, turbulence_at, wind_at
 from .collision import HeightfieldData, terrain_height
 
 wp.set_module_options({"enable_backward": False})
@@ -50,6 +50,7 @@ def _canopy_load(
     particle_q: wp.array(dtype=wp.vec3d),
     particle_q_prev: wp.array(dtype=wp.vec3d),
     wind: wp.array(dtype=wp.vec3),
+    turb: TurbulenceData,
     dt: float,
     world_density: wp.array(dtype=wp.float32),
     shear_exponent: float,
@@ -87,7 +88,9 @@ def _canopy_load(
     velocity = velocity / area
     centre = centre / wp.float64(area)
     height = float(centre[2] - terrain_height(hf, centre[0], centre[1]))
-    w = wind_at(wind[particle_world[first]], height, shear_reference_height, shear_exponent) - velocity
+    world = particle_world[first]
+    w = wind_at(wind[world], height, shear_reference_height, shear_exponent) + turbulence_at(turb, world, centre)
+    w = w - velocity
     speed = wp.length(w)
     if speed == 0.0:
         canopy_load_out[c] = wp.vec4(0.0)
@@ -158,6 +161,7 @@ def canopy_air_force(
             state.particle_q,
             state.particle_q_prev,
             control.wind,
+            control.turbulence.data,
             float(dt),
             control.air_density,
             float(wind.shear_exponent),

@@ -185,3 +185,36 @@ def update_air_density(model, state, air, world_start: wp.array, density_out: wp
         [density_out],
         device=model.device,
     )
+
+
+@wp.kernel
+def _advance_turbulence(
+    wind: wp.array(dtype=wp.vec3),
+    intensity: wp.array(dtype=wp.float32),
+    dt: float,
+    shift_out: wp.array(dtype=wp.vec3d),
+    scale_out: wp.array(dtype=wp.float32),
+):
+    w = wp.tid()
+    strength = intensity[w]
+    if strength <= 0.0:
+        return
+    u = wind[w]
+    shift_out[w] = shift_out[w] - wp.vec3d(u) * wp.float64(dt)
+    scale_out[w] = strength * wp.length(u)
+
+
+def advance_turbulence(model, control, dt: float) -> None:
+    """Carry every turbulent world's frozen field along by its wind at the reference height for one step of ``dt``
+    [s] (Taylor's hypothesis) and set its turbulence's standard deviation to ``intensity * |wind|`` [m/s]; nothing is
+    launched when no world has turbulence."""
+    turbulence = control.turbulence
+    if turbulence.field is None:
+        return
+    wp.launch(
+        _advance_turbulence,
+        turbulence.intensity.shape[0],
+        [control.wind, turbulence.intensity, float(dt)],
+        [turbulence.data.shift, turbulence.data.scale],
+        device=model.device,
+    )

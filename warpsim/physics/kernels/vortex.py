@@ -47,7 +47,7 @@ import numpy as np
 import warp as wp
 
 from .. import lattice
-from .aero import plate_normal_coefficient, stall_blend, wind_at
+from .aero import TurbulenceData, plate_normal_coefficient, stall_blend, turbulence_at, wind_at
 from .collision import HeightfieldData, terrain_height
 
 wp.set_module_options({"enable_backward": False})
@@ -121,6 +121,7 @@ def _panels(
     particle_q: wp.array(dtype=wp.vec3d),
     particle_q_prev: wp.array(dtype=wp.vec3d),
     wind: wp.array(dtype=wp.vec3),
+    turb: TurbulenceData,
     dt: float,
     shear_exponent: float,
     shear_reference_height: float,
@@ -150,7 +151,8 @@ def _panels(
     moved += particle_q[idx[2]] - particle_q_prev[idx[2]]
     x = o + wp.vec3d(centre)
     height = float(x[2] - terrain_height(hf, x[0], x[1]))
-    w = wind_at(wind[particle_world[idx[0]]], height, shear_reference_height, shear_exponent)
+    world = particle_world[idx[0]]
+    w = wind_at(wind[world], height, shear_reference_height, shear_exponent) + turbulence_at(turb, world, x)
     wind_out[v] = w - wp.vec3(moved) / (3.0 * dt)
 
 
@@ -438,6 +440,7 @@ def _edge_force(
     particle_q: wp.array(dtype=wp.vec3d),
     particle_q_prev: wp.array(dtype=wp.vec3d),
     wind: wp.array(dtype=wp.vec3),
+    turb: TurbulenceData,
     dt: float,
     world_density: wp.array(dtype=wp.float32),
     aero_scale: float,
@@ -481,7 +484,8 @@ def _edge_force(
         sigma = 0.5 * (sigma + stall[panels[1]])
     moved = (a - particle_q_prev[ends[0]]) + (b - particle_q_prev[ends[1]])
     height = float(mid[2] - terrain_height(hf, mid[0], mid[1]))
-    w = wind_at(wind[particle_world[ends[0]]], height, shear_reference_height, shear_exponent)
+    world = particle_world[ends[0]]
+    w = wind_at(wind[world], height, shear_reference_height, shear_exponent) + turbulence_at(turb, world, mid)
     velocity = w - wp.vec3(moved) / (2.0 * dt)
     edge_force_out[e] = wp.cross(velocity, wp.vec3(b - a)) * (air_density * g * aero_scale * (1.0 - sigma))
 
@@ -600,6 +604,7 @@ def vortex_air_force(
             state.particle_q,
             state.particle_q_prev,
             control.wind,
+            control.turbulence.data,
             float(dt),
             *shear,
         ],
@@ -693,6 +698,7 @@ def vortex_air_force(
             state.particle_q,
             state.particle_q_prev,
             control.wind,
+            control.turbulence.data,
             float(dt),
             rho,
             scale,

@@ -543,6 +543,32 @@ def case_vortex(name: str, rounds: int = 3) -> Callable[[Options], dict]:
     return run
 
 
+AIR_SETTINGS = {
+    "steady": {},
+    "isa": {"air": {"density": 0.0}},
+    "turbulence": {"wind": {"turbulence_intensity": 0.15}},
+}
+"""The kite's air in the ``air-kite`` case: the paper's constant density and a steady wind (the baseline), the standard
+atmosphere, frozen turbulence."""
+
+
+def case_air(rounds: int = 3) -> Callable[[Options], dict]:
+    def run(opts: Options) -> dict:
+        sims = {name: Simulation(scene("kite", extra), device=opts.device) for name, extra in AIR_SETTINGS.items()}
+        rates = {name: [] for name in sims}
+        for _ in range(rounds):  # alternating rounds: the machine's drift falls on every setting alike
+            for name, sim in sims.items():
+                rates[name].append(
+                    time_steps(sim.step, opts.min_time, lambda s=sim: wp.synchronize_device(s.model.device))
+                )
+        median = {name: float(np.median(r)) for name, r in rates.items()}
+        row = _row("air-kite", sims["turbulence"], median["turbulence"])
+        return _compare(row, "the kite in steady air, same run", median["steady"], isa_steps_per_s=median["isa"])
+
+    run.__doc__ = f"the kite in frozen turbulence (and in the standard atmosphere) against steady air, {rounds} rounds"
+    return run
+
+
 CASES: dict[str, Callable[[Options], dict]] = {
     "flag": case_object("flag"),
     "hang-glider": case_object("hang-glider"),
@@ -559,6 +585,7 @@ CASES: dict[str, Callable[[Options], dict]] = {
     **{f"run-{n}": case_run_vs_raw(n) for n in ("hang-glider", "kite", "parachute")},
     "vortex-glider": case_vortex("hang-glider"),
     "vortex-kite": case_vortex("kite"),
+    "air-kite": case_air(),
     "startup": case_startup,
     "viewer": case_viewer,
     "build-scaling": case_build_scaling,

@@ -1793,7 +1793,20 @@ CASES: dict[str, Callable[[], list[Row]]] = {
     ),
     "convergence-flag": flag_convergence,
     "vortex": lambda: _vortex_rows(),
+    "atmosphere": lambda: _module_rows("atmosphere"),
+    "turbulence": lambda: _module_rows("turbulence"),
 }
+
+
+def _module_rows(name: str) -> list[Row]:
+    """The rows of ``benchmarks.validation.<name>_rows`` (they import this module's Row)."""
+    if name == "atmosphere":
+        from .atmosphere_rows import rows
+
+        return rows()
+    from .turbulence_rows import field_rows
+
+    return field_rows()
 
 
 def _vortex_rows() -> list[Row]:

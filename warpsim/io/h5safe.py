@@ -9,6 +9,9 @@
   attempts. HDF5 retries a metadata block whose checksum fails up to 100 times with growing sleeps when a
   file is opened for SWMR reading (a live writer may be half-way through it); a corrupted file then hangs a
   reader for minutes. With no live writer there is nothing to wait for, so one attempt is made.
+* :func:`probe_metadata`: HDF5 (1.14) can loop for minutes or for ever, holding the interpreter's lock so that no
+  signal reaches Python, on a file whose global heap is damaged (a variable-length string's object with a corrupted
+  size); a forked child reads every attribute first and is killed after a few seconds, and the file is refused.
 * :func:`clear_status_flags`: a writer killed outright (SIGKILL, power loss) leaves the "open for (SWMR)
   write" flags set in the superblock, and plain ``h5py.File(path, "r")`` refuses the file. A resume clears
   them under its lock, as ``h5clear -s`` does.
@@ -23,7 +26,9 @@ import ctypes
 import errno
 import fcntl
 import os
+import signal
 import struct
+import time
 from pathlib import Path
 
 import h5py
@@ -280,3 +285,31 @@ def abandon(file: h5py.File) -> None:
         file.close()
     except Exception:  # noqa: BLE001 - writes now go nowhere; nothing more can fail that matters
         pass
+
+
+PROBE_SECONDS = 10.0
+"""[s] how long :func:`probe_metadata` lets HDF5 read a recording's attributes before it calls the file damaged."""
+
+
+def probe_metadata(path, seconds: float = PROBE_SECONDS) -> None:
+    """Raise ``OSError`` when HDF5 does not finish reading every attribute of ``path`` (opened as a reader with no
+    live writer) within ``seconds``: a forked child reads them and is killed past the deadline. Errors the child
+    meets are left to the caller's own reading (which reports them); without ``os.fork`` nothing is probed."""
+    if not hasattr(os, "fork"):  # pragma: no cover - not POSIX
+        return
+    pid = os.fork()
+    if pid == 0:  # the child: read, then leave without running the parent's clean-up
+        try:
+            with open_for_reading(path, False) as f:
+                dict(f.attrs)
+                f.visititems(lambda _name, item: dict(item.attrs))
+        except BaseException:  # noqa: BLE001, S110 - the parent reads the file again and reports what is wrong
+            pass
+        os._exit(0)
+    deadline = time.monotonic() + seconds
+    while os.waitpid(pid, os.WNOHANG) == (0, 0):
+        if time.monotonic() > deadline:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+            raise OSError(f"HDF5 did not finish reading its attributes in {seconds:g} s: a damaged heap")
+        time.sleep(0.002)

@@ -23,7 +23,15 @@ from .h5format import (
     _reading,
     descriptor_digest,
 )
-from .h5safe import LockedError, WriterLock, clear_status_flags, open_for_reading, status_flags, writer_active
+from .h5safe import (
+    LockedError,
+    WriterLock,
+    clear_status_flags,
+    open_for_reading,
+    probe_metadata,
+    status_flags,
+    writer_active,
+)
 
 
 class Recording:
@@ -53,6 +61,8 @@ class Recording:
         self.owner = owner
         self.live = not owner and writer_active(self.path)
         with _reading(path):
+            if not self.live:  # a damaged heap can hang HDF5 for ever: read the attributes in a child first
+                probe_metadata(self.path)
             try:
                 self.file = open_for_reading(self.path, self.live)
             except OSError:

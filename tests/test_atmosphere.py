@@ -72,3 +72,16 @@ def test_bad_atmosphere_settings_are_one_line(setting, message, capsys):
     code = main(["run", "parachute", "--seconds", "0.1", "--set", "air.density=0", "--set", setting])
     err = capsys.readouterr().err
     assert code == 2 and message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_run_says_the_air_its_figures_depend_on(capsys):
+    """The figures of a run in the standard atmosphere and in turbulence say so (the paper's constant air, the
+    default, adds nothing)."""
+    args = ["run", "parachute", "--seconds", "1", "--set", "air.density=0", "--set", "air.elevation=1500"]
+    assert main([*args, "--set", "wind.turbulence_intensity=0.1"]) == 0
+    out = capsys.readouterr().out
+    assert "air: the standard atmosphere" in out and "1500 m above sea level" in out
+    assert "turbulence: von Karman, intensity 0.1, length scale 24.5 m" in out
+    assert main(["run", "parachute", "--seconds", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "air:" not in out and "turbulence:" not in out

@@ -241,7 +241,25 @@ class FlightFigures:
                 if note and note not in notes:
                     notes.append(note)
         some = "some worlds: " if count > 1 and len(notes) > 1 else ""
-        return [f"{head}: {', '.join(parts)} ({where})"] + [f"  {some}{note}" for note in notes]
+        return [f"{head}: {', '.join(parts)} ({where})"] + [f"  {some}{note}" for note in notes] + self._air_lines()
+
+    def _air_lines(self) -> list[str]:
+        """What the figures depend on beyond the scene's defaults: the standard atmosphere's density at the end, the
+        turbulence."""
+        air, wind, lines = self.sim.settings.air, self.sim.descriptor["wind"], []
+        if air.density == 0.0:
+            rho = self.sim.control.air_density.numpy()
+            text = f"{rho.mean():.4g} kg/m^3" if len(rho) == 1 else f"{rho.min():.4g} to {rho.max():.4g} kg/m^3"
+            lines.append(
+                f"  air: the standard atmosphere, {text} at the end ({air.elevation:g} m above sea level at z = 0, "
+                f"ISA{air.temperature_offset:+g} K)"
+            )
+        if self.sim.control.turbulence.field is not None:
+            lines.append(
+                f"  turbulence: von Karman, intensity {wind['turbulence_intensity']:g}, length scale "
+                f"{wind['turbulence_length']:g} m"
+            )
+        return lines
 
 
 def swing_frequency(times: np.ndarray, values: np.ndarray, hysteresis: float = 0.25, least: float = 0.0) -> float:

@@ -6,6 +6,7 @@ import pytest
 from warpsim.cli import main
 from warpsim.objects.kite import line_state
 from warpsim.run.simulation import Simulation
+from warpsim.scene import descriptor
 from warpsim.scene.descriptor import defaults
 
 
@@ -333,3 +334,18 @@ def test_kite_side_refuses_bad_input_in_one_line(capsys, argv, message):
         kite_side(argv)
     err = capsys.readouterr().err
     assert stop.value.code == 2 and message in err and "Traceback" not in err, err
+
+
+def test_a_rope_lying_on_the_ground_has_no_pull_from_its_sag():
+    """A kite in 1 m/s falls and its rope lies on the ground: the sag's statics, which would give ~1e10 N there, give
+    no pull (NaN), and the run's figures leave it out; a flying kite's rope gives its pull."""
+    from warpsim.objects.kite import anchor_pull
+
+    d = descriptor.merge("test", descriptor.resolve("kite")[0], {"wind": {"velocity": [1.0, 0.0, 0.0]}})
+    sim = Simulation(d)
+    sim.run(10.0)
+    record = sim.model.objects[0]
+    assert np.isnan(anchor_pull(record, sim.state.positions(), sim.model.particle_free_mass))
+    flying = Simulation(descriptor.resolve("kite")[0])
+    flying.run(10.0)
+    assert 5.0 < anchor_pull(record, flying.state.positions(), flying.model.particle_free_mass) < 30.0

@@ -27,8 +27,7 @@ from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
 
 
-def _fly(scene: str, overrides: dict, seconds: float, measure: Callable) -> tuple[dict, float]:
-    d = descriptor.merge("convergence", descriptor.resolve(scene)[0], overrides)
+def _fly(d: dict, seconds: float, measure: Callable) -> tuple[dict, float]:
     sim = Simulation(d)
     started = time.perf_counter()
     figures = measure(sim, seconds)
@@ -106,7 +105,7 @@ def table(name: str) -> list[dict]:
     results, speed = {}, {}
     for label, (step, iterations) in settings.items():
         solver = {"solver": {"dt": step, "iterations": iterations}}
-        results[label], speed[label] = _fly(scene, descriptor.merge("c", overrides, solver), seconds, measure)
+        results[label], speed[label] = _fly(descriptor.merge("c", base, solver), seconds, measure)
         print(f"  {name} {label}: {results[label]} ({speed[label]:.1f}x real time)", flush=True)
     rows = []
     for figure in results["defaults"]:

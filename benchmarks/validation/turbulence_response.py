@@ -115,16 +115,27 @@ def plot(table, out: Path, seconds: float) -> None:
     spread = [table["line_pull_n"] - table["line_pull_p10_n"], table["line_pull_p90_n"] - table["line_pull_n"]]
     a.errorbar(i, table["line_pull_n"], spread, marker="s", capsize=3, label="line pull [N] (median, 10-90 %)")
     a.plot(i, 10 * table["sideways_std_m"], marker="^", label="sideways wander ×10 [m, std]")
-    a.set(xlabel="turbulence intensity σ/U", title=f"kite in 6 m/s, L = 24.5 m ({seconds:g} s each)")
-    a.legend()
+    a.set(
+        xlabel="turbulence intensity σ/U",
+        ylabel="each in the unit its legend gives",
+        title=f"kite in 6 m/s, L = 24.5 m ({seconds:g} s each)",
+    )
+    a.set_ylim(0.0, 80.0)  # room above the points for the legend
+    a.legend(loc="upper center", fontsize="small")
     b.errorbar(i, table["descent_m_s"], table["descent_std_m_s"], marker="o", capsize=3, label="descent [m/s]")
     b2 = b.twinx()
     b2.plot(i, table["swing_max_deg"], "r^-", label="largest swing [°]")
     b2.plot(i, table["swing_rms_deg"], "rv--", label="rms swing [°]")
-    b.set(xlabel="turbulence intensity σ/U", ylabel="descent [m/s]", title="flat round parachute in a 3 m/s breeze")
+    b.set(
+        xlabel="turbulence intensity σ/U",
+        ylabel="descent [m/s]",
+        title="flat round parachute, 3 m/s breeze, no gusts",
+    )
     b2.set_ylabel("swing [°]")
-    b.legend(loc="upper left")
-    b2.legend(loc="upper right")
+    b.set_ylim(4.8, 7.0)  # room below the points for the legends
+    b2.set_ylim(10.0, 34.0)
+    b.legend(loc="lower left", fontsize="small")
+    b2.legend(loc="lower right", fontsize="small")
     fig.savefig(out, dpi=110)
     plt.close(fig)
 

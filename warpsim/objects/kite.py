@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -451,6 +452,10 @@ def anchor_elevation(record: KiteRecord, q: np.ndarray) -> float:
     return float(np.degrees(np.arctan2(d[2], np.linalg.norm(d[:2]))))
 
 
+FLAT_ROPE_SLOPE = math.tan(math.radians(1.0))
+"""A rope whose every segment lies within this slope of the horizontal lies on the ground (:func:`anchor_pull`)."""
+
+
 def anchor_pull(record: KiteRecord, q: np.ndarray, mass: np.ndarray, gravity: float = 9.80665) -> float:
     """The line's pull at the anchor [N], from the rope's sag alone (no air force enters it).
 
@@ -459,8 +464,10 @@ def anchor_pull(record: KiteRecord, q: np.ndarray, mass: np.ndarray, gravity: fl
     sticks from the anchor up (:attr:`KiteRecord.sag_chain`), ``H = g * sum(m_j) / (tan(theta_top) -
     tan(theta_anchor))`` with ``theta`` the segments' elevations, and the pull along the anchor's segment is
     ``H / cos(theta_anchor)`` (the catenary's statics, e.g. Irvine, *Cable Structures*, 1981, ch. 1). ``q``: ``[P,
-    3]`` positions [m]; ``mass``: ``[P]`` particle masses [kg]. NaN when the chain has fewer than three particles
-    or does not sag (slack or whipping rope: its slope does not grow upwards).
+    3]`` positions [m]; ``mass``: ``[P]`` particle masses [kg]. NaN when the chain has fewer than three particles,
+    does not sag (slack or whipping rope: its slope does not grow upwards) or lies flat, within a degree of the
+    horizontal all along (on the ground, where the ground and not its tension holds it up: the statics would give
+    a pull of 1e10 N).
     """
     chain = record.sag_chain
     if len(chain) < 3:
@@ -468,7 +475,7 @@ def anchor_pull(record: KiteRecord, q: np.ndarray, mass: np.ndarray, gravity: fl
     d = np.diff(q[chain], axis=0)
     slope = d[:, 2] / np.linalg.norm(d[:, :2], axis=1)
     rise = slope[-1] - slope[0]
-    if not rise > 0.0:
+    if not rise > 0.0 or np.abs(slope).max() < FLAT_ROPE_SLOPE:
         return float("nan")
     horizontal = gravity * float(mass[chain[1:-1]].sum()) / rise
     return horizontal * float(np.hypot(1.0, slope[0]))

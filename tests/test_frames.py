@@ -98,7 +98,7 @@ def test_blow_up_goes_back_to_the_last_good_frame_and_its_controls():
     """A bad frame is undone whole: positions from the probe's slot of the last good frame, and the controls,
     even when they changed at the bad frame's start."""
     sim = Simulation(defaults("hang-glider"))
-    sim.run(0.3)
+    sim.run(9 * sim.steps_per_frame * sim.dt)  # to a frame's end: the next advance starts a frame
     good = (sim.state.positions(), sim.state.particle_q_prev.numpy().copy(), sim.state.time, sim.steps_taken)
     rest = sim.control.stick_rest.numpy().copy()
     before = dict(sim.controls)

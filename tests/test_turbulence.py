@@ -112,3 +112,21 @@ def test_worlds_of_other_length_scales_are_refused_in_one_line(capsys):
     code = main(["run", "kite", "--seconds", "0.1", "--set", turbulent, "--vary", lengths])
     err = capsys.readouterr().err
     assert code == 2 and "one wind.turbulence_length" in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_blow_up_goes_back_to_the_air_of_the_last_good_frame():
+    """The turbulence moves every step: a bad frame undone puts the worlds back where they were in the field at the
+    last good frame (it went back to where they were at the last change of the controls)."""
+    sim = _kite()
+    sim.run(3 * sim.steps_per_frame * sim.dt)
+    good = sim.control.turbulence.data.shift.numpy().copy()
+    record = sim.model.objects[0]
+
+    def poison(index):
+        q = sim.state.particle_q.numpy()
+        q[record.particles[3]] = np.inf
+        sim.state.particle_q.assign(q)
+
+    with pytest.raises(Exception, match="non-finite"):
+        sim.advance(before=poison)
+    np.testing.assert_array_equal(sim.control.turbulence.data.shift.numpy(), good)

@@ -22,12 +22,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import errno
 import fcntl
 import os
 import signal
 import struct
+import threading
 import time
 from pathlib import Path
 
@@ -293,12 +295,19 @@ PROBE_SECONDS = 10.0
 
 def probe_metadata(path, seconds: float = PROBE_SECONDS) -> None:
     """Raise ``OSError`` when HDF5 does not finish reading every attribute of ``path`` (opened as a reader with no
-    live writer) within ``seconds``: a forked child reads them and is killed past the deadline. Errors the child
-    meets are left to the caller's own reading (which reports them); without ``os.fork`` nothing is probed."""
-    if not hasattr(os, "fork"):  # pragma: no cover - not POSIX
+    live writer) within ``seconds``: a forked child reads them and is killed past the deadline (also when the wait
+    is interrupted). Errors the child meets are left to the caller's own reading (which reports them). Nothing is
+    probed without ``os.fork``, with other threads running (a fork copies only the caller's thread, and one of the
+    others might hold h5py's lock), or when the fork or the wait itself fails."""
+    if not hasattr(os, "fork") or threading.active_count() > 1:
         return
-    pid = os.fork()
+    try:
+        pid = os.fork()
+    except OSError:
+        return
     if pid == 0:  # the child: read, then leave without running the parent's clean-up
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
         try:
             with open_for_reading(path, False) as f:
                 dict(f.attrs)
@@ -307,9 +316,17 @@ def probe_metadata(path, seconds: float = PROBE_SECONDS) -> None:
             pass
         os._exit(0)
     deadline = time.monotonic() + seconds
-    while os.waitpid(pid, os.WNOHANG) == (0, 0):
-        if time.monotonic() > deadline:
-            os.kill(pid, signal.SIGKILL)
-            os.waitpid(pid, 0)
-            raise OSError(f"HDF5 did not finish reading its attributes in {seconds:g} s: a damaged heap")
-        time.sleep(0.002)
+    done = False
+    try:
+        while os.waitpid(pid, os.WNOHANG) == (0, 0):
+            if time.monotonic() > deadline:
+                raise OSError(f"HDF5 did not finish reading its attributes in {seconds:g} s: a damaged heap")
+            time.sleep(0.002)
+        done = True
+    except ChildProcessError:  # someone else reaped it (SIGCHLD ignored): nothing to say about the file
+        done = True
+    finally:
+        if not done:  # past the deadline, or the wait was interrupted: the child must not loop on for ever
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+                os.waitpid(pid, 0)

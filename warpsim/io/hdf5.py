@@ -9,7 +9,7 @@ Layout (``F`` frames, ``N`` particles, ``M`` sticks, ``T`` triangles, ``O`` obje
     /diagnostics/centre          [F, O, 3]  float64  mass centre of each object [m]
     /diagnostics/altitude        [F, O]     float64  height of that centre above the terrain [m]
     /diagnostics/airspeed        [F, O]     float32  |mean velocity - wind| of each object [m/s]
-    /controls                    [F, C, 3]  float64  the controls in force while each frame was stepped, one row
+    /controls                    [F, C, 3]  float64  the controls in force when each frame's stepping began, one row
                                                      per name of ``/checkpoint`` attr ``control_names`` (a unit
                                                      control in column 0, a vector in its first columns; NaN:
                                                      not set); what a replay sets again (:meth:`Recording.controls`)

@@ -42,8 +42,9 @@ class HangGliderConfig(Checked):
             washout struts, a keel pocket, 1.25 degrees of dihedral and a billow shift under weight shift, under the
             ``sail`` air model) or ``paper``
             (Section 6: the pilot on seven control sticks, an untensioned flat sail, the paper's air law). In a
-            scene or with ``--set`` it is a preset (:data:`PRESETS`): it sets those keys and ``air.model``, and
-            keys given beside it win. The builder itself reads only the individual keys.
+            scene or with ``--set`` it is a preset (:data:`PRESETS`): it sets those keys, ``air.model`` and
+            ``solver.dt`` (5 ms flying, 10 ms paper), and keys given beside it win. The builder itself reads only
+            the individual keys.
         divisions: sail subdivisions per side (paper: 8).
         span: tip-to-tip distance [m].
         chord: nose to trailing-edge distance along the keel [m].

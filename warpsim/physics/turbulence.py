@@ -33,7 +33,7 @@ VON_KARMAN_KE = 0.7468
 """``k_e L`` of von Kármán's spectrum for the longitudinal integral length scale ``L``
 (``Γ(1/3) / (Γ(1/2) Γ(5/6))``-based constant; ESDU 85020)."""
 LENGTHS = (0.5, 2000.0)
-"""[m] the length scales a scene may give (a 128 km box at the top)."""
+"""[m] the length scales a scene may give (a 32 km box at the top)."""
 INTENSITIES = (0.0, 1.0)
 """The turbulence intensities (sigma / mean speed) a scene may give."""
 

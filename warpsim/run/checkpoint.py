@@ -95,6 +95,10 @@ class Checkpoint:
                 )
         if not (np.isfinite(self.q).all() and np.isfinite(self.q_prev).all() and np.isfinite(self.time).all()):
             raise ValueError("checkpoint positions or time are not finite")
+        if not all(np.isfinite(a).all() for a in (self.gust_g, self.gust_mean, self.turbulence_shift)):
+            raise ValueError("checkpoint gusts or turbulence are not finite")
+        if (self.gust_step < 0).any():
+            raise ValueError("checkpoint gust step counts are negative")
         if not 0 <= self.steps[0] <= MAX_STEPS:
             raise ValueError(f"checkpoint step count {self.steps[0]} is outside 0..{MAX_STEPS}")
 

@@ -51,7 +51,8 @@ class Frame:
         world_nonfinite: host ``[W]`` number of particles of each world with a non-finite position or velocity.
         clearance: host ``[K]`` lowest height [m] above the terrain of each object's particles that can touch it
             (:class:`GroundContacts`), ``1e30`` for an object with none.
-        controls: the controls in force while the frame's last steps ran, by name (what
+        controls: the controls in force when the frame's stepping began (after the keys or a replay set theirs
+            at its start; a schedule may change them at its own steps within the frame), by name (what
             :meth:`warpsim.run.simulation.Simulation.set_controls` takes; empty when none was set).
 
     Read on first use:

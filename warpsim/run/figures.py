@@ -250,6 +250,8 @@ class FlightFigures:
         if air.density == 0.0:
             rho = self.sim.control.air_density.numpy()
             text = f"{rho.mean():.4g} kg/m^3" if len(rho) == 1 else f"{rho.min():.4g} to {rho.max():.4g} kg/m^3"
+            if not np.isfinite(rho).all():
+                text = "not known at the end (the run blew up)"
             lines.append(
                 f"  air: the standard atmosphere, {text} at the end ({air.elevation:g} m above sea level at z = 0, "
                 f"ISA{air.temperature_offset:+g} K)"

@@ -97,7 +97,7 @@ class Inputs:
         on every world). At any other step nothing is done: a ramp moves on its own grid, not at frame starts."""
         if step not in self._changes:
             return
-        values = self.schedule.at(step * self.dt + 1e-9)
+        values = self.schedule.at((step + 1e-6) * self.dt)  # the same margin as the change steps
         changed = {k: v for k, v in values.items() if self.scheduled.get(k) != v}
         if changed:
             self.set(**changed)

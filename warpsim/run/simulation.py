@@ -127,6 +127,9 @@ class Simulation:
         self._threads = GroupThreads(self._groups, self)
         self._source = FrameSource(self.model, self.state, self.control, self.dt)
         self._out = _nothing  # the last frame handed out (a weak reference), copied before the state moves on
+        # (frame index, the controls in force when that frame's stepping began): what a frame records and a replay
+        # sets again at the frame's start (the schedule may change them within the frame, at its own steps)
+        self._start_controls: tuple[int, dict] = (-1, {})
         self._good = GoodFrame(0, 0.0, 0, 0)  # the last frame that passed its checks
         self._saved_version, self._saved = -1, None  # inputs and control arrays of the last good frame
         first = self.frame(0)
@@ -184,8 +187,15 @@ class Simulation:
         end = self.steps_taken + count
         while self.steps_taken < end:
             self.inputs.apply_schedule(self.steps_taken)
+            self._note_frame_start()
             change = self.inputs.next_change(self.steps_taken)
             self._solver_steps(end - self.steps_taken if change is None else min(end, change) - self.steps_taken)
+
+    def _note_frame_start(self) -> None:
+        """At a frame's first step, keep the controls in force (after the schedule and ``before`` have acted)."""
+        spf = getattr(self, "steps_per_frame", 0)
+        if spf and self.steps_taken % spf == 0:
+            self._start_controls = (self.steps_taken // spf + 1, dict(self.inputs.in_force))
 
     def _solver_steps(self, count: int) -> None:
         """Take ``count`` solver steps, the inputs as they are."""
@@ -228,7 +238,8 @@ class Simulation:
     def _hand_out(self, index: int) -> Frame:
         """Frame ``index`` of the probe's report, remembered so that :meth:`_release` can copy what it needs."""
         self._release()
-        controls = dict(self.inputs.in_force)
+        started, at_start = self._start_controls
+        controls = dict(at_start) if started == index else dict(self.inputs.in_force)
         frame = Frame(index, self.state.time, self.steps_taken, self._report(), self._source, controls)
         self._out = weakref.ref(frame)
         return frame
@@ -262,6 +273,7 @@ class Simulation:
         self._release()
         slot = self._good.free_slot
         self.inputs.apply_schedule(self.steps_taken)
+        self._note_frame_start()
         change = self.inputs.next_change(self.steps_taken)
         steady = change is None or change >= self.steps_taken + count  # no scheduled change inside the frame
         if count == self.steps_per_frame and self._groups[0].graphs is not None and steady:
@@ -280,8 +292,9 @@ class Simulation:
         """Make ``frame``, the last one measured and just checked, the last good frame, with the controls in force
         now."""
         self._good = GoodFrame(frame.index, frame.time, frame.steps, self._good.free_slot)
-        # the controls changed since the last good frame (the gusts change with every step)
-        if self._saved_version != self.inputs.version or self.control.gusts is not None:
+        # the controls changed since the last good frame (the gusts and the turbulence move with every step)
+        moving = self.control.gusts is not None or self.control.turbulence.field is not None
+        if self._saved_version != self.inputs.version or moving:
             self._saved_version = self.inputs.version
             c = self.control
             saved = (c.stick_rest_target, c.nail_target_goal, c.wind)

@@ -1793,20 +1793,16 @@ CASES: dict[str, Callable[[], list[Row]]] = {
     ),
     "convergence-flag": flag_convergence,
     "vortex": lambda: _vortex_rows(),
-    "atmosphere": lambda: _module_rows("atmosphere"),
-    "turbulence": lambda: _module_rows("turbulence"),
+    "atmosphere": lambda: _rows_of("atmosphere_rows", "rows"),
+    "turbulence": lambda: _rows_of("turbulence_rows", "field_rows"),
 }
 
 
-def _module_rows(name: str) -> list[Row]:
-    """The rows of ``benchmarks.validation.<name>_rows`` (they import this module's Row)."""
-    if name == "atmosphere":
-        from .atmosphere_rows import rows
+def _rows_of(module: str, function: str) -> list[Row]:
+    """The rows ``benchmarks.validation.<module>.<function>()`` gives (imported here: they import this module)."""
+    import importlib
 
-        return rows()
-    from .turbulence_rows import field_rows
-
-    return field_rows()
+    return getattr(importlib.import_module(f".{module}", __package__), function)()
 
 
 def _vortex_rows() -> list[Row]:

@@ -90,13 +90,6 @@ def longitudinal_spectrum(k1: np.ndarray, length: float) -> np.ndarray:
     return (2.0 * length / math.pi) / (1.0 + (np.asarray(k1, dtype=np.float64) / ke) ** 2) ** (5.0 / 6.0)
 
 
-def resolved_fraction(length: float, cell: float) -> float:
-    """The share of the field's variance in eddies longer than four cells (what trilinear sampling of the grid
-    carries well): ``∫_0^{π/(2 cell)} E dk / ∫ E dk``."""
-    k = np.linspace(0.0, math.pi / (2.0 * cell), 20001)
-    return float(np.trapezoid(von_karman_energy(k, length), k) / 1.5)
-
-
 def synthesise(length: float, seed: int, grid: tuple[int, int, int] = GRID) -> Field:
     """A von Kármán field for the integral length scale ``length`` [m] from ``seed`` (the same seed and length give
     the same field), of unit variance per component for the whole spectrum (less the share the grid cannot hold)."""

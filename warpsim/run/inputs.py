@@ -92,7 +92,7 @@ class Inputs:
         nails.assign(targets["nail_target"])
 
     def apply_schedule(self, step: int) -> None:
-        """At a solver step where the schedule changes something (:meth:`due`), apply it as it stands then (time
+        """At a solver step where the schedule changes something, apply it as it stands then (time
         ``step * dt``): the controls whose scheduled value differs from the last one it set (scheduled controls act
         on every world). At any other step nothing is done: a ramp moves on its own grid, not at frame starts."""
         if step not in self._changes:
@@ -102,10 +102,6 @@ class Inputs:
         if changed:
             self.set(**changed)
             self.scheduled.update(changed)
-
-    def due(self, step: int) -> bool:
-        """Whether the schedule changes something at solver step ``step``."""
-        return step in self._changes
 
     def next_change(self, step: int) -> int | None:
         """The first step after ``step`` at which the schedule changes something, or None."""

@@ -258,7 +258,9 @@ def case_c_reference(name: str) -> Callable[[Options], dict]:
         if c_reference.compiler() is None:
             return {"case": case, "skipped": "no C compiler (cc, gcc or clang) on the PATH"}
         desc = flag(int(name.split("-")[1])) if name.startswith("flag-") else scene(name)
-        desc = descriptor.merge("c", desc, {"air": {"density": AIR_DENSITY}})  # the C has a fixed density (the paper's)
+        # the C has a fixed density (the paper's) and the per-triangle laws, not the vortex lattice
+        air = {"density": AIR_DENSITY, **({"model": "sail"} if desc["air"]["model"] == "vortex" else {})}
+        desc = descriptor.merge("c", desc, {"air": air})
         row = measure(case, desc, opts)
         sim = Simulation(desc, device="cpu")
         with tempfile.TemporaryDirectory() as tmp:

@@ -61,7 +61,7 @@ def test_intermediate_glider_handles_as_the_default_at_both_time_steps():
     after centring); the dive recovery and phugoid period miss as the default's (40.8 m against 17.6-25.5 m,
     +34 %), while pulled out with the bar held out it levels inside the band (25.4 / 23.2 m)."""
     rows = cases.CASES["flying-glider-intermediate"]()
-    assert len(rows) == 12
+    assert len(rows) == 15
     missing = {r.case.removeprefix("intermediate ") for r in rows if not r.ok}
     assert missing == set(cases.FLYING_MISSES), [r for r in rows if not r.ok]
     turn40 = next(r for r in rows if r.case.endswith("~40°"))

@@ -79,6 +79,23 @@ def fly_piloted(
     return history
 
 
+def body_angles(sim: Simulation, state: dict) -> None:
+    """Add to ``state`` (a :func:`fly_piloted` decision's) the mass centre's sideslip ``beta`` [deg] (the angle of
+    its velocity out of the plane of the keel and the sail's normal, positive towards the left tip) and the keel's
+    angle of attack ``alpha`` [deg] (of that velocity below the keel, in that plane; beyond ±90° the keel flies tail
+    first), from the particles: the keel from the tail to the nose, the normal across it and the tip-to-tip line."""
+    rec = sim.model.objects[0]
+    q = sim.state.positions()
+    fwd = q[rec.nose] - q[rec.keel[-1]]
+    fwd /= np.linalg.norm(fwd)
+    up = np.cross(fwd, q[rec.tips[0]] - q[rec.tips[1]])
+    up /= np.linalg.norm(up)
+    left = np.cross(up, fwd)
+    v = state["cg_velocity"] / max(float(np.linalg.norm(state["cg_velocity"])), 1e-9)
+    state["beta"] = math.degrees(math.asin(float(np.clip(v @ left, -1.0, 1.0))))
+    state["alpha"] = math.degrees(math.atan2(-float(v @ up), float(v @ fwd)))
+
+
 def _crossing(history: list[dict], t0: float, test: Callable[[dict], bool]) -> float:
     """First time [s] at or after ``t0`` when ``test`` holds (inf if never)."""
     return next((f["t"] for f in history if f["t"] >= t0 and test(f)), math.inf)
@@ -93,7 +110,10 @@ def roll_flight(
     then holds 30° left for ``steady`` [s]; then ``roll = +1`` until 30° of right bank (the reversal), and the bar is
     centred for ``hold`` [s]. Returns ``time_to_30`` [s] (level to -30°), ``reversal`` [s] (from the full weight
     shift right in the steady left turn to +30°), ``bank_after_hold`` [deg] (the bank ``hold`` seconds after
-    centring), ``bank_min``/``bank_max`` [deg] over the hold, ``history``.
+    centring), ``bank_min``/``bank_max`` [deg] over the hold, the largest sideslip [deg] at the mass centre
+    (:func:`body_angles`) over the roll-in (``beta_roll_in``: level to -30°) and over the reversal (``beta_reversal``),
+    the largest keel angle of attack [deg] over the whole flight (``alpha_max``; beyond 90° the keel flies tail
+    first), ``history``.
     """
     phase = {"name": "level"}
     holder = bank_holder(lambda t: -30.0)
@@ -116,16 +136,48 @@ def roll_flight(
         return None
 
     done = lambda s: phase["name"] == "hold" and s["t"] >= phase["t_right"] + hold - 1e-9  # noqa: E731
-    history = fly_piloted(scene_descriptor(scene, solver), level + steady + 60.0 + hold, pilot, stop=done)
+    history = fly_piloted(
+        scene_descriptor(scene, solver), level + steady + 60.0 + hold, pilot, stop=done, watch=body_angles
+    )
     t_right = phase.get("t_right", math.inf)
     held = [f for f in history if t_right <= f["t"]]
+
+    def largest_beta(t0: float, t1: float) -> float:
+        return max((abs(f["beta"]) for f in history if t0 - 1e-9 <= f["t"] <= t1 + 1e-9), default=math.nan)
+
     return {
+        "beta_roll_in": largest_beta(level, phase.get("t_left", math.inf)),
+        "beta_reversal": largest_beta(phase.get("t_reverse", math.inf), t_right),
+        "alpha_max": max(abs(f["alpha"]) for f in history if f["t"] >= level - 1e-9),
         "time_to_30": phase.get("t_left", math.inf) - level,
         "reversal": t_right - phase.get("t_reverse", math.inf),
         "history": history,
         "bank_after_hold": held[-1]["bank_deg"] if held and held[-1]["t"] >= t_right + hold - 0.06 else math.nan,
         "bank_min": min((f["bank_deg"] for f in held), default=math.nan),
         "bank_max": max((f["bank_deg"] for f in held), default=math.nan),
+    }
+
+
+def held_shift_flight(
+    scene: str | dict, solver: dict | None = None, roll: float = 0.5, level: float = 10.0, seconds: float = 20.0
+) -> dict:
+    """Weight shift ``roll`` held ``seconds`` [s] from level trimmed flight at ``level`` [s]: the largest sideslip
+    [deg] at the mass centre and keel angle of attack [deg] (:func:`body_angles`) while it is held, the bank [deg]
+    and airspeed [m/s] at its end and the fastest airspeed [m/s] on the way, and the ``history``."""
+    history = fly_piloted(
+        scene_descriptor(scene, solver),
+        level + seconds,
+        lambda s: {"roll": roll} if s["t"] >= level - 1e-9 else None,
+        watch=body_angles,
+    )
+    held = [f for f in history if f["t"] >= level - 1e-9]
+    return {
+        "beta": max(abs(f["beta"]) for f in held),
+        "alpha": max(abs(f["alpha"]) for f in held),
+        "bank": held[-1]["bank_deg"],
+        "airspeed": held[-1]["airspeed"],
+        "fastest": max(f["airspeed"] for f in held),
+        "history": history,
     }
 
 
@@ -627,8 +679,9 @@ def dive_band(
 
 def summary(scene: str | dict = "hang-glider", solver: dict | None = None) -> dict:
     """Every handling figure of ``scene`` (one flight each), without the histories."""
-    r, t, dv, dvb, p, s, g, a, pd = (
+    r, hs, t, dv, dvb, p, s, g, a, pd = (
         roll_flight(scene, solver),
+        held_shift_flight(scene, solver),
         turn_flight(scene, solver),
         dive_flight(scene, solver),
         dive_flight(scene, solver, bar=-1.0),
@@ -643,6 +696,10 @@ def summary(scene: str | dict = "hang-glider", solver: dict | None = None) -> di
         "reversal": r["reversal"],
         "bank_after_hold": r["bank_after_hold"],
         "hold_range": (r["bank_min"], r["bank_max"]),
+        "beta_roll_in": r["beta_roll_in"],
+        "beta_reversal": r["beta_reversal"],
+        "alpha_max": r["alpha_max"],
+        "half_shift": {k: v for k, v in hs.items() if k != "history"},
         "turn20": {k: v for k, v in t[20.0].items()},
         "turn40": {k: v for k, v in t[40.0].items()},
         "dive_height": dv["height"],

@@ -40,11 +40,12 @@ class HangGliderConfig(Checked):
     Attributes:
         design: ``flying`` (the default: the pilot on a hang strap holding a control bar, a tensioned sail with
             washout struts, a keel pocket, 1.25 degrees of dihedral and a billow shift under weight shift, under the
-            ``sail`` air model) or ``paper``
-            (Section 6: the pilot on seven control sticks, an untensioned flat sail, the paper's air law). In a
-            scene or with ``--set`` it is a preset (:data:`PRESETS`): it sets those keys, ``air.model`` and
-            ``solver.dt`` (5 ms flying, 10 ms paper), and keys given beside it win. The builder itself reads only
-            the individual keys.
+            ``sail`` air model), ``lattice`` (the same glider under the ``vortex`` air model, the lattice's air from
+            the sail's own shape: 1.5 degrees of anhedral, a 1 degree billow shift, the pilot's drag area 0.25 m^2)
+            or ``paper`` (Section 6: the pilot on seven control sticks, an untensioned flat sail, the paper's air
+            law). In a scene or with ``--set`` it is a preset (:data:`PRESETS`): it sets those keys, ``air.model``
+            and ``solver.dt`` (5 ms flying and lattice, 10 ms paper), and keys given beside it win. The builder
+            itself reads only the individual keys.
         divisions: sail subdivisions per side (paper: 8).
         span: tip-to-tip distance [m].
         chord: nose to trailing-edge distance along the keel [m].
@@ -82,14 +83,17 @@ class HangGliderConfig(Checked):
             centre of gravity, so the trim speed).
         bar_forward: ``strap``: the control bar ahead of the hang point [m]. bar_width: its width [m].
         control_frame_mass: ``strap``: mass of the hang point and control bar particles [kg] (added to the glider).
-        pilot_drag_area: ``sail`` air model: the pilot's drag area ``C_D A`` [m^2] (prone in a pod harness,
-            about 0.15-0.25; Dees, AIAA 2010-9300 drag build-up).
-        frame_drag_area: ``sail`` air model, ``strap``: drag area [m^2] of the control frame, wires and kingpost.
-        dihedral: the wings rise from the keel by this angle [deg] (sweep and dihedral roll a wing away from a
-            sideslip: with 0 the flex wing slowly steepens a turn, with 2 it rolls back towards level within
-            20 s, with 3 or more it answers weight shift the wrong way without ``billow_shift``; 1.25 with the
-            billow shift holds a 30 degree turn nearly neutrally, as real flex wings do: issue 34, README "How it
-            flies"; below 1.25 the hands-off glide moves more than 4 % with the time step).
+        pilot_drag_area: ``sail`` and ``vortex`` air models: the pilot's drag area ``C_D A`` [m^2] (prone in a pod
+            harness, about 0.15-0.25; Dees, AIAA 2010-9300 drag build-up; Kilkenny's tunnel tests of five pilots
+            advise a range rather than one value). Hung below the wing, it also damps the phugoid.
+        frame_drag_area: ``sail`` and ``vortex`` air models, ``strap``: drag area [m^2] of the control frame, wires
+            and kingpost.
+        dihedral: the wings rise from the keel by this angle [deg]; negative is anhedral. Sweep already rolls a
+            wing away from a sideslip, and flex wings are rigged with anhedral to bring that near neutral. Under the
+            ``sail`` law, with 0 the flex wing slowly steepens a turn, with 2 it rolls back towards level within 20
+            s, with 3 or more it answers weight shift the wrong way without ``billow_shift``; 1.25 with the billow
+            shift holds a 30 degree turn nearly neutrally (below 1.25 the hands-off glide moves more than 4 % with
+            the time step). On the lattice (``lattice``), whose sweep rolls the wing back harder, -1.5 holds it.
         keel_pocket: hold the cloth on both sides of the keel tube to it (a sail's keel pocket), so the sail
             cannot fold along the keel between keel particles.
         washout_struts: share of each half of the trailing edge, from the tip, held rigid at its washout by
@@ -106,10 +110,12 @@ class HangGliderConfig(Checked):
             full weight shift gives the strutted trailing edge of the half the pilot moves towards, and takes from
             the other half (the struts' ties follow; needs ``washout_struts``). On a real flex wing the keel floats
             and swings under the pilot's weight against the leading edges and crossbar, so the half the pilot moves
-            towards gets more cloth, billows and twists more, and lifts less: that wing drops (issue 34).
+            towards gets more cloth, billows and twists more, and lifts less: that wing drops (issue 34). It also
+            yaws the nose away from the turn (adverse yaw): on the lattice 1 degree reverses a 30 degree turn in
+            about 3.5 s, and 2 or more make the roll-in slip past 20 degrees.
     """
 
-    design: str = choice("flying", ("flying", "paper"))
+    design: str = choice("flying", ("flying", "lattice", "paper"))
     divisions: int = number(8, Bounds(2, 256))
     span: float = number(10.0, POSITIVE)
     chord: float = number(2.8, POSITIVE)
@@ -156,13 +162,25 @@ _PAPER_GLIDER = {
     "dihedral": 0.0,
     "billow_shift": 0.0,
     "roll_travel": 0.4,
+    "pilot_drag_area": 0.2,  # the same as the flying design's: every design sets the keys the lattice's sets
 }
+_LATTICE_GLIDER = {"dihedral": -1.5, "billow_shift": 1.0, "pilot_drag_area": 0.25}
 PRESETS = {
     # the flying glider steps 5 ms (two substeps of the paper's 10 ms, the iterations kept): its glide and trim
     # speed within 1.5 % of their converged values, where 10 ms was 3.5-3.8 % off (docs/validation.md)
     "flying": {
         "air": {"model": "sail"},
         "hang_glider": {k: getattr(HangGliderConfig(), k) for k in _PAPER_GLIDER},
+        "solver": {"dt": 0.005},
+    },
+    # the flying glider on the vortex lattice (issue 53): anhedral against sweep's dihedral effect, a billow shift
+    # the lattice's roll needs 1 degree of, and the pilot's drag at the top of Dees's range (it damps the phugoid)
+    "lattice": {
+        "air": {"model": "vortex"},
+        "hang_glider": {
+            **{k: getattr(HangGliderConfig(), k) for k in _PAPER_GLIDER},
+            **_LATTICE_GLIDER,
+        },
         "solver": {"dt": 0.005},
     },
     "paper": {"air": {"model": "paper"}, "hang_glider": _PAPER_GLIDER, "solver": {"dt": 0.01}},

@@ -265,3 +265,16 @@ def test_a_triangle_has_one_air_law_owner():
     b.add_lifting_surface(tris, [(6, 7), (7, 8)])
     with pytest.raises(ValueError, match="already belongs"):
         b.add_lifting_surface(tris[:2], [(0, 1)])
+
+
+def test_lattice_glider_lateral_derivatives_have_their_stable_signs():
+    """The lattice glider's own flying shape, held rigid (issue 53): the nose turns into a sideslip (weathercock), the
+    windward tip rises (sweep's dihedral effect beats the 1.5 deg of anhedral), a roll and a yaw are damped, and a
+    right roll yaws the nose left (adverse yaw)."""
+    from benchmarks.validation.glider_derivatives import derivatives
+
+    d = derivatives()
+    assert 0.5 < d["CL"] < 1.3 and 5.0 < d["alpha"] < 25.0
+    assert d["C_n_beta"] > 0.0 and d["C_l_beta"] > 0.0 and d["C_Y_beta"] < 0.0
+    assert d["C_l_p"] < -0.1 and d["C_n_r"] < 0.0
+    assert d["C_n_p"] > 0.0

@@ -632,3 +632,32 @@ def test_worlds_are_drawn_apart(pictures):
     assert not _found(worlds, middle, red, reach=3)
     cloth = (worlds[..., 0] > 80) & (worlds[..., 1] < 50) & (worlds[..., 2] < 50)
     assert np.flatnonzero(cloth.any(axis=1)).min() > where["panel_height"]
+
+
+@pytest.mark.slow
+@pytest.mark.display
+def test_window_360_turn_and_reversal_flown_with_the_keys(display, tmp_path):
+    """Issue 53: the lattice glider flown with injected arrow keys through a 360° turn and a reversal
+    (benchmarks/validation/keys_flight.py, as docs/keys_flight.png was made): it rolls to 30° in a few seconds,
+    completes the turn and reverses, never flies tail first, and slips at most about 18° (the sail law's glider, flown
+    the same way, 53°)."""
+    result = subprocess.run(
+        [sys.executable, "-m", "benchmarks.validation.keys_flight", "scenes/hang_glider_lattice.toml", str(tmp_path)],
+        env=display,
+        cwd=HERE.parent,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    figures = json.loads((tmp_path / "keys_flight.json").read_text())
+    assert 1.5 <= figures["time_to_30"] <= 4.0
+    assert figures["turn_360_s"] < 20.0 and 3.0 <= figures["reversal_s"] <= 6.0
+    assert figures["alpha_max"] < 90.0 and figures["beta_max"] < 25.0
+    from PIL import Image
+
+    for name in ("keys_flight.png", "keys_chase.png"):
+        picture = np.asarray(Image.open(tmp_path / name).convert("L"), dtype=float)
+        assert picture.std() > 10.0  # a drawing, not a blank
+    with Recording(tmp_path / "keys_flight.h5") as recorded:
+        assert abs(recorded.frame_count - figures["frames"]) <= 1  # every frame flown is in the recording

@@ -59,10 +59,11 @@ def test_paper_glider_rows_report_the_model_limit():
 
 @pytest.mark.slow
 def test_flying_glider_rows_at_both_time_steps():
-    """Issue 34: the flying design against real flex wings and closed forms, each band at dt 0.01/55 and 0.005/110
-    (glide, trim, roll from level and reversal, bank after centring, turn radii, phugoid damping, stall recovery):
-    inside, none excused. The dive recovery (Jones 1977) and the phugoid period (Lanchester) still miss their bands
-    and are reported as failures (no model-limit excuse); if one starts passing, take it out of FLYING_MISSES."""
+    """Issues 34 and 53: the flying design against real flex wings and closed forms, each band at dt 0.005/55 and
+    0.005/110 (glide, trim, roll from level and reversal, bank after centring, turn radii, phugoid damping, stall
+    recovery, never tail first): inside, none excused. The dive recovery (Jones 1977), the phugoid period
+    (Lanchester), the roll-in's sideslip (53°) and the sideslip under half weight shift (33°) miss their bands and
+    are reported as failures (no model-limit excuse); if one starts passing, take it out of FLYING_MISSES."""
     rows = cases.flying_glider()
     assert len(rows) == 15
     missing = {r.case.removeprefix("glider ") for r in rows if not r.ok}
@@ -83,7 +84,7 @@ def test_lattice_glider_rows_at_both_time_steps():
     assert missing == set(cases.LATTICE_MISSES), [r for r in rows.values() if not r.ok]
     slips = [float(v) for v in re.findall(r"([0-9.]+)°", rows["sideslip, roll-in and reversal"].measured)]
     assert len(slips) == 4
-    assert max(slips) < 30.0  # the sail law's glider: over 50°
+    assert max(slips) < 25.0  # measured 22°; the sail law's glider: over 50°
     assert rows["keel never tail first"].ok and rows["phugoid period"].ok
 
 

@@ -641,19 +641,23 @@ def test_window_360_turn_and_reversal_flown_with_the_keys(display, tmp_path):
     (benchmarks/validation/keys_flight.py, as docs/keys_flight.png was made): it rolls to 30° in a few seconds,
     completes the turn and reverses, never flies tail first, and slips at most about 18° (the sail law's glider, flown
     the same way, 53°)."""
-    result = subprocess.run(
-        [sys.executable, "-m", "benchmarks.validation.keys_flight", "scenes/hang_glider_lattice.toml", str(tmp_path)],
-        env=display,
-        cwd=HERE.parent,
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
+    try:
+        script = [sys.executable, "-m", "benchmarks.validation.keys_flight"]
+        result = subprocess.run(
+            [*script, "scenes/hang_glider_lattice.toml", str(tmp_path)],
+            env=display,
+            cwd=HERE.parent,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+    finally:  # a killed flight must not leave an arrow held down for the module's other window tests
+        subprocess.run(["xdotool", "keyup", "Left", "Right"], env=display, capture_output=True, timeout=20)
     assert result.returncode == 0, result.stderr[-3000:]
     figures = json.loads((tmp_path / "keys_flight.json").read_text())
     assert 1.5 <= figures["time_to_30"] <= 4.0
-    assert figures["turn_360_s"] < 20.0 and 3.0 <= figures["reversal_s"] <= 6.0
-    assert figures["alpha_max"] < 90.0 and figures["beta_max"] < 25.0
+    assert figures["turned_deg"] >= 360.0 and figures["turn_360_s"] < 20.0 and 3.0 <= figures["reversal_s"] <= 5.0
+    assert figures["alpha_max"] < 90.0 and figures["beta_max"] < 20.0  # measured 18°: issue 53's ±15° is missed
     from PIL import Image
 
     for name in ("keys_flight.png", "keys_chase.png"):

@@ -112,7 +112,7 @@ def roll_flight(
     shift right in the steady left turn to +30°), ``bank_after_hold`` [deg] (the bank ``hold`` seconds after
     centring), ``bank_min``/``bank_max`` [deg] over the hold, the largest sideslip [deg] at the mass centre
     (:func:`body_angles`) over the roll-in (``beta_roll_in``: level to -30°) and over the reversal (``beta_reversal``),
-    the largest keel angle of attack [deg] over the whole flight (``alpha_max``; beyond 90° the keel flies tail
+    the largest keel angle of attack [deg] from the roll-in on (``alpha_max``; beyond 90° the keel flies tail
     first), ``history``.
     """
     phase = {"name": "level"}

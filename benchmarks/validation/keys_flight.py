@@ -17,6 +17,7 @@ flies it again) and ``keys_flight.json`` (the figures, also printed).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import subprocess
@@ -26,6 +27,8 @@ from pathlib import Path
 import numpy as np
 
 SIZE = (960, 540)
+MAX_FRAMES = 10_000
+"""Frames after which the flight is given up (a glider that never reaches a bank it is flown to)."""
 
 
 def _xdotool(*args: str) -> str:
@@ -65,15 +68,24 @@ def fly(scene: str = "scenes/hang_glider_lattice.toml", out: Path = Path("docs")
     def press(*keys: str) -> None:
         for key in held - set(keys):
             _xdotool("keyup", key)
+            held.discard(key)
         for key in set(keys) - held:
             _xdotool("keydown", key)
+            held.add(key)
+
+    def release() -> None:
+        for key in ("Left", "Right"):
+            with contextlib.suppress(Exception):
+                _xdotool("keyup", key)
         held.clear()
-        held.update(keys)
 
     def frame() -> dict:
         nonlocal now
+        if len(rows) >= MAX_FRAMES:
+            raise RuntimeError(f"the flight did not end within {MAX_FRAMES} frames")
         now += viewer.frame_interval
-        viewer.tick(now)
+        if not viewer.tick(now) or viewer.paused or viewer.error:
+            raise RuntimeError(f"the viewer stopped at {viewer.sim.state.time:.2f} s: {viewer.error or 'closed'}")
         sim = viewer.sim
         q, q_prev = sim.state.positions(), sim.state.particle_q_prev.numpy()
         velocity = mass @ (q[glider.particles] - q_prev[glider.particles]) / (mass.sum() * sim.dt)
@@ -93,38 +105,41 @@ def fly(scene: str = "scenes/hang_glider_lattice.toml", out: Path = Path("docs")
         rows.append(row)
         return row
 
-    row = frame()
-    while row["t"] < 8.0:
+    try:
         row = frame()
-    phases = {"roll_in": row["t"]}
-    press("Left")
-    while row["bank"] > -30.0 and row["t"] < 30.0:
-        row = frame()
-    phases["at_30"] = row["t"]
-    turned, last = 0.0, row["heading"]
-    shot = None
-    while abs(turned) < 360.0 and row["t"] < 120.0:
-        if row["bank"] > -25.0:
-            press("Left")
-        elif row["bank"] < -38.0:
-            press("Right")
-        else:
-            press()
-        row = frame()
-        turned += (row["heading"] - last + 180.0) % 360.0 - 180.0
-        last = row["heading"]
-        if shot is None and abs(turned) >= 180.0:
-            shot = backend.screenshot()
-    phases["turned_360"] = row["t"]
-    press("Right")
-    while row["bank"] < 30.0 and row["t"] < 150.0:
-        row = frame()
-    phases["reversed"] = row["t"]
-    press()
-    end = row["t"] + 10.0
-    while row["t"] < end:
-        row = frame()
-    viewer.close()
+        while row["t"] < 8.0:
+            row = frame()
+        phases = {"roll_in": row["t"]}
+        press("Left")
+        while row["bank"] > -30.0 and row["t"] < 30.0:
+            row = frame()
+        phases["at_30"] = row["t"]
+        turned, last = 0.0, row["heading"]
+        shot = None
+        while abs(turned) < 360.0 and row["t"] < 120.0:
+            if row["bank"] > -25.0:
+                press("Left")
+            elif row["bank"] < -38.0:
+                press("Right")
+            else:
+                press()
+            row = frame()
+            turned += (row["heading"] - last + 180.0) % 360.0 - 180.0
+            last = row["heading"]
+            if shot is None and abs(turned) >= 180.0:
+                shot = backend.screenshot()
+        phases["turned_360"] = row["t"]
+        press("Right")
+        while row["bank"] < 30.0 and row["t"] < 150.0:
+            row = frame()
+        phases["reversed"] = row["t"]
+        press()
+        end = row["t"] + 10.0
+        while row["t"] < end:
+            row = frame()
+    finally:  # never leave a key held down on the X server, nor the window open
+        release()
+        viewer.close()
     if shot is not None:
         Image.fromarray(shot).save(out / "keys_chase.png")
     turn = [r for r in rows if phases["at_30"] <= r["t"] <= phases["turned_360"]]
@@ -132,6 +147,7 @@ def fly(scene: str = "scenes/hang_glider_lattice.toml", out: Path = Path("docs")
         "scene": scene,
         "phases": phases,
         "time_to_30": phases["at_30"] - phases["roll_in"],
+        "turned_deg": abs(turned),  # 360 unless the turn was cut off at 120 s
         "turn_360_s": phases["turned_360"] - phases["at_30"],
         "reversal_s": phases["reversed"] - phases["turned_360"],
         "beta_max": max(abs(r["beta"]) for r in rows if r["t"] >= phases["roll_in"]),

@@ -93,7 +93,8 @@ class HangGliderConfig(Checked):
             ``sail`` law, with 0 the flex wing slowly steepens a turn, with 2 it rolls back towards level within 20
             s, with 3 or more it answers weight shift the wrong way without ``billow_shift``; 1.25 with the billow
             shift holds a 30 degree turn nearly neutrally (below 1.25 the hands-off glide moves more than 4 % with
-            the time step). On the lattice (``lattice``), whose sweep rolls the wing back harder, -1.5 holds it.
+            the time step). On the lattice (``lattice``) -1.5 with a 1 degree billow shift: the anhedral buys roll rate
+            (30 degrees in 2.2 s, where 0 takes 2.8 s) and the billow shift holds the turn after centring.
         keel_pocket: hold the cloth on both sides of the keel tube to it (a sail's keel pocket), so the sail
             cannot fold along the keel between keel particles.
         washout_struts: share of each half of the trailing edge, from the tip, held rigid at its washout by
@@ -111,8 +112,8 @@ class HangGliderConfig(Checked):
             the other half (the struts' ties follow; needs ``washout_struts``). On a real flex wing the keel floats
             and swings under the pilot's weight against the leading edges and crossbar, so the half the pilot moves
             towards gets more cloth, billows and twists more, and lifts less: that wing drops (issue 34). It also
-            yaws the nose away from the turn (adverse yaw): on the lattice 1 degree reverses a 30 degree turn in
-            about 3.5 s, and 2 or more make the roll-in slip past 20 degrees.
+            yaws the nose away from the turn (adverse yaw): on the lattice 0, 0.5 and 1 degree reverse a 30 degree
+            turn in 6.7, 4.1 and 3.5 s and slip 18, 20 and 22 degrees in the roll-in.
     """
 
     design: str = choice("flying", ("flying", "lattice", "paper"))
@@ -162,7 +163,7 @@ _PAPER_GLIDER = {
     "dihedral": 0.0,
     "billow_shift": 0.0,
     "roll_travel": 0.4,
-    "pilot_drag_area": 0.2,  # the same as the flying design's: every design sets the keys the lattice's sets
+    "pilot_drag_area": HangGliderConfig().pilot_drag_area,  # the flying design's: every design sets the same keys
 }
 _LATTICE_GLIDER = {"dihedral": -1.5, "billow_shift": 1.0, "pilot_drag_area": 0.25}
 PRESETS = {

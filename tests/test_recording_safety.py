@@ -268,6 +268,34 @@ def test_corrupted_recordings_fail_within_seconds_or_read_exactly(tmp_path):
     assert failed >= len(cases) // 2  # most flips land in metadata or data and are caught
 
 
+_CRASH_SCRIPT = """
+import os, signal, sys
+import warpsim.io.h5safe as h5safe
+from warpsim.cli import main
+parent, read = os.getpid(), h5safe.open_for_reading
+def crashing(path, live):  # HDF5 crashing on a damaged file, in the probe's forked child only
+    if os.getpid() != parent:
+        os.kill(os.getpid(), signal.SIGSEGV)
+    return read(path, live)
+h5safe.open_for_reading = crashing
+sys.exit(main(["convert", sys.argv[1], sys.argv[2]]))
+"""
+
+
+def test_a_recording_that_crashes_hdf5_is_refused_in_one_line(tmp_path):
+    """A file on which the library itself crashes (a segmentation fault in HDF5's reading of its attributes, which
+    the probe's child meets first) is one line, exit 2, not a crash of warpsim: the parent never reads it."""
+    rec = _pristine(tmp_path)
+    out = tmp_path / "out.usda"
+    proc = subprocess.run(
+        [sys.executable, "-c", _CRASH_SCRIPT, str(rec), str(out)], capture_output=True, text=True, timeout=120
+    )
+    lines = [line for line in proc.stderr.splitlines() if line.strip() and "Warp CUDA" not in line]
+    assert proc.returncode == EXIT_USAGE, proc.stderr[-2000:]
+    assert len(lines) == 1 and "HDF5 crashed (SIGSEGV)" in lines[0] and rec.name in lines[0], lines
+    assert not out.exists()
+
+
 def _slot_offsets(path: Path) -> dict[str, tuple[int, int]]:
     """``slot name -> (frame, file offset of its q array)``."""
     with h5py.File(path, "r") as f:

@@ -295,8 +295,10 @@ PROBE_SECONDS = 10.0
 
 def probe_metadata(path, seconds: float = PROBE_SECONDS) -> None:
     """Raise ``OSError`` when HDF5 does not finish reading every attribute of ``path`` (opened as a reader with no
-    live writer) within ``seconds``: a forked child reads them and is killed past the deadline (also when the wait
-    is interrupted). Errors the child meets are left to the caller's own reading (which reports them). Nothing is
+    live writer) within ``seconds``, or crashes reading them: a forked child reads them and is killed past the
+    deadline (also when the wait is interrupted); a child killed by a signal of its own (a segmentation fault in the
+    library) means the file would crash the caller too. Errors the child meets are left to the caller's own reading
+    (which reports them). Nothing is
     probed without ``os.fork``, with other threads running (a fork copies only the caller's thread, and one of the
     others might hold h5py's lock), or when the fork or the wait itself fails."""
     if not hasattr(os, "fork") or threading.active_count() > 1:
@@ -318,11 +320,14 @@ def probe_metadata(path, seconds: float = PROBE_SECONDS) -> None:
     deadline = time.monotonic() + seconds
     done = False
     try:
-        while os.waitpid(pid, os.WNOHANG) == (0, 0):
+        while (status := os.waitpid(pid, os.WNOHANG)) == (0, 0):
             if time.monotonic() > deadline:
                 raise OSError(f"HDF5 did not finish reading its attributes in {seconds:g} s: a damaged heap")
             time.sleep(0.002)
         done = True
+        if os.WIFSIGNALED(status[1]):  # the library itself crashed on the file: reading it here would crash too
+            name = signal.Signals(os.WTERMSIG(status[1])).name
+            raise OSError(f"HDF5 crashed ({name}) reading its attributes: a damaged file")
     except ChildProcessError:  # someone else reaped it (SIGCHLD ignored): nothing to say about the file
         done = True
     finally:

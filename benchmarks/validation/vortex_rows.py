@@ -9,12 +9,10 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from warpsim.scene import descriptor
 
 from .cases import Row, kite_flight
-from .handling import fly_piloted, glide_flight, scene_descriptor
+from .handling import body_angles, fly_piloted, glide_flight, scene_descriptor
 from .wings import delta, helmbold, lift_slope, lifting_line, lifting_line_roll, loads, rectangle, tuck
 
 HELMBOLD = "Helmbold 1942 / USAF DATCOM 4.1.3.2 (thin section, 2 pi); 5-9 % above lifting-surface solutions at A 2-8"
@@ -209,17 +207,10 @@ def roll_in(d: dict, solver: dict | None = None, level: float = 5.0, seconds: fl
     out = {"beta": 0.0, "alpha": 0.0, "t30": math.inf}
 
     def watch(sim, s):
-        rec = sim.model.objects[0]
-        q = sim.state.positions()
-        fwd = q[rec.nose] - q[rec.keel[-1]]
-        fwd /= np.linalg.norm(fwd)
-        up = np.cross(fwd, q[rec.tips[0]] - q[rec.tips[1]])
-        up /= np.linalg.norm(up)
-        left = np.cross(up, fwd)
-        v = s["cg_velocity"] / np.linalg.norm(s["cg_velocity"])
+        body_angles(sim, s)
         if s["t"] >= level - 1e-9 and out["t30"] == math.inf:  # the roll-in: until 30 deg of bank
-            out["beta"] = max(out["beta"], abs(math.degrees(math.asin(float(np.clip(v @ left, -1, 1))))))
-            out["alpha"] = max(out["alpha"], abs(math.degrees(math.atan2(-(v @ up), v @ fwd))))
+            out["beta"] = max(out["beta"], abs(s["beta"]))
+            out["alpha"] = max(out["alpha"], abs(s["alpha"]))
             if abs(s["bank_deg"]) >= 30.0:
                 out["t30"] = min(out["t30"], s["t"] - level)
 

@@ -1026,8 +1026,9 @@ HALF = {"dt": 0.0025, "iterations": 110}
 """Half the flying designs' 5 ms step and twice their iterations (issue 53's dt/2 with 2x iterations)."""
 
 
-def _fmt_values(values, spec: str, unit: str = "", fine: str = "0.005/110") -> str:
-    """``values`` (defaults, then the finer numerics ``fine``, ``dt/iterations``) as ``a (b at dt 0.005/110)``."""
+def _fmt(values, spec: str, unit: str, fine: str) -> str:
+    """``values`` (defaults, then the finer numerics labelled ``fine``, ``dt/iterations``) as
+    ``a (b at dt 0.005/110)``."""
     return f"{values[0]:{spec}}{unit} ({values[1]:{spec}}{unit} at dt {fine})"
 
 
@@ -1040,11 +1041,11 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
     from benchmarks.validation import handling as h
 
     fine = FINE if fine is None else fine
-    FINE_LABEL = f"{fine['dt']:g}/{fine['iterations']}"  # noqa: N806 - the rows' label of the finer numerics
+    fine_label = f"{fine['dt']:g}/{fine['iterations']}"
     figs = [h.summary(scene, solver) for solver in (None, fine)]
 
-    def _fmt(values, spec: str, unit: str = "") -> str:
-        return _fmt_values(values, spec, unit, FINE_LABEL)
+    def fmt(values, spec: str, unit: str = "") -> str:
+        return _fmt(values, spec, unit, fine_label)
 
     label = f"{name} "
     main = name == "glider"  # the default glider's figures at main 8edd34f (python -m benchmarks.validation.handling)
@@ -1064,7 +1065,7 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
             ">= 8",
             "single-surface flex wings glide about 8-10:1 at trim, modern topless ones about 15:1 at best "
             "(issue 18's band; Wikipedia, 'Hang gliding: performance'; approximate)",
-            _fmt(glide_, ".2f"),
+            fmt(glide_, ".2f"),
             ">= 8 at both",
             min(glide_) >= 8.0,
             note=f"sink {speed[0] / glide_[0]:.2f} m/s; largest bank hands off "
@@ -1076,7 +1077,7 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
             "9-13 m/s, steady within ±10 %",
             "hands-off trim of flex wings, about 32-47 km/h (issue 18's band; owner manuals, e.g. Wills Wing, "
             "give about 30-43 km/h; approximate)",
-            _fmt(speed, ".2f", " m/s") + f", within ±{100 * max(spread):.0f} %",
+            fmt(speed, ".2f", " m/s") + f", within ±{100 * max(spread):.0f} %",
             "9-13 m/s, ±10 %, at both",
             all(9.0 <= v <= 13.0 for v in speed) and max(spread) <= 0.1,
             note=f"{3.6 * speed[0]:.1f} km/h",
@@ -1090,7 +1091,7 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
             "a few seconds",
             "issue 34: weak but prompt lateral control (Cook & Spottiswoode, Aeronautical Journal 2006); a 30° turn "
             "reversed to the other side in about 3-4 s, so from level, half the angle from rest, about 2 s",
-            _fmt(t30, ".1f", " s"),
+            fmt(t30, ".1f", " s"),
             "1.5-4 s at both",
             all(1.5 <= v <= 4.0 for v in t30),
             note="full weight shift moves the pilot 0.55 m sideways and shifts the billow: the strutted trailing edge "
@@ -1104,7 +1105,7 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
             "about 3-4 s",
             "issue 34: hang gliders reverse a 30° turn to the other side in about 3-4 s (Cook & Spottiswoode, "
             "Aeronautical Journal 2006: weak but prompt lateral control)",
-            _fmt(rev, ".1f", " s"),
+            fmt(rev, ".1f", " s"),
             "3-4 s at both",
             all(3.0 <= v <= 4.0 for v in rev),
             note="the bar from one stop to the other in 1 s" + was("26.8 s (from a rolling -30°)"),
@@ -1122,7 +1123,7 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
             "issue 53's band: a swept flex wing rolls with a small, brief adverse yaw (Seibel 2000, yaw-string "
             "flights: a brief slip whenever the bank steepens, gone once it holds; Cook & Spottiswoode, "
             "Aeronautical Journal 2006: weak lateral control with a significant instantaneous adverse response)",
-            _fmt(beta_in, ".1f", "°") + "; reversal " + _fmt(beta_rev, ".1f", "°"),
+            fmt(beta_in, ".1f", "°") + "; reversal " + fmt(beta_rev, ".1f", "°"),
             "under 15° in both manoeuvres, at both",
             all(v < 15.0 for v in beta_in + beta_rev),  # a NaN (a reversal never made) fails
             note="the slip grows with the bank while the bar is held over: the roll rate's adverse yaw and the billow "
@@ -1137,7 +1138,7 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
             "turn, the reversal, the 20 s with the bar centred and 20 s of half weight shift",
             "|α| < 90°",
             "issue 53's band: no flex wing flies tail first in a manoeuvre",
-            _fmt(alpha, ".1f", "°"),
+            fmt(alpha, ".1f", "°"),
             "under 90° at both",
             max(alpha) < 90.0,
         ),
@@ -1147,7 +1148,7 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
             "at its end",
             "sideslip within ±15°, never tail first",
             "issue 53's band: a held weight shift is a turn that steepens slowly; the pilot eases off",
-            _fmt([x["beta"] for x in half], ".1f", "°"),
+            fmt([x["beta"] for x in half], ".1f", "°"),
             "under 15° at both",
             all(x["beta"] < 15.0 and x["alpha"] < 90.0 for x in half),
             note=f"bank {half[0]['bank']:.0f}° ({half[1]['bank']:.0f}°) at {half[0]['airspeed']:.1f} m/s "
@@ -1163,10 +1164,10 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
             "neither diverging nor snapping back (20-40°)",
             "issue 34: a flex wing at moderate bank is close to spirally neutral; centring the bar holds or slowly "
             "shallows the bank",
-            _fmt(hold, ".1f", "°"),
+            fmt(hold, ".1f", "°"),
             "20-40° at both",
             all(20.0 <= v <= 40.0 for v in hold),
-            note=f"bank over the 20 s {low[0]:.0f}-{high[0]:.0f}° ({low[1]:.0f}-{high[1]:.0f}° at {FINE_LABEL}): "
+            note=f"bank over the 20 s {low[0]:.0f}-{high[0]:.0f}° ({low[1]:.0f}-{high[1]:.0f}° at {fine_label}): "
             "the roll "
             "carries on a little while the bar comes back, then the bank shallows slowly" + was("19.0° (31-19°)"),
         )
@@ -1180,13 +1181,13 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
                 f"a pilot holding {bank}° of bank (proportional-integral on the bar), 10 s settled, 10 s measured: "
                 f"radius V_h / rate against V^2 / (g tan bank), V the airspeed; bank {turns[0]['bank']:.1f}° at "
                 f"{turns[0]['airspeed']:.1f} m/s",
-                f"{turns[0]['expected']:.1f} m ({turns[1]['expected']:.1f} m at {FINE_LABEL})",
+                f"{turns[0]['expected']:.1f} m ({turns[1]['expected']:.1f} m at {fine_label})",
                 "coordinated turn: tan(bank) = V^2 / (g R) (level-turn force balance, any flight-mechanics text); "
                 "issue 34: within 15 % up to 45°",
-                _fmt([t["radius"] for t in turns], ".1f", " m"),
+                fmt([t["radius"] for t in turns], ".1f", " m"),
                 "within ±15 % at both",
                 all(abs(r) <= 0.15 for r in ratio),
-                note=f"{100 * ratio[0]:+.1f} % ({100 * ratio[1]:+.1f} % at {FINE_LABEL}); turn rate "
+                note=f"{100 * ratio[0]:+.1f} % ({100 * ratio[1]:+.1f} % at {fine_label}); turn rate "
                 f"{abs(turns[0]['rate']):.1f} °/s",
             )
         )
@@ -1241,14 +1242,14 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
             f"all-moving tail comes close to the least height). For comparison, {rigid}: "
             f"{b['rigid']:.1f}-{b['panel']:.1f} m ({b['pieces']:.1f} m with every piece of chord lifting alone); "
             "without drag z = (3 + 2c) (m/S) / (ρ C_L)",
-            _fmt(dive, ".1f", " m"),
-            f"{b['low']:.1f}-{b['high']:.1f} m ({bands[1]['low']:.1f}-{bands[1]['high']:.1f} m at {FINE_LABEL}), "
+            fmt(dive, ".1f", " m"),
+            f"{b['low']:.1f}-{b['high']:.1f} m ({bands[1]['low']:.1f}-{bands[1]['high']:.1f} m at {fine_label}), "
             "at both",
             all(bd["low"] <= v <= bd["high"] for v, bd in zip(dive, bands, strict=True)),
             note=f"{figs[0]['dive_time']:.1f} s to level, {figs[0]['dive_fastest']:.1f} m/s at most, nose down to "
             f"{-figs[0]['dive_lowest_pitch']:.0f}°; the wing pulls out below its trim angle of attack (its pitch "
             "damping against its pitch stiffness). Its phugoid's period gives its lag, c = (T / T_Lanchester)² - 1 = "
-            f"{b['lag']:.2f} ({bands[1]['lag']:.2f} at {FINE_LABEL}), 3-8 times the rigid wing's, and that point mass "
+            f"{b['lag']:.2f} ({bands[1]['lag']:.2f} at {fine_label}), 3-8 times the rigid wing's, and that point mass "
             f"with it falls {b['predicted']:.1f} m ({bands[1]['predicted']:.1f} m): one lag explains both misses; "
             + tunnel
             + was("38.2 m"),
@@ -1264,28 +1265,28 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
             "R.T. Jones 1977 (the row above): the band is a wing held at its trim C_L or above through the pull-out, "
             "which is what the pilot does by pushing the bar out; hands off, a tailless wing pulls out below its "
             "trim (row above)",
-            _fmt(piloted, ".1f", " m"),
-            f"{b['low']:.1f}-{b['high']:.1f} m ({bands[1]['low']:.1f}-{bands[1]['high']:.1f} m at {FINE_LABEL}), "
+            fmt(piloted, ".1f", " m"),
+            f"{b['low']:.1f}-{b['high']:.1f} m ({bands[1]['low']:.1f}-{bands[1]['high']:.1f} m at {fine_label}), "
             "at both",
             all(bd["low"] <= v <= bd["high"] for v, bd in zip(piloted, bands, strict=True)),
             note=f"{figs[0]['dive_bar_out_time']:.1f} s to level ({figs[1]['dive_bar_out_time']:.1f} s at "
-            f"{FINE_LABEL}); near the band's top: the bar reaches its stop 0.5 s after the release",
+            f"{fine_label}); near the band's top: the bar reaches its stop 0.5 s after the release",
         )
     )
     rows.append(
         Row(
             f"{label}phugoid period",
             "period of the airspeed's oscillation after a 2 s pulse of bar in (pitch 0.3), hands off",
-            f"{ph[0]['lanchester']:.2f} s ({ph[1]['lanchester']:.2f} s at {FINE_LABEL})",
+            f"{ph[0]['lanchester']:.2f} s ({ph[1]['lanchester']:.2f} s at {fine_label})",
             "Lanchester's phugoid: period π √2 V / g at the trim speed V (constant angle of attack, no drag; e.g. "
             "Etkin & Reid, Dynamics of Flight, 4.4); issue 34: within 20 %. A wing whose C_L falls a k (dγ/dt) / V "
             "while its path turns has (1 + c) V dγ/dt = 2 g u / V, so sqrt(1 + c) times the period "
             f"(handling.lagged_period); {rigid}: +{100 * (b['rigid_period'] - 1):.0f} to "
             f"+{100 * (b['panel_period'] - 1):.0f} % (+{100 * (b['pieces_period'] - 1):.0f} % pieces alone)",
-            _fmt([p["period"] for p in ph], ".2f", " s"),
+            fmt([p["period"] for p in ph], ".2f", " s"),
             "within ±20 % at both",
             all(abs(o) <= 0.2 for o in period_off),
-            note=f"{100 * period_off[0]:+.0f} % ({100 * period_off[1]:+.0f} % at {FINE_LABEL}): the keel's angle of "
+            note=f"{100 * period_off[0]:+.0f} % ({100 * period_off[1]:+.0f} % at {fine_label}): the keel's angle of "
             "attack falls as the speed rises (it lags the pitch rate the phugoid asks for), so the lift grows less "
             f"than V^2: c = {b['lag']:.2f} against the rigid wing's {b['rigid_lag']:.2f}-{b['panel_lag']:.2f}; "
             f"{tunnel}, √(1 + c) = {100 * (math.sqrt(1 + lag_tunnel) - 1):+.0f} %" + was("7.4 s (+35 %)"),
@@ -1297,14 +1298,14 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
         Row(
             f"{label}phugoid damping",
             "damping ratio of the same oscillation",
-            f"{lanchester[0]:.3f} ({lanchester[1]:.3f} at {FINE_LABEL})",
+            f"{lanchester[0]:.3f} ({lanchester[1]:.3f} at {fine_label})",
             "Lanchester's phugoid: damping ratio 1 / (sqrt(2) L/D) (e.g. Etkin & Reid, Dynamics of Flight, 4.4), "
             "L/D the measured glide ratio",
-            _fmt(zeta, ".3f"),
+            fmt(zeta, ".3f"),
             "within ±30 % at both",
             all(abs(z / lc - 1.0) <= 0.3 for z, lc in zip(zeta, lanchester, strict=True)),
             note=f"{100 * (zeta[0] / lanchester[0] - 1):+.0f} % ({100 * (zeta[1] / lanchester[1] - 1):+.0f} % at "
-            f"{FINE_LABEL})",
+            f"{fine_label})",
         )
     )
     st = both(lambda f: f["stall"])
@@ -1315,11 +1316,11 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
             "<= 5 s",
             "issue 18: a flex wing recovers by itself from a stall when the bar is released (HGMA-certified "
             "wings are pitch stable)",
-            _fmt([x["recovery"] for x in st], ".1f", " s"),
+            fmt([x["recovery"] for x in st], ".1f", " s"),
             "<= 5 s, and no tumble (|pitch| < 60°), at both",
             all(x["recovery"] <= 5.0 and x["max_pitch"] < 60.0 for x in st),
             note=f"held out: airspeed down to {st[0]['slowest']:.1f} m/s, nose up to {st[0]['nose_up']:.0f}°; after "
-            f"the release |pitch| at most {st[0]['max_pitch']:.0f}° ({st[1]['max_pitch']:.0f}° at {FINE_LABEL})",
+            f"the release |pitch| at most {st[0]['max_pitch']:.0f}° ({st[1]['max_pitch']:.0f}° at {fine_label})",
         )
     )
     return rows

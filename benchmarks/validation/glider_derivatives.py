@@ -20,6 +20,7 @@ import sys
 import numpy as np
 import warp as wp
 
+from benchmarks.validation.handling import body_frame
 from warpsim.physics.config import WindConfig
 from warpsim.physics.kernels.vortex import VortexScratch, vortex_air_force
 from warpsim.run.simulation import Simulation
@@ -38,15 +39,10 @@ def derivatives(scene: str = "scenes/hang_glider_lattice.toml", settle: float = 
     sim.step(int(round(settle / sim.dt)))
     m, rec, dt = sim.model, sim.model.objects[0], sim.dt
     q = sim.state.positions().astype(np.float64)
-    inv = m.particle_inv_mass.numpy()
-    mass = np.where(inv > 0, 1.0 / np.where(inv > 0, inv, 1.0), 0.0)
+    mass = m.particle_free_mass
     cg = mass @ q / mass.sum()
     v = mass @ (q - sim.state.particle_q_prev.numpy()) / (mass.sum() * dt)
-    keel = q[rec.nose] - q[rec.keel[-1]]
-    keel /= np.linalg.norm(keel)
-    normal = np.cross(keel, q[rec.tips[0]] - q[rec.tips[1]])
-    normal /= np.linalg.norm(normal)
-    left = np.cross(normal, keel)
+    keel, left, normal = body_frame(rec, q)
     speed = float(np.linalg.norm(v))
     alpha = math.atan2(-float(v @ normal), float(v @ keel))
     x = math.cos(alpha) * keel - math.sin(alpha) * normal  # stability axes

@@ -79,18 +79,23 @@ def fly_piloted(
     return history
 
 
+def body_frame(record, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A hang glider's body axes at positions ``q`` [m], unit vectors: ``fwd`` along the keel from the tail to the
+    nose, ``up`` across the keel and the tip-to-tip line (the sail's normal), ``left`` = ``up x fwd`` (towards the
+    left tip)."""
+    fwd = q[record.nose] - q[record.keel[-1]]
+    fwd /= np.linalg.norm(fwd)
+    up = np.cross(fwd, q[record.tips[0]] - q[record.tips[1]])
+    up /= np.linalg.norm(up)
+    return fwd, np.cross(up, fwd), up
+
+
 def body_angles(sim: Simulation, state: dict) -> None:
     """Add to ``state`` (a :func:`fly_piloted` decision's) the mass centre's sideslip ``beta`` [deg] (the angle of
     its velocity out of the plane of the keel and the sail's normal, positive towards the left tip) and the keel's
     angle of attack ``alpha`` [deg] (of that velocity below the keel, in that plane; beyond ±90° the keel flies tail
-    first), from the particles: the keel from the tail to the nose, the normal across it and the tip-to-tip line."""
-    rec = sim.model.objects[0]
-    q = sim.state.positions()
-    fwd = q[rec.nose] - q[rec.keel[-1]]
-    fwd /= np.linalg.norm(fwd)
-    up = np.cross(fwd, q[rec.tips[0]] - q[rec.tips[1]])
-    up /= np.linalg.norm(up)
-    left = np.cross(up, fwd)
+    first), in the glider's :func:`body_frame`."""
+    fwd, left, up = body_frame(sim.model.objects[0], sim.state.positions())
     v = state["cg_velocity"] / max(float(np.linalg.norm(state["cg_velocity"])), 1e-9)
     state["beta"] = math.degrees(math.asin(float(np.clip(v @ left, -1.0, 1.0))))
     state["alpha"] = math.degrees(math.atan2(-float(v @ up), float(v @ fwd)))

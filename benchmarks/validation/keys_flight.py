@@ -58,8 +58,7 @@ def fly(scene: str = "scenes/hang_glider_lattice.toml", out: Path = Path("docs")
     window = _xdotool("search", "--sync", "--name", title).split()[0]
     _xdotool("windowfocus", "--sync", window)
     glider = viewer.model.objects[0]
-    inv = viewer.model.particle_inv_mass.numpy()[glider.particles]
-    mass = np.where(inv > 0, 1.0 / np.where(inv > 0, inv, 1.0), 0.0)
+    mass = viewer.model.particle_free_mass[glider.particles]
     now = 0.0
     viewer.tick(now)
     held: set[str] = set()

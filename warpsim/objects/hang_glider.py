@@ -165,23 +165,21 @@ _PAPER_GLIDER = {
     "roll_travel": 0.4,
     "pilot_drag_area": HangGliderConfig().pilot_drag_area,  # the flying design's: every design sets the same keys
 }
+_FLYING_GLIDER = {k: getattr(HangGliderConfig(), k) for k in _PAPER_GLIDER}
 _LATTICE_GLIDER = {"dihedral": -1.5, "billow_shift": 1.0, "pilot_drag_area": 0.25}
 PRESETS = {
     # the flying glider steps 5 ms (two substeps of the paper's 10 ms, the iterations kept): its glide and trim
     # speed within 1.5 % of their converged values, where 10 ms was 3.5-3.8 % off (docs/validation.md)
     "flying": {
         "air": {"model": "sail"},
-        "hang_glider": {k: getattr(HangGliderConfig(), k) for k in _PAPER_GLIDER},
+        "hang_glider": _FLYING_GLIDER,
         "solver": {"dt": 0.005},
     },
     # the flying glider on the vortex lattice (issue 53): anhedral against sweep's dihedral effect, a billow shift
     # the lattice's roll needs 1 degree of, and the pilot's drag at the top of Dees's range (it damps the phugoid)
     "lattice": {
         "air": {"model": "vortex"},
-        "hang_glider": {
-            **{k: getattr(HangGliderConfig(), k) for k in _PAPER_GLIDER},
-            **_LATTICE_GLIDER,
-        },
+        "hang_glider": {**_FLYING_GLIDER, **_LATTICE_GLIDER},
         "solver": {"dt": 0.005},
     },
     "paper": {"air": {"model": "paper"}, "hang_glider": _PAPER_GLIDER, "solver": {"dt": 0.01}},

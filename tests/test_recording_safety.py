@@ -548,6 +548,31 @@ def test_sigterm_as_the_recording_is_created_leaves_no_empty_file(tmp_path):
             assert r.frame_count >= 1
 
 
+def test_an_interrupt_just_after_the_lock_creates_the_file_leaves_no_file(tmp_path, monkeypatch):
+    """The window the test above hits by chance, hit every time: the writer's lock has created the empty file and
+    Ctrl-C (or SIGTERM, which raises the same) lands before the recorder holds it. No 0-byte file is left; and a
+    recording another run is writing is never removed by a run that could not claim it."""
+    import warpsim.io.hdf5 as hdf5
+    from warpsim.io.h5safe import WriterLock
+
+    def claim_then_interrupted(path, create):
+        WriterLock(path, create)
+        raise KeyboardInterrupt
+
+    d = defaults("flag")
+    sim = Simulation(d)
+    path = tmp_path / "k.h5"
+    monkeypatch.setattr(hdf5, "claim", claim_then_interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        H5Recorder(path, sim.model, d, sim.checkpoint, to_toml(d), "flag")
+    assert not path.exists()
+    monkeypatch.undo()
+    with H5Recorder(path, sim.model, d, sim.checkpoint, to_toml(d), "flag") as first:
+        with pytest.raises(Exception, match="another warpsim run is writing"):
+            H5Recorder(path, sim.model, d, sim.checkpoint, to_toml(d), "flag")
+        assert path.exists() and first.file is not None
+
+
 def test_empty_and_skeleton_recordings_are_refused(tmp_path, capsys):
     d = defaults("flag")
     empty = tmp_path / "empty.h5"

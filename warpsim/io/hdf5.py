@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -123,10 +124,14 @@ class H5Recorder(FrameOutput):
         self.model = model
         self.descriptor = descriptor
         self.checkpoint = checkpoint
-        self.lock = lock if lock is not None else claim(self.path, create=not resume)
         self.file = None
         self.failed: OutputWriteError | None = None
+        self.lock = None
+        existed = resume or os.path.lexists(self.path)
         try:
+            # the claim inside: a Ctrl-C or SIGTERM landing just after the lock created the file, before it was
+            # held here, left a 0-byte file that every reader called 'not an HDF5 file'
+            self.lock = lock if lock is not None else claim(self.path, create=not resume)
             if resume:
                 self._open_existing()
             else:
@@ -135,9 +140,11 @@ class H5Recorder(FrameOutput):
             if self.file is not None:
                 with contextlib.suppress(Exception):
                     self.file.close()
-            if not resume:
+            ours = self.lock is not None or not (existed or isinstance(err, RecordingError))
+            if not resume and ours:  # never another run's file (RecordingError: it holds the lock)
                 self.path.unlink(missing_ok=True)
-            self.lock.release()
+            if self.lock is not None:
+                self.lock.release()
             if isinstance(err, OSError | RuntimeError):
                 raise OutputWriteError(f"{self.path}: cannot write the recording ({reason(err)})") from None
             raise

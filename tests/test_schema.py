@@ -22,6 +22,8 @@ except ImportError:  # Python 3.10
 def _problems(schema: dict, value, where: str = "") -> list[str]:
     """What ``value`` breaks of ``schema`` (the subset of JSON Schema scene_schema writes)."""
     out = []
+    if "anyOf" in schema and all(_problems(option, value, where) for option in schema["anyOf"]):
+        out.append(f"{where}: {value!r} fits none of {schema['anyOf']}")
     if "enum" in schema and value not in schema["enum"]:
         out.append(f"{where}: {value!r} not in {schema['enum']}")
     kind = schema.get("type")
@@ -45,7 +47,7 @@ def _problems(schema: dict, value, where: str = "") -> list[str]:
             if key in schema and not ok(value, schema[key]):
                 out.append(f"{where}: {value!r} breaks {key} {schema[key]}")
     if kind == "array":
-        if "minItems" in schema and not schema["minItems"] <= len(value) <= schema["maxItems"]:
+        if "minItems" in schema and not schema["minItems"] <= len(value) <= schema.get("maxItems", len(value)):
             out.append(f"{where}: {len(value)} items")
         for k, item in enumerate(value):
             out += _problems(schema.get("items", {}), item, f"{where}[{k}]")

@@ -16,7 +16,7 @@ import sys
 from .._version import __version__
 from .common import EXIT_INTERRUPTED, EXIT_OUTPUT, EXIT_USAGE, Parser, UsageError, one_line
 
-COMMANDS = ("list", "info", "run", "view", "sweep", "plot", "convert", "render", "schema")
+COMMANDS = ("list", "info", "run", "view", "sweep", "plot", "convert", "render", "export", "schema")
 """The commands, in the order ``--help`` lists them; each is the module of that name in this package, with
 ``add_parser(sub)`` and ``command(args) -> exit code``."""
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from . import figures, flag, hang_glider, kite, parachute
+from . import figures, flag, hang_glider, kite, mesh, parachute
 
 
 @dataclass(frozen=True)
@@ -119,6 +119,21 @@ OBJECTS: dict[str, ObjectSpec] = {
         figures=figures.PARACHUTE_FIGURES,
         measure_figures=figures.parachute_figures,
         hud=figures.parachute_hud,
+    ),
+    "mesh": ObjectSpec(
+        config=mesh.MeshConfig,
+        build=mesh.build_mesh,
+        scene_defaults={
+            "wind": {"velocity": [6.0, 0.0, 0.0]},
+            "solver": {"mass_splitting": True},
+            "air": {"model": "sail"},
+        },
+        summary="your own design from a mesh file (mesh.file) with its parts: spars, nails, a line, point masses",
+        controls=("pitch", "roll", "anchor"),
+        apply_controls=mesh.apply_controls,
+        figures=mesh.MESH_FIGURES,
+        measure_figures=mesh.mesh_figures,
+        hud=mesh.mesh_hud,
     ),
 }
 

@@ -66,6 +66,15 @@ def field_bounds(cls, name: str) -> Bounds | None:
     return None
 
 
+def field_entries(cls, name: str):
+    """The parser of field ``name`` of ``cls`` when it holds a list of tables (``entries`` in its metadata: a
+    callable that raises ``ValueError`` on bad entries), or None."""
+    for f in dataclasses.fields(cls):
+        if f.name == name:
+            return f.metadata.get("entries")
+    return None
+
+
 def field_choices(cls, name: str) -> tuple[str, ...] | None:
     """The names a descriptor may give field ``name`` of ``cls`` (an enum's members lower-case), or None."""
     for f in dataclasses.fields(cls):

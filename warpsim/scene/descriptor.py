@@ -38,7 +38,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 from ..objects import registry
-from ..physics.config import SECTIONS, Bounds, as_section, field_bounds, field_choices, plain
+from ..physics.config import SECTIONS, Bounds, as_section, field_bounds, field_choices, field_entries, plain
 from .controls import ControlError, ControlSchedule
 from .values import FLOAT_LIMIT, DescriptorError, range_values, suggest
 
@@ -93,6 +93,14 @@ def _apply_preset(descriptor: dict, kind: str, design) -> None:
 def _check_value(where: str, section: str, key: str, default, value):
     """Coerce ``value`` to the type of ``default`` or raise a DescriptorError naming ``where``."""
     name = f"{section}.{key}"
+    cls = section_class(section)
+    entries = field_entries(cls, key) if cls is not None else None
+    if entries is not None:  # a list of tables (a mesh design's parts), checked by its own parser
+        try:
+            entries(value)
+        except ValueError as err:
+            raise DescriptorError(f"{where}: {name}: {err}") from None
+        return [dict(e) for e in value]
     if isinstance(default, bool):
         if not isinstance(value, bool):
             raise DescriptorError(f"{where}: {name} must be true or false, got {value!r}")
@@ -403,13 +411,27 @@ def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, st
 
 
 def _files_beside(descriptor: dict, scene: Path) -> dict:
-    """``descriptor`` read from the file ``scene`` with a relative ``terrain.file`` made absolute against the scene
-    file's folder (where its author put it), not the current directory, so that the scene runs from anywhere."""
+    """``descriptor`` read from the file ``scene`` with a relative ``terrain.file`` or ``mesh.file`` made absolute
+    against the scene file's folder (where its author put it), not the current directory, so that the scene runs from
+    anywhere."""
     import os
 
-    name = descriptor.get("terrain", {}).get("file")
-    if name and not os.path.isabs(name):
-        descriptor["terrain"]["file"] = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(scene)), name))
+    folder = os.path.dirname(os.path.abspath(scene))
+
+    def beside(name):
+        return (
+            os.path.abspath(os.path.join(folder, name))
+            if isinstance(name, str) and name and not os.path.isabs(name)
+            else name
+        )
+
+    for section in ("terrain", "mesh"):
+        if descriptor.get(section, {}).get("file"):
+            descriptor[section]["file"] = beside(descriptor[section]["file"])
+        for table in ("worlds", "sweep"):  # a file per world or per case
+            values = descriptor.get(table, {}).get(section, {}).get("file")
+            if isinstance(values, list):
+                descriptor[table][section]["file"] = [beside(v) for v in values]
     return descriptor
 
 
@@ -433,6 +455,8 @@ def _toml_value(value) -> str:
 
     if isinstance(value, list):
         return f"[{', '.join(_toml_value(v) for v in value)}]"
+    if isinstance(value, dict):  # an inline table (a mesh design's part)
+        return "{" + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + "}"
     return tomli_w.dumps({"v": value})[4:].rstrip("\n")
 
 

@@ -38,6 +38,8 @@ def _number_schema(bounds, integer: bool) -> dict[str, Any]:
 def _key_schema(cls, field: dataclasses.Field, default) -> dict[str, Any]:
     """The schema of one key of a section: its choices, or its number type and bounds (per element for a vector),
     or a boolean or string; with its default."""
+    if "schema" in field.metadata:  # a list of tables with its own schema (a mesh design's parts)
+        return {**field.metadata["schema"], "default": default}
     options = field_choices(cls, field.name)
     if options is not None:
         return {"enum": list(options), "default": default}

@@ -115,7 +115,8 @@ class Viewer:
         self.frame_interval = sim.steps_per_frame * sim.dt
         names = sim.control_names()
         self.has_glider_keys = "pitch" in names and "roll" in names
-        self.kite = next((r for r in self.model.objects if r.kind == "kite"), None)  # the one W/A/S/D walks
+        # the first object with a line to a nailed anchor (a kite, a mesh design's line): the one W/A/S/D walks
+        self.kite = next((r for r in self.model.objects if getattr(r, "anchor_nail", -1) >= 0), None)
         self.has_anchor = "anchor" in names and self.kite is not None
         self.draw_list = draw_list(self.model)
         self.figures = Figures(self.model)
@@ -229,7 +230,8 @@ class Viewer:
 
     def _bearing(self, anchor: np.ndarray) -> np.ndarray:
         """Unit horizontal vector from the anchor towards the first kite (downwind when right above it)."""
-        d = self.frame.positions[self.kite.parts["sail"]].mean(axis=0)[:2] - anchor
+        flying = self.kite.parts.get("sail", self.kite.parts.get("cloth"))  # a kite's sail, a mesh design's cloth
+        d = self.frame.positions[flying].mean(axis=0)[:2] - anchor
         if np.linalg.norm(d) < 1e-3:
             d = self.wind()[:2]
         n = np.linalg.norm(d)

@@ -1,0 +1,240 @@
+"""Any scene's cloth written as a mesh file, with a scene beside it that flies it as a design of its own
+(``scene.object = "mesh"``): the way to take a built-in object to a CAD tool and back (``warpsim export``).
+
+The mesh holds the object's triangles (its parts as named groups); the scene holds what a mesh cannot: the cloth's
+areal density and stick compliance, and the parts read off the model (:mod:`warpsim.objects.mesh_parts`), each
+naming its vertices by the written file's own numbering (:func:`~warpsim.objects.mesh_file.file_numbering`):
+
+* the nailed cloth particles -> a ``nail``;
+* cloth sticks stiffer than the cloth's (weight > 1) -> a ``spar`` (not rigid), and the cloth particles tied to a
+  rigid frame's virtual particles -> a rigid ``spar``;
+* a line to a nailed anchor (a kite's rope) -> the ``line``, with its length, segments and mass;
+* each particle off the cloth heavier than a twentieth of the object (a pilot, a person) -> a ``mass`` hung from the
+  cloth particles its sticks reach through lighter particles (lines, straps, a control bar), with its drag area and,
+  for a glider, the pilot's travel as its ``shift``.
+
+What the export leaves out is said in the scene file's header (a whole-canopy air law, bending hinges, the masses of
+lines and frames folded into the cloth's): a design flown from the export is the built-in's shape, not its every
+setting.
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import numpy as np
+
+from ..objects.mesh_file import file_numbering, write_mesh
+from ..objects.registry import OBJECTS
+from ..scene.build import build_model
+from ..scene.descriptor import to_toml, world_descriptor
+
+HEAVY_SHARE = 0.05
+"""A particle off the cloth heavier than this share of its object's mass is exported as a point mass."""
+
+
+def _aspect_ratio(design: np.ndarray, area: float) -> float:
+    """Span^2 / area of a cloth whose span is its widest extent in its own plane (the first principal direction of its
+    vertices ``design`` [m]), for the ``sail`` law (an export's axes are the world's, not the design's own)."""
+    centred = design - design.mean(axis=0)
+    direction = np.linalg.svd(centred, full_matrices=False)[2][0]
+    span = float(np.ptp(centred @ direction))
+    return float(np.clip(span * span / area, 0.3, 30.0))
+
+
+def _export_own(descriptor: dict, record, tris: np.ndarray, out: Path) -> tuple[Path, Path, list[str]]:
+    """A mesh design written back as it was read: its vertices in its own coordinates, its groups, and its scene
+    with ``mesh.file`` the new file (so that it reads back to the same model)."""
+    cloth = np.asarray(record.parts["cloth"], dtype=np.int64)
+    local = np.full(int(cloth.max()) + 1, -1, dtype=np.int64)
+    local[cloth] = np.arange(len(cloth))
+    first = int(record.tri_parts["cloth"][0])
+    groups = {n.removeprefix("group:"): np.asarray(ids) - first for n, ids in record.tri_parts.items() if n != "cloth"}
+    groups = groups or {"cloth": np.arange(len(tris))}
+    write_mesh(out, record.design, local[tris], groups)
+    numbering = file_numbering(out.suffix, local[tris], groups, len(record.design))
+    scene = {k: copy.deepcopy(v) for k, v in descriptor.items() if k not in ("worlds", "sweep")}
+    # the file holds the design's own coordinates, units and scale applied, and its groups: a part keeps its groups
+    # and boxes, and one that named vertices names them by the new file's own numbering
+    parts = []
+    for entry, chosen in zip(scene["mesh"]["parts"], record.selections, strict=True):
+        if "vertices" in entry:
+            entry = {**entry, "vertices": [int(i) for i in numbering[chosen]]}
+        parts.append(entry)
+    scene["mesh"].update(file=out.name, units="m", scale=1.0, parts=parts)
+    scene_path = out.with_suffix(".toml")
+    header = (
+        f"# a design exported by warpsim export to {out.name}, as it was read\n# Run: warpsim run {scene_path.name}\n"
+    )
+    scene_path.write_text(header + to_toml(scene), encoding="utf-8")
+    return out, scene_path, []
+
+
+def export_design(descriptor: dict, out: str | Path) -> tuple[Path, Path, list[str]]:
+    """Write world 0 of ``descriptor``'s object as the mesh file ``out`` (.obj, .glb, .gltf or .stl) and a scene
+    ``out`` with ``.toml`` that flies it; returns (mesh path, scene path, what the export left out)."""
+    out = Path(out)
+    single = world_descriptor(descriptor, 0)  # world 0 with its own [worlds] values
+    model = build_model(single, "cpu", "export")
+    record = model.objects[0]
+    tris = np.asarray(model.tri_indices_np, dtype=np.int64)
+    if len(tris) == 0:
+        raise ValueError(f"the {record.kind} has no triangles to export")
+    if record.kind == "mesh":
+        return _export_own(single, record, tris, out)
+    cloth = np.unique(tris)
+    local = {int(p): k for k, p in enumerate(cloth)}
+    q0 = np.asarray(model.particle_q0, dtype=np.float64)
+    mass = np.asarray(model.particle_free_mass, dtype=np.float64)
+    cx, cy = q0[cloth, :2].mean(axis=0)
+    ground = float(model.terrain.height(cx, cy))
+    origin = np.array([cx, cy, ground])
+    design = q0[cloth] - origin
+    left_out: list[str] = []
+
+    groups: dict[str, list[int]] = {}
+    taken = np.zeros(len(tris), dtype=bool)
+    named = [(n, ids) for n, ids in record.tri_parts.items() if n != "cloth"] + [("cloth", np.arange(len(tris)))]
+    for name, ids in named:
+        free = [int(t) for t in ids if not taken[t]]
+        if free:
+            groups[name.removeprefix("group:")] = free
+            taken[free] = True
+    mesh_tris = np.vectorize(local.get)(tris)
+    groups_np = {n: np.asarray(v) for n, v in groups.items()}
+    write_mesh(out, design, mesh_tris, groups_np)
+    numbering = file_numbering(out.suffix, mesh_tris, groups_np, len(cloth))
+
+    sticks = np.asarray(model.stick_particles_np, dtype=np.int64)
+    weight = model.stick_weight.numpy().astype(np.float64)
+    compliance = np.asarray(model.stick_compliance, dtype=np.float64) * weight
+    on_cloth = np.isin(sticks, cloth)
+    cloth_sticks = on_cloth.all(axis=1)
+    rope = set(int(p) for p in record.parts.get("rope", []))
+    heavy = [
+        int(p) for p in np.setdiff1d(record.particles, cloth) if mass[p] > HEAVY_SHARE * mass[record.particles].sum()
+    ]
+    virtual = [
+        int(p)
+        for p in np.setdiff1d(record.particles, cloth)
+        if int(p) not in rope
+        and int(p) not in heavy
+        and int(np.isin(sticks[(sticks == p).any(axis=1)], cloth).sum()) >= 3
+    ]
+    light = set(int(p) for p in np.setdiff1d(record.particles, cloth)) - rope - set(heavy) - set(virtual)
+    area = 0.5 * float(
+        np.linalg.norm(np.cross(q0[tris[:, 1]] - q0[tris[:, 0]], q0[tris[:, 2]] - q0[tris[:, 0]]), axis=1).sum()
+    )
+    cloth_mass = float(mass[cloth].sum() + mass[virtual].sum())
+    parts: list[dict] = []
+
+    def vertices_of(ids) -> list[int]:
+        return [int(numbering[local[int(i)]]) for i in sorted(ids)]
+
+    nailed = [int(p) for p in model.nail_particles if int(p) in local]
+    if nailed:
+        parts.append({"kind": "nail", "vertices": vertices_of(nailed)})
+    if virtual:
+        tied = {int(o) for s in sticks[np.isin(sticks, virtual).any(axis=1)] for o in s if int(o) in local}
+        parts.append({"kind": "spar", "vertices": vertices_of(tied), "rigid": True, "weight": float(weight.max())})
+    stiff = cloth_sticks & (weight > 1.0)
+    if stiff.any():
+        ends = {int(p) for p in sticks[stiff].reshape(-1)}
+        parts.append(
+            {"kind": "spar", "vertices": vertices_of(ends), "rigid": False, "weight": float(np.median(weight[stiff]))}
+        )
+    anchor_nail = getattr(record, "anchor_nail", -1)
+    if anchor_nail >= 0 and rope:
+        tow = int(record.tow)
+        rope_sticks = np.asarray(record.stick_groups.get("rope", []), dtype=np.int64)
+        length = float(model.stick_rest.numpy()[rope_sticks].sum())
+        target = model.nail_target0[anchor_nail]
+        line = {
+            "kind": "line",
+            "anchor": [float(target[0]), float(target[1])],
+            "length": length,
+            "segments": len(rope_sticks),
+            "mass_per_length": float(mass[sorted(rope)].sum()) / length,
+            "diameter": 0.0,
+        }
+        if tow in local:
+            line["vertices"] = vertices_of([tow])
+        else:
+            legs = {int(o) for s in sticks[(sticks == tow).any(axis=1)] for o in s if int(o) in local}
+            line["vertices"] = vertices_of(legs)
+            line["bridle"] = [float(v) for v in q0[tow] - origin]
+        if (weight[rope_sticks] > 1.0).any():
+            left_out.append("the rope's doubled sticks (the line's sticks all count once)")
+        parts.append(line)
+    drag = dict(zip(model.drag_particles.numpy().tolist(), model.drag_area.numpy().tolist(), strict=True))
+    for p in heavy:
+        reach, hang, seen = [p], set(), {p}
+        while reach:  # through lines, straps and bars to the cloth
+            here = reach.pop()
+            for a, b in sticks[(sticks == here).any(axis=1)]:
+                other = int(b if a == here else a)
+                if other in seen:
+                    continue
+                seen.add(other)
+                if other in local:
+                    hang.add(other)
+                elif other in light:
+                    reach.append(other)
+        if not hang:
+            continue
+        extra = float(mass[sorted(seen & light)].sum())
+        entry = {
+            "kind": "mass",
+            "vertices": vertices_of(hang),
+            "mass": float(mass[p]) + extra,
+            "position": [float(v) for v in q0[p] - origin],
+            "drag_area": float(drag.get(p, 0.0)),
+        }
+        travel = [float(getattr(record, "pitch_travel", 0.0)), float(getattr(record, "roll_travel", 0.0))]
+        if any(travel):
+            entry["shift"] = travel
+        parts.append(entry)
+    if model.hinge_count:
+        left_out.append("its bending hinges (mesh.bending_stiffness is 0)")
+    if model.canopy_count:
+        left_out.append("its whole-canopy air law (each triangle takes the scene's air.model)")
+    corner_area = np.zeros(model.particle_count)
+    np.add.at(
+        corner_area,
+        tris.reshape(-1),
+        np.repeat(
+            0.5
+            * np.linalg.norm(np.cross(q0[tris[:, 1]] - q0[tris[:, 0]], q0[tris[:, 2]] - q0[tris[:, 0]]), axis=1)
+            / 3.0,
+            3,
+        ),
+    )
+    by_area = corner_area[cloth] * cloth_mass / area
+    if np.abs(by_area - mass[cloth]).max() > 0.01 * mass[cloth].max():
+        left_out.append("its particles' own masses (the export's cloth has them by area, its frame's folded in)")
+
+    kind_section = record.kind.replace("-", "_")
+    scene = {k: copy.deepcopy(v) for k, v in descriptor.items() if k not in ("worlds", "sweep", kind_section)}
+    scene["scene"]["object"] = "mesh"
+    names = set(OBJECTS["mesh"].controls) | {"wind", "time", "ramp"}
+    scene["controls"] = [c for c in descriptor.get("controls", []) if set(c) <= names]
+    compliances = compliance[cloth_sticks & (weight <= 1.0)]
+    scene["mesh"] = {
+        "file": out.name,
+        "position": [float(cx), float(cy), 0.0],
+        "velocity": [float(v) for v in np.asarray(model.particle_qd0, dtype=np.float64)[cloth].mean(axis=0)],
+        "mass_per_area": cloth_mass / area,
+        "cloth_compliance": float(np.median(compliances)) if len(compliances) else 0.0,
+        "aspect_ratio": _aspect_ratio(design, area),
+        "parts": parts,
+    }
+    scene_path = out.with_suffix(".toml")
+    header = [
+        f"# {record.kind} exported by warpsim export to {out.name}: its cloth and its parts as a design of its own.",
+        "# Run: warpsim run " + scene_path.name,
+    ]
+    if left_out:
+        header.append("# Left out: " + "; ".join(left_out) + ".")
+    scene_path.write_text("\n".join(header) + "\n" + to_toml(scene), encoding="utf-8")
+    return out, scene_path, left_out

@@ -179,11 +179,12 @@ def export_design(descriptor: dict, out: str | Path) -> tuple[Path, Path, list[s
                 seen.add(other)
                 if other in local:
                     hang.add(other)
-                elif other in light:
+                elif other not in heavy and other not in rope:
                     reach.append(other)
         if not hang:
+            left_out.append(f"a point mass of {mass[p]:.3g} kg that no stick ties to the cloth")
             continue
-        extra = float(mass[sorted(seen & light)].sum())
+        extra = float(mass[sorted(seen & light)].sum())  # its lines' and straps' mass (a frame's is the cloth's)
         entry = {
             "kind": "mass",
             "vertices": vertices_of(hang),

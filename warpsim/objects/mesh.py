@@ -82,7 +82,7 @@ class MeshRecord(ObjectRecord):
     Attributes:
         tow: the particle its line hangs from (its bridle's knot), -1 without a line. anchor_particle: the line's
             nailed ground end. anchor_nail: its nail (-1 without a line). sag_chain: the line's particles from the
-            anchor up (:func:`~warpsim.objects.kite.anchor_pull`).
+            anchor up (:func:`~warpsim.objects.kite.anchor_pull`). line_drag: its line has a diameter (a drag).
         payload: the first point mass's particle (-1 without one): its swing is measured.
         shift_sticks: the sticks that hang the point masses with a ``shift``; shift_ends: their far ends' positions
             as built ``[k, 3]`` [m]; shift_mass: each one's mass's position as built ``[k, 3]`` [m]; shift_pitch,
@@ -96,6 +96,7 @@ class MeshRecord(ObjectRecord):
     anchor_particle: int = -1
     anchor_nail: int = -1
     sag_chain: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    line_drag: bool = False
     payload: int = -1
     shift_sticks: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
     shift_ends: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
@@ -344,6 +345,7 @@ def _add_line(builder, record, part, attach, points, place, terrain, parts_of, g
     if v["stiffness"] > 0.0:
         builder.set_compliance(sticks, length / count / v["stiffness"])
     if v["diameter"] > 0.0:
+        record.line_drag = True
         for p in rope[1:-1]:
             builder.set_drag_area(int(p), LINE_DRAG_COEFFICIENT * v["diameter"] * length / count)
     record.tow, record.anchor_particle = tow, int(rope[-1])
@@ -439,7 +441,11 @@ def apply_controls(record: MeshRecord, targets: dict, values: dict) -> None:
 
 MESH_FIGURES = {
     "line_angle": ("deg", "elevation of the line above the horizontal, anchor to knot (NaN without a line)"),
-    "line_pull": ("N", "the line's pull at the anchor from its sag (objects.kite.anchor_pull; NaN without a line)"),
+    "line_pull": (
+        "N",
+        "the line's pull at the anchor from its sag (objects.kite.anchor_pull; NaN without a line, and for a line with "
+        "a diameter, whose drag bends it too: the sag read as weight gave a sixth of the pull)",
+    ),
     "glide": ("-", "horizontal airspeed / sink of the mass centre (NaN unless it sinks faster than 0.05 m/s)"),
     "swing": (
         "deg",
@@ -460,7 +466,8 @@ def mesh_figures(model, record: MeshRecord):
         out = {"line_angle": nan, "line_pull": nan, "glide": horizontal / sink if sink > 0.05 else nan, "swing": nan}
         if record.anchor_nail >= 0:
             out["line_angle"] = line_elevation(record, view.positions)
-            out["line_pull"] = anchor_pull(record, view.positions, model.particle_free_mass, GRAVITY)
+            if not record.line_drag:  # the sag gives the pull of a line that carries only its own weight
+                out["line_pull"] = anchor_pull(record, view.positions, model.particle_free_mass, GRAVITY)
         if record.payload >= 0 and record.anchor_nail < 0:  # a kite's tail is no payload
             d = view.positions[cloth].mean(axis=0) - view.positions[record.payload]
             out["swing"] = float(np.degrees(np.arctan2(np.hypot(d[0], d[1]), d[2])))
@@ -472,7 +479,8 @@ def mesh_figures(model, record: MeshRecord):
 def mesh_hud(f: dict[str, float]) -> str:
     """The heads-up text of a mesh design: its line's angle and pull when it has a line, else its glide and swing."""
     if np.isfinite(f["line_angle"]):
-        return f"line {f['line_angle']:4.1f} deg  pull ~{f['line_pull']:5.1f} N"
+        pull = f"  pull ~{f['line_pull']:5.1f} N" if np.isfinite(f["line_pull"]) else ""
+        return f"line {f['line_angle']:4.1f} deg{pull}"
     glide = f"{f['glide']:4.1f}" if np.isfinite(f["glide"]) else " -- "
     swing = f"  swing {f['swing']:3.0f} deg" if np.isfinite(f["swing"]) else ""
     return f"sink {f['sink']:5.2f} m/s  glide {glide}{swing}"

@@ -402,3 +402,14 @@ def test_a_cloth_folded_back_on_itself_is_refused_for_bending(tmp_path, capsys):
     write_mesh(tmp_path / "fold.obj", v, np.array([[0, 1, 2], [0, 1, 3]]), {"sail": np.arange(2)})
     line = _one_error(capsys, ["info", str(_scene(tmp_path, "fold.obj", "bending_stiffness = 0.01"))])
     assert "folds 180 deg" in line or "folds 179 deg" in line, line
+
+
+@pytest.mark.dask
+def test_a_sweep_over_a_mesh_designs_cloth_stiffness_runs(tmp_path, capsys):
+    pandas = pytest.importorskip("pandas")
+    out = tmp_path / "sweep.csv"
+    argv = ["sweep", "diamond_kite", "--vary", "mesh.cloth_compliance=1e-5,1e-4", "--seconds", "2", "--out", str(out)]
+    assert main([*argv, "--workers", "1"]) == 0
+    table = pandas.read_csv(out)
+    assert list(table["mesh.cloth_compliance"]) == [1e-5, 1e-4]
+    assert table["line_angle_mean"].between(10.0, 80.0).all() and table["line_pull_mean"].isna().all()

@@ -113,6 +113,27 @@ def test_w_walks_the_kite_anchor_towards_the_kite_and_s_back():
     assert np.linalg.norm(np.array(viewer.sim.controls["anchor"]) - start) < 0.2
 
 
+def test_a_mesh_designs_line_is_walked_and_its_figures_shown_as_a_kites():
+    """The viewer knows the design of one's own by what it has (a line to a nailed anchor), not by its name: W walks
+    the diamond kite's anchor towards it, and the heads-up line shows its line angle."""
+    viewer, keys = _viewer("diamond_kite")
+    clock = Clock(viewer)
+    record = viewer.model.objects[0]
+    assert viewer.kite is record and record.kind == "mesh"
+    start = np.array(viewer._anchor())
+    kite = viewer.frame.positions[record.parts["cloth"]].mean(axis=0)[:2]
+    towards = (kite - start) / np.linalg.norm(kite - start)
+    keys.press("W")
+    clock.seconds(1.0)
+    keys.release("W")
+    moved = np.array(viewer.sim.controls["anchor"]) - start
+    assert moved @ towards == pytest.approx(viewer.WALK * 1.0, rel=0.05)
+    nail = viewer.sim.control.nail_target.numpy()[record.anchor_nail]
+    assert nail[:2] == pytest.approx(viewer.sim.controls["anchor"], abs=1e-5)
+    figures = viewer.figures(viewer.frame)[0]  # what the heads-up panel shows
+    assert 0.0 < figures["line_angle"] < 90.0 and np.isnan(figures["line_pull"])  # a line with drag: no sag pull
+
+
 def test_wind_keys_change_speed_and_direction():
     viewer, keys = _viewer("kite")  # 6 m/s along +x
     clock = Clock(viewer)

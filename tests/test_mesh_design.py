@@ -249,7 +249,7 @@ def test_the_diamond_kite_flies_steady_on_its_rigid_frame():
         assert np.abs(moved - built).max() < 0.01 * built.max()  # the frame holds its shape within 1 %
     assert spar
     angles = np.array(angles)
-    assert 30.0 < angles.mean() < 60.0 and angles.std() < 2.0  # aloft and steady (docs/designs.md: 40.3 deg)
+    assert 30.0 < angles.mean() < 60.0 and angles.std() < 2.0  # aloft and steady (docs/designs.md: 45.1 deg)
     sideways = np.array([q[record.parts["cloth"]].mean(axis=0)[1] for q in late])
     assert np.ptp(sideways) < 3.0
 
@@ -412,4 +412,4 @@ def test_a_sweep_over_a_mesh_designs_cloth_stiffness_runs(tmp_path, capsys):
     assert main([*argv, "--workers", "1"]) == 0
     table = pandas.read_csv(out)
     assert list(table["mesh.cloth_compliance"]) == [1e-5, 1e-4]
-    assert table["line_angle_mean"].between(10.0, 80.0).all() and table["line_pull_mean"].isna().all()
+    assert table["line_angle_mean"].between(10.0, 80.0).all() and (table["line_pull_mean"] > 0.0).all()

@@ -446,7 +446,11 @@ MESH_FIGURES = {
         "the line's pull at the anchor from its sag (objects.kite.anchor_pull; NaN without a line, and for a line with "
         "a diameter, whose drag bends it too: the sag read as weight gave a sixth of the pull)",
     ),
-    "glide": ("-", "horizontal airspeed / sink of the mass centre (NaN unless it sinks faster than 0.05 m/s)"),
+    "glide": (
+        "-",
+        "horizontal airspeed / sink of the mass centre (NaN unless it sinks faster than 0.05 m/s, and for a design on "
+        "a line)",
+    ),
     "swing": (
         "deg",
         "angle from the vertical of the line from the first point mass to the cloth's centre (NaN without one, and "
@@ -463,7 +467,8 @@ def mesh_figures(model, record: MeshRecord):
         nan = float("nan")
         sink = float(-view.velocity[2])
         horizontal = float(np.linalg.norm((view.velocity - view.wind)[:2]))
-        out = {"line_angle": nan, "line_pull": nan, "glide": horizontal / sink if sink > 0.05 else nan, "swing": nan}
+        glide = horizontal / sink if sink > 0.05 and record.anchor_nail < 0 else nan  # a tethered design glides not
+        out = {"line_angle": nan, "line_pull": nan, "glide": glide, "swing": nan}
         if record.anchor_nail >= 0:
             out["line_angle"] = line_elevation(record, view.positions)
             if not record.line_drag:  # the sag gives the pull of a line that carries only its own weight

@@ -31,6 +31,7 @@ of such boxes: the vertices inside any of them).
 
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass
 
 import numpy as np
@@ -110,7 +111,9 @@ def parse_parts(entries) -> list[Part]:
         allowed = {"kind", *SELECTORS, *_KEYS[kind]}
         unknown = sorted(set(entry) - allowed)
         if unknown:
-            raise ValueError(f"{where}: unknown key {unknown[0]!r}; its keys are {', '.join(sorted(allowed))}")
+            close = difflib.get_close_matches(str(unknown[0]), sorted(allowed), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ValueError(f"{where}: unknown key {unknown[0]!r}{hint}; its keys are {', '.join(sorted(allowed))}")
         chosen = [s for s in SELECTORS if s in entry]
         if len(chosen) != 1:
             raise ValueError(f"{where} must choose its vertices with exactly one of group, vertices or box")
@@ -234,7 +237,12 @@ def _labels(part: Part, mesh, design: np.ndarray) -> np.ndarray:
             inside = ((design >= np.asarray(box[:3])) & (design <= np.asarray(box[3:]))).all(axis=1)
             labels[inside] = k
     if (labels < 0).all():
-        raise ValueError(f"{part.label()} selects no vertex of the mesh")
+        low, high = design.min(axis=0), design.max(axis=0)
+        bounds = ", ".join(f"{a:.3g}..{b:.3g}" for a, b in zip(low, high, strict=True))
+        raise ValueError(
+            f"{part.label()} selects no vertex of the mesh (its vertices span x, y, z = {bounds} m in the design's "
+            "own coordinates)"
+        )
     return labels
 
 
@@ -253,12 +261,35 @@ def parts_schema() -> dict:
         "kind": {"enum": list(_KEYS)},
         "group": {"anyOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}, "minItems": 1}]},
         "vertices": {"type": "array", "items": {"type": "integer", "minimum": 0}, "minItems": 1},
-        "box": {"type": "array", "minItems": 1},
+        "box": {
+            "anyOf": [
+                {"type": "array", "items": {"type": "number"}, "minItems": 6, "maxItems": 6},
+                {
+                    "type": "array",
+                    "minItems": 1,
+                    "items": {"type": "array", "items": {"type": "number"}, "minItems": 6, "maxItems": 6},
+                },
+            ]
+        },
     }
+    required = [
+        {
+            "if": {"properties": {"kind": {"const": kind}}},
+            "then": {"required": [k for k, (_, d) in keys.items() if d == "required"]},
+        }
+        for kind, keys in _KEYS.items()
+        if any(d == "required" for _, d in keys.values())
+    ]
     for keys in _KEYS.values():
         for key, (kind_of, _) in keys.items():
             properties.setdefault(key, types[kind_of])
     return {
         "type": "array",
-        "items": {"type": "object", "required": ["kind"], "properties": properties, "additionalProperties": False},
+        "items": {
+            "type": "object",
+            "required": ["kind"],
+            "properties": properties,
+            "additionalProperties": False,
+            "allOf": required,
+        },
     }

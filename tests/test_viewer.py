@@ -139,7 +139,9 @@ def test_wind_keys_change_speed_and_direction():
     clock = Clock(viewer)
     keys.tap("PLUS")
     keys.tap("PLUS")
-    clock.ticks(1)
+    clock.ticks(1)  # the wind moves at WIND_RATE towards what was asked for
+    assert viewer.sim.controls["wind"] == pytest.approx((6.0 + viewer.WIND_RATE * viewer.frame_interval, 0.0, 0.0))
+    clock.seconds(1.0)
     assert viewer.sim.controls["wind"] == pytest.approx((8.0, 0.0, 0.0))
     assert viewer.sim.control.wind.numpy()[0] == pytest.approx([8.0, 0.0, 0.0])
     keys.tap("[")
@@ -149,8 +151,35 @@ def test_wind_keys_change_speed_and_direction():
     assert np.linalg.norm(w) == pytest.approx(8.0)
     for _ in range(12):
         keys.tap("MINUS")
-    clock.ticks(1)
+        clock.seconds(0.5)
+    clock.seconds(1.0)
     assert np.linalg.norm(viewer.sim.controls["wind"]) == 0.0  # never below calm
+
+
+@pytest.mark.parametrize("how", ["held", "auto-repeat"])
+def test_holding_plus_raises_the_wind_at_a_bounded_rate_and_stops_at_the_scenes_limit(how):
+    """A held + (a page's held key, or the window's auto-repeat: a press every 1/30 s) raises the wind at
+    WIND_RATE; once let go it runs on at most WIND_LEAD; it never passes the kite's wind limit. (It once took
+    the kite's wind from 7 to 38 m/s in 2 s, and the kite blew up.)"""
+    viewer, keys = _viewer("kite")  # 6 m/s
+    clock = Clock(viewer)
+    if how == "held":
+        keys.press("PLUS")
+        clock.seconds(2.0)
+        keys.release("PLUS")
+    else:
+        for _ in range(60):
+            keys.tap("PLUS")
+            clock.seconds(1 / 30)
+    speed = float(np.linalg.norm(viewer.sim.controls["wind"]))
+    assert speed == pytest.approx(6.0 + viewer.sim.state.time * viewer.WIND_RATE, abs=0.1)
+    clock.seconds(2.0)
+    after = float(np.linalg.norm(viewer.sim.controls["wind"]))
+    assert speed <= after <= speed + viewer.WIND_LEAD + 1e-9
+    keys.press("PLUS")
+    clock.seconds(4.0)
+    assert np.linalg.norm(viewer.sim.controls["wind"]) == pytest.approx(viewer.wind_limit) == 12.0
+    assert not viewer.blew_up
 
 
 def test_space_stops_simulated_time_and_period_steps_one_frame():
@@ -267,7 +296,7 @@ def test_a_flight_recorded_in_the_viewer_replays_headless_bit_for_bit(tmp_path):
         if key:
             keys.release(key)
     keys.tap("PLUS")
-    clock.seconds(0.4)
+    clock.seconds(0.6)  # the wind reaches 1 m/s after 0.5 s (WIND_RATE)
     viewer.close()
     again = tmp_path / "again.h5"
     assert main(["run", "--replay", str(path), "--h5", str(again), "--quiet"]) == 0

@@ -39,6 +39,8 @@ class ObjectSpec:
             (in the figure's unit) that counts as a swing.
         caveat: ``caveat(descriptor) -> str | None``: what the run's closing figures are not, said under them
             (e.g. a figure set by the mesh rather than by the object's physics); None when there is nothing to say.
+        wind_limit: the strongest wind [m/s] the object is made to fly in: the viewer's + key stops there (or at
+            the scene's own wind, when that is stronger).
     """
 
     config: type
@@ -54,6 +56,7 @@ class ObjectSpec:
     hud: Callable | None = None
     oscillations: dict[str, float] = field(default_factory=dict)
     caveat: Callable | None = None
+    wind_limit: float = 20.0
 
     def __post_init__(self) -> None:
         # a design is applied on top of the default design's values: one that leaves out a key another design sets
@@ -96,6 +99,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         figures=figures.GLIDER_FIGURES,
         measure_figures=figures.glider_figures,
         hud=figures.glider_hud,
+        wind_limit=15.0,  # above this no hang glider is flown (its trim speed is 11-12 m/s)
     ),
     "kite": ObjectSpec(
         config=kite.KiteConfig,
@@ -110,6 +114,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         figures=figures.KITE_FIGURES,
         measure_figures=figures.kite_figures,
         hud=figures.kite_hud,
+        wind_limit=12.0,  # a delta kite's upper wind range (Beaufort 5-6)
     ),
     "parachute": ObjectSpec(
         config=parachute.ParachuteConfig,
@@ -134,6 +139,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         figures=mesh.MESH_FIGURES,
         measure_figures=mesh.mesh_figures,
         hud=mesh.mesh_hud,
+        wind_limit=12.0,
     ),
 }
 

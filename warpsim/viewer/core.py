@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io.style import COLOURS
+from ..objects.registry import OBJECTS
 from ..run.diagnostics import Frame
 from ..run.figures import Figures
 from ..run.simulation import BlowUpError, Simulation
@@ -93,6 +94,9 @@ class Viewer:
     RAMP = 2.0  # [1/s] of simulated time: a held arrow takes pitch or roll from 0 to 1 in 0.5 s, release back
     WALK = 2.0  # [m/s] walking speed of the kite's anchor
     WIND_STEP = 1.0  # [m/s] per + or - press
+    WIND_RATE = 2.0  # [m/s per simulated second]: how fast the wind moves to what + and - asked for
+    WIND_LEAD = 2.0  # [m/s]: what + and - ask for runs at most this far ahead of the wind (a key's auto-repeat
+    # adds nothing beyond it: holding + raises the wind at WIND_RATE, and at most WIND_LEAD more once let go)
     WIND_TURN = 15.0  # [deg] per [ or ] press
     BUDGET = 0.05  # [s] of wall time stepping per tick at most, so that the window keeps answering
     MAX_FPS = 60.0  # pictures per wall second at most: the rest of the time is left to stepping or idle
@@ -142,6 +146,11 @@ class Viewer:
         self._last = None  # wall time of the last tick
         self._rate = []  # (wall time, simulated time, steps) of the last ticks, for the rates shown
         self._pending_wind = None
+        self._wind_goal: float | None = None  # [m/s] the wind speed + and - asked for, reached at WIND_RATE
+        self.wind_limit = max(
+            min(OBJECTS[r.kind].wind_limit for r in self.model.objects),
+            float(np.linalg.norm(sim.settings.wind.velocity[:2])),
+        )  # [m/s] + stops here: the strongest wind the scene's objects are made for (or the scene's own)
         self._one_frame = False
         self._restarted = False
         self.recorder = None
@@ -216,6 +225,17 @@ class Viewer:
                 side = np.array([ahead[1], -ahead[0]])
                 move = (forward * ahead + right * side) * self.WALK * self.frame_interval
                 values["anchor"] = tuple(float(v) for v in anchor + move)
+        for key, sign in (("PLUS", 1.0), ("MINUS", -1.0)):
+            if key in held:  # a page's held key (the window's + comes as repeated presses)
+                self._nudge_wind(sign)
+        if self._wind_goal is not None:
+            w = np.asarray(self._pending_wind if self._pending_wind is not None else self.wind(), dtype=np.float64)
+            speed = float(np.hypot(w[0], w[1]))
+            heading = math.atan2(w[1], w[0]) if speed > 1e-9 else math.atan2(*self._chase_heading[::-1])
+            speed = _towards(speed, self._wind_goal, self.WIND_RATE * self.frame_interval)
+            if abs(speed - self._wind_goal) < 1e-9:
+                self._wind_goal = None
+            self._pending_wind = (speed * math.cos(heading), speed * math.sin(heading), float(w[2]))
         if self._pending_wind is not None:
             values["wind"], self._pending_wind = self._pending_wind, None
         if values:
@@ -243,12 +263,20 @@ class Viewer:
             return np.asarray(self.sim.controls["wind"], dtype=np.float64)
         return np.asarray(self.sim.settings.wind.velocity, dtype=np.float64)
 
-    def _change_wind(self, faster: float = 0.0, turn: float = 0.0) -> None:
+    def _nudge_wind(self, sign: float) -> None:
+        """+ (``sign`` 1) or - (-1): ask for WIND_STEP more or less wind, unless what is asked for already runs
+        WIND_LEAD ahead of the wind; never below calm nor above :attr:`wind_limit`."""
+        speed = float(np.hypot(*self.wind()[:2]))
+        goal = speed if self._wind_goal is None else self._wind_goal
+        if sign * (goal - speed) + self.WIND_STEP <= self.WIND_LEAD + 1e-9:
+            self._wind_goal = min(max(goal + sign * self.WIND_STEP, 0.0), self.wind_limit)
+
+    def _change_wind(self, turn: float = 0.0) -> None:
+        """Turn the wind by ``turn`` [deg] (anticlockwise seen from above) at the next frame start."""
         w = self._pending_wind if self._pending_wind is not None else tuple(self.wind())
         x, y, z = w
         speed = math.hypot(x, y)
         heading = math.atan2(y, x) if speed > 1e-9 else math.atan2(*self._chase_heading[::-1])
-        speed = min(max(speed + faster, 0.0), 60.0)
         heading += math.radians(turn)
         self._pending_wind = (speed * math.cos(heading), speed * math.sin(heading), z)
 
@@ -279,10 +307,10 @@ class Viewer:
                 self.camera = CAMERAS[(CAMERAS.index(self.camera) + 1) % len(CAMERAS)]
             elif key in ("H", "?"):
                 self.show_help = not self.show_help
-            elif key == "PLUS":
-                self._change_wind(faster=self.WIND_STEP)
-            elif key == "MINUS":
-                self._change_wind(faster=-self.WIND_STEP)
+            elif key == "PLUS" and "PLUS" not in self.backend.held():  # a held key ramps at each frame start
+                self._nudge_wind(1.0)
+            elif key == "MINUS" and "MINUS" not in self.backend.held():
+                self._nudge_wind(-1.0)
             elif key == "[":
                 self._change_wind(turn=self.WIND_TURN)
             elif key == "]":
@@ -295,7 +323,7 @@ class Viewer:
         self.sim.restore(self.initial)
         self.frame = self.sim.start_frames()
         self.axes = {"pitch": 0.0, "roll": 0.0}
-        self._pending_wind = None
+        self._pending_wind = self._wind_goal = None
         self._debt, self.error, self.paused, self.blew_up = 0.0, "", False, False
         self._restarted = True  # the wall time of the tick that restarts is not owed to the new run
         if self._record_path is not None:

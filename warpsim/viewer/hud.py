@@ -14,7 +14,7 @@ KEYS = (
     ("Up / Down", "hang glider: bar in (pitch +1: nose down, faster) / bar out (pitch -1: slower)"),
     ("Left / Right", "hang glider: weight shift (roll -1 / +1), to turn that way"),
     ("W A S D", "kite: walk the line's ground anchor towards / left of / away from / right of the kite"),
-    ("+ / -", "wind speed up / down by 1 m/s"),
+    ("+ / -", "wind speed up / down: 1 m/s a press, 2 m/s a second held, up to the scene's limit"),
     ("[ / ]", "wind direction 15 deg anticlockwise / clockwise (seen from above)"),
     ("Space", "pause / go on"),
     (".", "one frame (when paused)"),

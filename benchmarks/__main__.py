@@ -83,6 +83,19 @@ def table(rows: list[dict]) -> str:
             renderer = next(iter(r["scenes"].values()))["renderer"]
             lines.append(f"| viewer | `warpsim view` at {r['size']} on {renderer}: {scenes} ||||||||||")
             continue
+        if r["case"] == "browser":
+            scenes = "; ".join(
+                f"{name} {v['page_fps']:.0f} fps drawn of {v['received_fps']:.0f} received at "
+                f"{100 * v['resolution']:.0f}% resolution, {v['bytes_per_s'] / 1e3:.0f} kB/s, "
+                f"{v['realtime_factor']:.2f}x real time"
+                for name, v in r["scenes"].items()
+            )
+            renderer = next(iter(r["scenes"].values()))["renderer"]
+            lines.append(
+                f"| browser | `warpsim view --browser` at {r['size']}, headless Chromium on {renderer}: "
+                f"{scenes} ||||||||||"
+            )
+            continue
         if r["case"] == "sweep-kites-64":
             lines.append(
                 f"| sweep-kites-64 | `warpsim sweep` of {r['cases']} kite cases ({r['seconds_per_case']:g} s each, "

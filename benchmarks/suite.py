@@ -365,6 +365,29 @@ def case_viewer(opts: Options) -> dict:
     return {"case": "viewer", "size": "1280x720", "scenes": json.loads(result.stdout.splitlines()[-1])}
 
 
+def case_browser(opts: Options) -> dict:
+    """`warpsim view --browser` watched in headless Chromium at 1280x720: the page's pictures/s, bytes/s, resolution"""
+    import importlib.util
+    import shutil
+
+    if importlib.util.find_spec("playwright") is None or importlib.util.find_spec("aiohttp") is None:
+        return {"case": "browser", "skipped": "needs aiohttp and playwright (pip install -e '.[test]')"}
+    if not shutil.which("/usr/bin/chromium"):
+        return {"case": "browser", "skipped": "needs Debian's chromium (apt-get install chromium)"}
+    seconds = max(4.0, 4 * opts.min_time)
+    result = subprocess.run(
+        [sys.executable, "-m", "benchmarks.browser", str(seconds), "1280x720"],
+        capture_output=True,
+        text=True,
+        cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+    )
+    if result.returncode != 0:
+        raise RuntimeError(f"the browser benchmark failed: {result.stderr.strip()[-2000:]}")
+    import json
+
+    return {"case": "browser", "size": "1280x720", "scenes": json.loads(result.stdout.splitlines()[-1])}
+
+
 SWEEP_AXES = ("kite.tow_point=0.2:0.55:8", "wind.speed=4:11:8")  # 64 cases
 SWEEP_SECONDS, SWEEP_CHUNK = 8.0, 8
 
@@ -590,6 +613,7 @@ CASES: dict[str, Callable[[Options], dict]] = {
     "air-kite": case_air(),
     "startup": case_startup,
     "viewer": case_viewer,
+    "browser": case_browser,
     "build-scaling": case_build_scaling,
     "sweep-kites-64": case_sweep,
     "threads-kites": case_threads,

@@ -130,7 +130,7 @@ def typed(out: Path) -> dict:
     keys = ("plus", "plus", "plus", "equal", "KP_Add", "minus", "minus", "KP_Subtract", "question", "question")
     for key in (*keys, "slash", "bracketleft", "bracketright", "bracketright"):
         xdotool("key", key)
-        clock.ticks(5)
+        clock.seconds(0.6)  # + and - move the wind 1 m/s in 0.5 s (Viewer.WIND_RATE)
         wind = viewer.wind()
         heading = float(np.degrees(np.arctan2(wind[1], wind[0])))
         steps.append([key, float(np.linalg.norm(wind[:2])), viewer.show_help, heading])

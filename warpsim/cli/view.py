@@ -6,6 +6,7 @@ import contextlib
 import sys
 
 from .._interrupt import interruptible
+from ..viewer.backend import ViewerUnavailableError
 from .common import (
     EXIT_BLOWUP,
     EXIT_INTERRUPTED,
@@ -84,8 +85,12 @@ def command(args) -> int:
     from ..run.simulation import Simulation, available_cores
     from ..scene.descriptor import to_toml
     from ..viewer.core import Viewer
-    from ..viewer.gl import PygletBackend
 
+    browser = args.browser or args.host is not None or args.port is not None
+    if browser and args.screenshot:
+        raise UsageError(
+            "--screenshot is for the window: with --browser the page is the picture (take it in the browser)"
+        )
     h5_path = checked_output(check_recording_path, args.h5, "--h5")
     shot = checked_output(check_picture_path, args.screenshot, "--screenshot")
     if shot is not None:
@@ -98,16 +103,26 @@ def command(args) -> int:
     device = check_device(args.device)
     descriptor, _, where = load_scene(args)
     same_file_check(args.scene, {"--h5": h5_path, "--screenshot": shot})
-    from ..viewer import gl
+    if browser:
+        from ..viewer import web
 
-    gl.check_display()  # a missing extra or display is said before the model is built
+        web._aiohttp()  # a missing extra is said before the model is built
+        backend = web.BrowserBackend(args.host or "127.0.0.1", 8765 if args.port is None else args.port, size=args.size)
+    else:
+        from ..viewer import gl
+
+        gl.check_display()  # a missing extra or display is said before the model is built
+        backend = gl.PygletBackend(args.size, keep_pictures=shot is not None)
     sim = Simulation(descriptor, device=device, where=where, threads=args.threads or available_cores())
-    backend = PygletBackend(args.size, keep_pictures=shot is not None)
     interruptible()  # the recording opens next
     try:
         viewer = Viewer(sim, backend, f"warpsim: {where}", h5_path, to_toml(descriptor), where, seconds=args.seconds)
     except RecordingError as err:
         raise UsageError(f"--h5 {err}") from None
+    except ViewerUnavailableError as err:
+        raise UsageError(f"--browser: {err}") from None
+    if browser:
+        return _serve(viewer, backend, sim)
     lost = _on_display_lost(viewer, backend, shot)  # kept referenced: Xlib holds only a C pointer to it
     # Ctrl-C in the terminal, or SIGTERM, quits like Esc, between two frames: the recording closed with every frame
     # flown (an interrupt raised between a step and its write once cost the frames since the last checkpoint), the
@@ -125,6 +140,25 @@ def command(args) -> int:
     return EXIT_BLOWUP if viewer.blew_up else 0
 
 
+def _serve(viewer, backend, sim) -> int:
+    """Fly ``viewer`` in the browser: print the page's address, wait for the first page, then fly at wall-clock
+    pace until the pilot quits, --seconds, Ctrl-C or SIGTERM; the recording is closed however it ends."""
+    print(f"open {backend.url} in a browser (Ctrl-C stops the server)", flush=True)
+    if not backend.token and backend.host not in ("127.0.0.1", "localhost", "::1"):
+        print("warning: no token is asked for on a non-loopback address", file=sys.stderr)
+    with _signals_quit(viewer), contextlib.suppress(KeyboardInterrupt):
+        try:
+            if backend.wait_for_page(stop=lambda: viewer.quit):
+                print("a page connected: flying", flush=True)
+                viewer.run()  # closes the recording and the server, however it ends
+        finally:
+            viewer.close()
+    print(f"simulated {sim.state.time:.2f} s; sent {viewer.pictures} pictures to {backend.connections} page(s)")
+    for path in viewer.takes:
+        print(f"recording: {path}")
+    return EXIT_BLOWUP if viewer.blew_up else 0
+
+
 def add_parser(sub) -> None:
     """Add the ``view`` command to the subparsers ``sub``."""
     view = sub.add_parser(
@@ -134,7 +168,7 @@ def add_parser(sub) -> None:
         "ramp pitch/roll to +-1, release ramps back), W/A/S/D walk the kite's anchor, +/- and [/] change the wind, "
         "Space pauses, '.' steps one frame, R restarts, C cycles the camera, H shows every key, Esc quits. "
         "Needs the viewer extra (pip install -e '.[viewer]') and a display (on a remote machine: ssh -X, or "
-        "xvfb-run with --screenshot).",
+        "xvfb-run with --screenshot), or --browser to fly it in a web page instead.",
     )
     view.add_argument("scene", metavar="SCENE")
     add_scene_options(view)
@@ -148,6 +182,21 @@ def add_parser(sub) -> None:
         "--seconds", type=number_type("--seconds"), help="close after this much simulated time (default: when you quit)"
     )
     view.add_argument("--screenshot", metavar="OUT.png", help="save the last picture drawn as a PNG when closing")
+    view.add_argument(
+        "--browser",
+        action="store_true",
+        help="serve the flight to a web browser instead of opening a window: prints the page's address; the "
+        "first page steers, later ones watch (needs the browser extra: pip install -e '.[browser]')",
+    )
+    view.add_argument(
+        "--host",
+        metavar="H",
+        help="with --browser: the address to listen on (default 127.0.0.1, this machine only; any other asks for "
+        "the token printed in the page's address). From elsewhere, prefer ssh -L 8765:127.0.0.1:8765",
+    )
+    view.add_argument(
+        "--port", type=int, metavar="N", help="with --browser: the port to listen on (default 8765; 0: any free one)"
+    )
     view.add_argument(
         "--size", type=size_type, default=(1280, 720), metavar="WxH", help="window size (default 1280x720)"
     )

@@ -80,6 +80,10 @@ class Backend:
         """Keys held down now."""
         raise NotImplementedError
 
+    def applied(self, frame: int, held: frozenset[str]) -> None:
+        """The viewer read ``held`` (from :meth:`held`) at the start of frame ``frame`` and steers that frame by it
+        (a backend that acknowledges inputs, or logs what was flown, overrides this)."""
+
     def draw(self, positions: np.ndarray, view: View, hud: list[str], overlay: list[str]) -> None:
         """Draw one picture: the points ``positions`` ``[P + added, 3]`` [m] (``DrawList.place`` of the particles)
         seen from ``view``, the ``hud`` lines on a panel in a corner and ``overlay`` lines (help, errors) in the

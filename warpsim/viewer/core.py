@@ -209,6 +209,7 @@ class Viewer:
     def _controls_at_frame_start(self, index: int) -> None:
         """Set the keyboard's controls for the frame about to be stepped (see Simulation.advance)."""
         held = self.backend.held()
+        self.backend.applied(index, held)
         values: dict = {}
         if self.has_glider_keys:
             for name, minus, plus in (("pitch", "DOWN", "UP"), ("roll", "LEFT", "RIGHT")):

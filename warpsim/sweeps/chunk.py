@@ -99,10 +99,14 @@ def _chunk_recorder(task: ChunkTask, sim):
     """The chunk's recording (``--h5-dir``), written afresh (a retried task starts it again), or None."""
     if not task.h5:
         return None
+    from ..io import OutputWriteError
     from ..io.outputs import open_recording
 
     path = Path(task.h5)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:  # a file in the way of --h5-dir (checked up front only where no scheduler is given)
+        raise OutputWriteError(f"--h5-dir {path.parent}: cannot make the folder ({err.strerror})") from None
     if path.is_symlink():  # the chunk's own name: a link planted there is removed, never written through
         path.unlink()
     # the recorder takes the file's writer lock before it truncates it: a run writing it is never overwritten

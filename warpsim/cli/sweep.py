@@ -83,7 +83,7 @@ def command(args) -> int:
         sweeps.check_workers(args.workers)
     h5_dir = _check_h5_dir(args.h5_dir) if args.h5_dir and not args.scheduler else args.h5_dir
     if h5_dir and args.scheduler and Path(h5_dir).exists() and not Path(h5_dir).is_dir():
-        raise UsageError(f"--h5-dir {h5_dir} is a file here, not a folder")  # a file in the way here, where it is likely shared
+        raise UsageError(f"--h5-dir {h5_dir} is a file here, not a folder")
     h5_dir = Path(h5_dir) if h5_dir else None
     total = len(plan.cases)
     if not args.quiet:

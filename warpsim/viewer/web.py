@@ -251,7 +251,9 @@ class BrowserBackend(Backend):
 
     async def _file(self, request):
         _, web = _aiohttp()
-        if not self._allowed(request):
+        # the page's scripts and licence are public code: only the page itself (and /ws) ask for the token, so that the
+        # scripts it loads without one are served
+        if request.path == "/" and not self._allowed(request):
             return web.Response(status=403, text="a token is needed: use the address warpsim printed\n")
         name, kind = FILES[request.path]
         body = resources.files(__package__).joinpath("web", name).read_bytes()
@@ -444,7 +446,12 @@ class BrowserBackend(Backend):
 
 
 def _is_number(value) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value) and abs(value) < 1e6
+    if not isinstance(value, int | float) or isinstance(value, bool):
+        return False
+    try:
+        return math.isfinite(value) and abs(value) < 1e6
+    except OverflowError:  # an integer of hundreds of digits
+        return False
 
 
 def _is_count(value) -> bool:

@@ -11,6 +11,7 @@ import asyncio
 import gc
 import importlib.util
 import json
+import math
 import os
 import re
 import shutil
@@ -212,6 +213,7 @@ def test_a_malformed_message_closes_that_connection_only():
         json.dumps({"type": "keys", "seq": -1, "held": []}), json.dumps({"type": "drag", "dx": "1e400", "dy": 0}),
         '{"type": "scroll", "clicks": 1e999}', '{"type": "drag", "dx": ' + "9" * 400 + ', "dy": 0}',
         json.dumps({"type": "launch"}), json.dumps({"type": "keys", "seq": 1, "held": ["UP"] * 10000}),
+        b'{"type": "keys", "seq": 1, "held": ["UP"]}',  # a binary message, even of good JSON
     ]  # fmt: skip
 
     async def check():
@@ -220,7 +222,7 @@ def test_a_malformed_message_closes_that_connection_only():
             pilot = await _connect(session, backend)
             for text in bad:
                 ws = await _connect(session, backend)
-                await ws.send_str(text)
+                await (ws.send_bytes(text) if isinstance(text, bytes) else ws.send_str(text))
                 async with asyncio.timeout(10):
                     ends = (aiohttp.WSMsgType.CLOSE, aiohttp.WSMsgType.CLOSED)
                     while (await ws.receive()).type not in ends:
@@ -240,6 +242,58 @@ def test_a_malformed_message_closes_that_connection_only():
     assert not viewer.error
 
 
+def test_a_pilot_who_hands_over_or_leaves_with_a_key_held_lets_it_go():
+    """Keys held by a pilot who hands over, or whose page goes away, are let go at once (a held roll would
+    otherwise steer on for ever) and the next pilot's keys messages are acknowledged by their own count."""
+    _require("aiohttp")
+    import aiohttp
+
+    from warpsim.viewer.web import decode_frame
+
+    viewer, backend = _browser_viewer("hang-glider")
+
+    async def role(ws):
+        async with asyncio.timeout(10):
+            while True:
+                message = await ws.receive()
+                if message.type == aiohttp.WSMsgType.TEXT and json.loads(message.data)["type"] == "role":
+                    return json.loads(message.data)
+
+    def flown():
+        return backend.applied_log[-1][1] if backend.applied_log else None
+
+    async def until(test):
+        async with asyncio.timeout(10):
+            while not test():
+                await asyncio.sleep(0.02)
+
+    async def check():
+        async with aiohttp.ClientSession() as session:
+            first = await _connect(session, backend)
+            second = await _connect(session, backend)
+            assert (await role(second))["role"] == "spectator"
+            await first.send_str(json.dumps({"type": "keys", "seq": 7, "held": ["RIGHT"]}))
+            await until(lambda: flown() == ("RIGHT",))
+            await first.send_str(json.dumps({"type": "handover"}))
+            await until(lambda: backend.pilot == 2 and flown() == ())  # handed over: let go
+            await second.send_str(json.dumps({"type": "keys", "seq": 1, "held": ["LEFT"]}))
+            await until(lambda: flown() == ("LEFT",))
+            acks = set()  # (pilot, ack) of the pictures seen since the test began
+            async with asyncio.timeout(10):
+                while (2, 1) not in acks:
+                    _, ack, header, _ = decode_frame((await _pictures(second, 1))[0])
+                    acks.add((header["pilot"], ack))
+            await second.close()  # the pilot leaves with LEFT held
+            await until(lambda: backend.pilot == 1 and flown() == ())  # gone: let go
+            await first.close()
+            return acks
+
+    with _Flying(viewer):
+        acks = asyncio.run(check())
+    assert (1, 7) in acks and not {(2, a) for a in range(2, 8)} & acks  # each pilot's own count, never the other's
+    assert [keys for _, keys, _ in backend.applied_log][-4:] == [("RIGHT",), (), ("LEFT",), ()]
+
+
 def _vanish(port: int) -> None:
     """A page that opens the WebSocket, takes part of what is sent and vanishes (its socket reset, no close)."""
     import base64
@@ -254,14 +308,20 @@ def _vanish(port: int) -> None:
         )
         got = b""
         while len(got) < 2000:
-            got += raw.recv(4096)
+            more = raw.recv(4096)
+            if not more:
+                break  # the server closed first
+            got += more
         assert got.startswith(b"HTTP/1.1 101")
+        # half a masked text frame of 100 bytes: the header and mask, then 10 bytes of the payload
+        raw.sendall(bytes([0x81, 0x80 | 100]) + os.urandom(4) + os.urandom(10))
         raw.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))  # reset, mid-message
 
 
 def _run_with_clients(clients: int, frames: int):
     """Positions after ``frames`` frames of the glider flown on a test clock, with ``clients`` pages connecting,
-    taking pictures and vanishing meanwhile (none steers); and the Python memory held before and after."""
+    taking pictures, sending keys, drags and wheel turns and vanishing meanwhile, while a pilot that holds no key
+    stays connected (so that they are spectators: none steers); and the Python memory held before and after."""
     import aiohttp
 
     viewer, backend = _browser_viewer("hang-glider")
@@ -269,13 +329,19 @@ def _run_with_clients(clients: int, frames: int):
 
     async def churn():
         async with aiohttp.ClientSession() as session:
+            pilot = await _connect(session, backend)
             for k in range(clients):
                 if k % 2:
                     ws = await _connect(session, backend)
                     await ws.receive()  # the hello
+                    for message in ({"type": "keys", "seq": 1, "held": ["RIGHT", "PLUS", "R"]},
+                                    {"type": "drag", "dx": 40, "dy": 5}, {"type": "scroll", "clicks": 3}):  # fmt: skip
+                        await ws.send_str(json.dumps(message))
+                    await _pictures(ws, 1)
                     await ws.close()  # politely
                 else:
                     _vanish(backend.port)
+            await pilot.close()
 
     thread = threading.Thread(target=lambda: asyncio.run(churn()) if clients else None)
     gc.collect()
@@ -284,7 +350,12 @@ def _run_with_clients(clients: int, frames: int):
     thread.start()
     for _ in range(frames):
         clock.ticks(1)
-    thread.join(60)
+    viewer.paused = True  # then only pictures, until the pages are done
+    deadline = time.monotonic() + 120
+    while thread.is_alive() and time.monotonic() < deadline:
+        clock.ticks(1)
+        time.sleep(0.005)
+    assert not thread.is_alive()
     deadline = time.monotonic() + 10
     while backend.clients and time.monotonic() < deadline:
         time.sleep(0.05)
@@ -302,9 +373,97 @@ def test_a_hundred_connects_and_disconnects_leave_the_flight_and_memory_unchange
     _require("aiohttp")
     quiet, _, _, _ = _run_with_clients(0, 120)
     busy, grown, left, connections = _run_with_clients(100, 120)
-    assert connections == 100 and left == 0
+    assert connections == 101 and left == 0  # and the pilot
     assert np.array_equal(quiet, busy)  # bit for bit: watching changes nothing
     assert grown < 2_000_000, f"{grown} bytes more held after 100 pages came and went"
+
+
+def test_while_no_page_is_connected_the_flight_waits():
+    """The server's flight stands still while nobody watches (it flew on to the end of --seconds unseen), and
+    goes on when a page comes back; what was printed says so."""
+    _require("aiohttp")
+    import contextlib
+    import io
+
+    import aiohttp
+
+    from warpsim.cli.view import _serve
+
+    viewer, backend = _browser_viewer("flag")
+    printed = io.StringIO()
+
+    async def look(seconds: float) -> float:
+        async with aiohttp.ClientSession() as session:
+            ws = await _connect(session, backend)
+            await _pictures(ws, 3)
+            await asyncio.sleep(seconds)
+            await ws.close()
+        return viewer.sim.state.time
+
+    def serve():
+        with contextlib.redirect_stdout(printed):
+            _serve(viewer, backend, viewer.sim)
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    time.sleep(0.5)
+    assert viewer.sim.state.time == 0.0  # no page yet
+    seen = asyncio.run(look(1.0))
+    deadline = time.monotonic() + 10
+    while backend.clients and time.monotonic() < deadline:
+        time.sleep(0.02)
+    time.sleep(0.3)
+    gone = viewer.sim.state.time
+    time.sleep(1.0)
+    still = viewer.sim.state.time
+    back = asyncio.run(look(0.5))
+    viewer.quit = True
+    thread.join(30)
+    assert not thread.is_alive()
+    assert 0.5 < seen and gone == still and back > still + 0.2
+    out = printed.getvalue()
+    assert "waiting for a page" in out and "no page connected: the flight waits for one" in out
+
+
+@pytest.mark.parametrize(
+    "extra, words",
+    [
+        (["--port", "70000"], "0 to 65535"),
+        (["--port", "TAKEN"], "cannot listen"),
+        (["--host", "no-such-host.invalid"], "--host no-such-host.invalid"),
+    ],
+)
+def test_a_port_or_host_that_cannot_be_listened_on_is_one_line_before_the_model_is_built(
+    extra, words, capsys, monkeypatch
+):
+    _require("aiohttp")
+    import socket
+
+    from warpsim.cli import main
+    from warpsim.run import simulation
+
+    def no_model(*args, **kwargs):
+        raise AssertionError("the model was built first")
+
+    monkeypatch.setattr(simulation, "Simulation", no_model)
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        argv = ["view", "kite", *[str(taken.getsockname()[1]) if a == "TAKEN" else a for a in extra]]
+        try:
+            code = main(argv)
+        except SystemExit as exit:
+            code = exit.code
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and words in err, err
+
+
+def test_an_address_on_every_interface_is_printed_by_this_machines_name():
+    import socket
+
+    viewer, backend = _browser_viewer("flag", host="0.0.0.0")
+    viewer.close()
+    assert backend.url.startswith(f"http://{socket.gethostname()}:{backend.port}/?token=")
 
 
 # ------------------------------------------------------------------------------------------ the page in Chromium
@@ -389,20 +548,72 @@ def test_arrow_right_held_3_s_in_the_page_banks_the_glider_as_the_null_backend_d
     assert sail.sum() > 400, "no glider in the picture"
 
 
-def test_plus_held_2_s_in_the_page_does_not_blow_the_kite_up(chromium):
-    viewer, backend = _browser_viewer("kite")
+def _held_seconds(viewer, backend, key: str) -> float:
+    """Simulated seconds ``key`` was held at frame starts, from the backend's log of what was flown."""
+    log = backend.applied_log
+    starts = [k for k, (_, keys, _) in enumerate(log) if key in keys]
+    assert len(starts) == 1 and starts[0] + 1 < len(log), log
+    k = starts[0]
+    return (log[k + 1][0] - log[k][0]) * viewer.frame_interval
+
+
+def test_plus_held_in_the_page_ramps_the_wind_and_never_blows_the_kite_up(chromium):
+    """+ held 1.5 s, then 3 s more: the wind rises at WIND_RATE while held, ends 1 to 2 m/s above where it was at
+    the release (WIND_LEAD), never past the kite's limit; then + held 6 s stops at the limit (12 m/s)."""
+    viewer, backend = _browser_viewer("kite")  # 6 m/s
     with _Flying(viewer):
         page = _page(chromium, backend.url)
         page.keyboard.down("+")
-        time.sleep(2.0)
+        time.sleep(1.5)
         page.keyboard.up("+")
         time.sleep(2.5)
-        hud = page.inner_text("#hud")
-        page.close()
-        wind = float(re.search(r"wind ([\d.]+) m/s", hud).group(1))
+        wind = float(np.linalg.norm(viewer.sim.controls["wind"]))
+        held = _held_seconds(viewer, backend, "PLUS")
+        shown = float(re.search(r"wind ([\d.]+) m/s", page.inner_text("#hud")).group(1))
+        page.keyboard.down("+")
+        time.sleep(6.0)
+        page.keyboard.up("+")
+        time.sleep(0.5)
+        top = float(np.linalg.norm(viewer.sim.controls["wind"]))
         blew_up = viewer.blew_up
-    assert not blew_up
-    assert 6.0 + 2.0 < wind <= 6.0 + 4.5 * viewer.WIND_RATE / 2 + viewer.WIND_LEAD  # about 2 m/s a second held
+        page.close()
+    assert 0.8 < held < 2.2
+    at_release = 6.0 + viewer.WIND_RATE * held
+    assert at_release + 1.0 - 0.2 <= wind <= at_release + viewer.WIND_LEAD + 0.2
+    assert shown == pytest.approx(wind, abs=0.06)  # the page shows it (to its one decimal)
+    assert top == pytest.approx(viewer.wind_limit) == 12.0 and not blew_up
+
+
+def test_the_pages_keys_are_the_physical_keys_once_each_and_let_go_on_blur(chromium):
+    """A key let go after Shift is still the key pressed (by event.code: '[' pressed, then Shift, then '[' let go
+    once stayed held as '{'); the browser's auto-repeat sends nothing more; leaving the page lets every key go."""
+    viewer, backend = _browser_viewer("kite")
+    with _Flying(viewer):
+        page = _page(chromium, backend.url)
+        page.keyboard.down("BracketLeft")
+        page.keyboard.down("Shift")
+        page.keyboard.up("BracketLeft")
+        page.keyboard.up("Shift")
+        page.keyboard.down("Shift")
+        page.keyboard.down("Equal")  # '+'
+        page.keyboard.up("Shift")
+        page.keyboard.up("Equal")  # '='
+        assert page.evaluate("warpsim.held") == [] and page.evaluate("warpsim.sentSeq") == 4
+        for _ in range(5):
+            page.keyboard.down("KeyW")  # a held key's auto-repeat
+        assert page.evaluate("[warpsim.sentSeq, warpsim.held]") == [5, ["W"]]
+        time.sleep(0.5)
+        page.evaluate("window.dispatchEvent(new Event('blur'))")
+        assert page.evaluate("[warpsim.sentSeq, warpsim.held]") == [6, []]
+        page.wait_for_function("warpsim.ack === 6")
+        time.sleep(1.5)
+        w = np.array(viewer.sim.controls["wind"])
+        flown = [keys for _, keys, _ in backend.applied_log]
+        assert not page.errors
+        page.close()
+    assert math.degrees(math.atan2(w[1], w[0])) == pytest.approx(viewer.WIND_TURN)  # one '[' press
+    assert np.linalg.norm(w) == pytest.approx(7.0)  # one '+' press
+    assert flown[-1] == () and ("W",) in flown and "anchor" in viewer.sim.controls
 
 
 def test_a_second_tab_watches_and_the_pilot_hands_over(chromium):
@@ -427,6 +638,8 @@ def test_a_second_tab_watches_and_the_pilot_hands_over(chromium):
         watcher.keyboard.up("ArrowLeft")
         time.sleep(0.3)
         assert any("LEFT" in keys for _, keys, _ in backend.applied_log)
+        watcher.wait_for_function("warpsim.ack === warpsim.sentSeq")  # its own keys messages, acknowledged
+        assert pilot.evaluate("warpsim.ack") <= pilot.evaluate("warpsim.sentSeq")
         watcher.close()  # the pilot leaves: the keys go to the page connected longest
         pilot.wait_for_function("warpsim.role === 'pilot'")
         pilot.close()

@@ -104,7 +104,7 @@ def test_w_walks_the_kite_anchor_towards_the_kite_and_s_back():
     clock.seconds(1.0)
     keys.release("W")
     moved = np.array(viewer.sim.controls["anchor"]) - start
-    assert moved @ towards == pytest.approx(viewer.WALK * 1.0, rel=0.05)  # walking speed [m/s] x 1 s
+    assert moved @ towards == pytest.approx(viewer.walk_keys.speed * 1.0, rel=0.05)  # walking speed [m/s] x 1 s
     record = viewer.model.objects[0]
     nail = viewer.sim.control.nail_target.numpy()[record.anchor_nail]
     assert nail[:2] == pytest.approx(viewer.sim.controls["anchor"], abs=1e-5)  # the rope's ground end moved
@@ -119,7 +119,7 @@ def test_a_mesh_designs_line_is_walked_and_its_figures_shown_as_a_kites():
     viewer, keys = _viewer("diamond_kite")
     clock = Clock(viewer)
     record = viewer.model.objects[0]
-    assert viewer.kite is record and record.kind == "mesh"
+    assert viewer.walked is record and record.kind == "mesh"
     start = np.array(viewer._anchor())
     kite = viewer.frame.positions[record.parts["cloth"]].mean(axis=0)[:2]
     towards = (kite - start) / np.linalg.norm(kite - start)
@@ -127,7 +127,7 @@ def test_a_mesh_designs_line_is_walked_and_its_figures_shown_as_a_kites():
     clock.seconds(1.0)
     keys.release("W")
     moved = np.array(viewer.sim.controls["anchor"]) - start
-    assert moved @ towards == pytest.approx(viewer.WALK * 1.0, rel=0.05)
+    assert moved @ towards == pytest.approx(viewer.walk_keys.speed * 1.0, rel=0.05)
     nail = viewer.sim.control.nail_target.numpy()[record.anchor_nail]
     assert nail[:2] == pytest.approx(viewer.sim.controls["anchor"], abs=1e-5)
     figures = viewer.figures(viewer.frame)[0]  # what the heads-up panel shows
@@ -154,6 +154,100 @@ def test_wind_keys_change_speed_and_direction():
         clock.seconds(0.5)
     clock.seconds(1.0)
     assert np.linalg.norm(viewer.sim.controls["wind"]) == 0.0  # never below calm
+
+
+def test_a_short_tap_of_plus_asks_one_step_and_a_press_while_paused_counts():
+    """A page's + held for 0.1 s asks 1 m/s, not one per frame it was held (it once gave 2); a press while paused
+    is kept for when the flight goes on (a page's press once came and went between two frame starts)."""
+    viewer, keys = _viewer("kite")  # 6 m/s
+    clock = Clock(viewer)
+    keys.press("PLUS")
+    clock.seconds(0.1)
+    keys.release("PLUS")
+    clock.seconds(2.0)
+    assert np.linalg.norm(viewer.sim.controls["wind"]) == pytest.approx(7.0)
+    keys.tap("SPACE")
+    clock.ticks(1)
+    keys.press("PLUS")
+    clock.ticks(2)
+    keys.release("PLUS")
+    clock.ticks(2)
+    keys.tap("SPACE")
+    clock.seconds(2.0)
+    assert np.linalg.norm(viewer.sim.controls["wind"]) == pytest.approx(8.0)
+
+
+def test_plus_never_lowers_a_wind_beyond_the_objects_limit():
+    """A schedule (or a control set from elsewhere) may blow harder than the kite's limit: + then leaves it alone
+    (it once pulled such a wind down to the limit), - still lowers it."""
+    viewer, keys = _viewer("kite")
+    clock = Clock(viewer)
+    viewer.sim.set_controls(wind=(18.0, 0.0, 0.0))
+    clock.ticks(1)
+    keys.tap("PLUS")
+    clock.seconds(1.0)
+    assert viewer.wind_limit == 12.0 and np.linalg.norm(viewer.sim.controls["wind"]) == pytest.approx(18.0)
+    keys.tap("MINUS")
+    clock.seconds(1.0)
+    assert np.linalg.norm(viewer.sim.controls["wind"]) == pytest.approx(17.0)
+
+
+def test_the_wind_keeps_its_direction_through_a_calm():
+    """Down to calm, turned while calm, up again: it blows from where it was, turned (it came back along +x, and a
+    turn while calm was lost)."""
+    viewer, keys = _viewer("kite", wind={"velocity": [0.0, 2.0, 0.0]})  # towards +y (90 deg)
+    clock = Clock(viewer)
+    for _ in range(2):
+        keys.tap("MINUS")
+    clock.seconds(1.5)
+    assert np.linalg.norm(viewer.sim.controls["wind"]) == 0.0
+    keys.tap("[")  # 15 deg anticlockwise, while calm
+    clock.ticks(1)
+    keys.tap("PLUS")
+    clock.seconds(1.0)
+    w = np.array(viewer.sim.controls["wind"])
+    assert np.linalg.norm(w) == pytest.approx(1.0)
+    assert math.degrees(math.atan2(w[1], w[0])) == pytest.approx(90.0 + viewer.WIND_TURN)
+
+
+def test_each_object_says_its_keys_and_the_help_shows_the_scenes_own():
+    """The keys come from the objects (ObjectSpec.keys), not from the viewer: the help lists those of the scene's
+    objects and the common ones, and an object the viewer has never heard of is steered by the keys it declares."""
+    helps = {}
+    for scene in ("flag", "hang-glider", "kite"):
+        viewer, _ = _viewer(scene)
+        viewer.show_help = True
+        helps[scene] = "\n".join(viewer.overlay())
+        assert [k for k, _ in viewer.backend.keys] == [line.lstrip().split("   ")[0] for line in viewer.overlay()]
+    assert "Up / Down" not in helps["flag"] and "W A S D" not in helps["flag"] and "Space" in helps["flag"]
+    assert "Up / Down" in helps["hang-glider"] and "W A S D" not in helps["hang-glider"]
+    assert "W A S D" in helps["kite"] and "Left / Right" not in helps["kite"]
+
+
+def test_an_object_with_keys_of_its_own_is_steered_by_them(monkeypatch):
+    import dataclasses
+
+    from warpsim.objects import registry
+    from warpsim.objects.keys import AxisKeys
+
+    seen = []  # a flag that leans its pole: no such flag is built in, and the viewer is told nothing of it
+    spec = dataclasses.replace(
+        registry.OBJECTS["flag"],
+        controls=("roll",),
+        apply_controls=lambda record, targets, values: seen.append(values.get("roll")),
+        keys=(AxisKeys("roll", "J", "K", "J / K", "flag: lean the pole left / right", rate=4.0),),
+    )
+    monkeypatch.setitem(registry.OBJECTS, "flag", spec)
+    viewer, keys = _viewer("flag")
+    clock = Clock(viewer)
+    keys.press("K")
+    clock.seconds(1.0)
+    assert viewer.sim.controls["roll"] == 1.0 and seen[-1] == 1.0
+    viewer.show_help = True
+    assert any("flag: lean the pole left / right" in line for line in viewer.overlay())
+    assert "roll +1.00" in viewer.hud()[-2]
+    with pytest.raises(ValueError, match="'roll'"):
+        dataclasses.replace(spec, controls=())  # a key bound to a control the object lacks
 
 
 @pytest.mark.parametrize("how", ["held", "auto-repeat"])

@@ -107,6 +107,7 @@ def command(args) -> int:
         from ..viewer import web
 
         web._aiohttp()  # a missing extra is said before the model is built
+        _check_port(args.host or "127.0.0.1", 8765 if args.port is None else args.port)
         backend = web.BrowserBackend(args.host or "127.0.0.1", 8765 if args.port is None else args.port, size=args.size)
     else:
         from ..viewer import gl
@@ -140,19 +141,49 @@ def command(args) -> int:
     return EXIT_BLOWUP if viewer.blew_up else 0
 
 
+def _check_port(host: str, port: int) -> None:
+    """Say in one line, before the model is built, that ``host:port`` cannot be listened on (taken, out of range,
+    an address not of this machine)."""
+    import socket
+
+    if not 0 <= port <= 65535:
+        raise UsageError(f"--port {port}: a port is 0 to 65535 (0: any free one)")
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except (OSError, UnicodeError) as err:
+        raise UsageError(f"--host {host}: {err}") from None
+    family, kind, proto, _, address = infos[0]
+    with socket.socket(family, kind, proto) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as the server binds
+        try:
+            probe.bind(address)
+        except OSError as err:
+            raise UsageError(f"cannot listen on {host}:{port}: {err.strerror or err}") from None
+
+
 def _serve(viewer, backend, sim) -> int:
     """Fly ``viewer`` in the browser: print the page's address, wait for the first page, then fly at wall-clock
     pace until the pilot quits, --seconds, Ctrl-C or SIGTERM; the recording is closed however it ends."""
+    from ..viewer.web import is_loopback
+
     print(f"open {backend.url} in a browser (Ctrl-C stops the server)", flush=True)
-    if not backend.token and backend.host not in ("127.0.0.1", "localhost", "::1"):
+    if not backend.token and not is_loopback(backend.host):
         print("warning: no token is asked for on a non-loopback address", file=sys.stderr)
+    waited = False
     with _signals_quit(viewer), contextlib.suppress(KeyboardInterrupt):
         try:
-            if backend.wait_for_page(stop=lambda: viewer.quit):
-                print("a page connected: flying", flush=True)
-                viewer.run()  # closes the recording and the server, however it ends
+            while not viewer.quit:
+                if not backend.clients:  # nobody watches: the flight waits (simulated time stands still)
+                    print("no page connected: the flight waits for one" if waited else "waiting for a page", flush=True)
+                    if not backend.wait_for_page(stop=lambda: viewer.quit):
+                        break
+                    print("a page connected: flying", flush=True)
+                    viewer.hold_clock()
+                    waited = True
+                if not viewer.paced_tick():
+                    break
         finally:
-            viewer.close()
+            viewer.close()  # the recording and the server, however it ends
     print(f"simulated {sim.state.time:.2f} s; sent {viewer.pictures} pictures to {backend.connections} page(s)")
     for path in viewer.takes:
         print(f"recording: {path}")
@@ -186,16 +217,21 @@ def add_parser(sub) -> None:
         "--browser",
         action="store_true",
         help="serve the flight to a web browser instead of opening a window: prints the page's address; the "
-        "first page steers, later ones watch (needs the browser extra: pip install -e '.[browser]')",
+        "first page steers, later ones watch; the flight waits while no page is connected (needs the browser "
+        "extra: pip install -e '.[browser]')",
     )
     view.add_argument(
         "--host",
         metavar="H",
-        help="with --browser: the address to listen on (default 127.0.0.1, this machine only; any other asks for "
-        "the token printed in the page's address). From elsewhere, prefer ssh -L 8765:127.0.0.1:8765",
+        help="the browser view's address to listen on (implies --browser; default 127.0.0.1, this machine only; "
+        "any other asks for the token printed in the page's address). From elsewhere, prefer "
+        "ssh -L 8765:127.0.0.1:8765",
     )
     view.add_argument(
-        "--port", type=int, metavar="N", help="with --browser: the port to listen on (default 8765; 0: any free one)"
+        "--port",
+        type=int,
+        metavar="N",
+        help="the browser view's port to listen on (implies --browser; default 8765; 0: any free one)",
     )
     view.add_argument(
         "--size", type=size_type, default=(1280, 720), metavar="WxH", help="window size (default 1280x720)"

@@ -8,6 +8,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from . import figures, flag, hang_glider, kite, mesh, parachute
+from .keys import line_walk_keys, weight_shift_keys
 
 
 @dataclass(frozen=True)
@@ -41,6 +42,9 @@ class ObjectSpec:
             (e.g. a figure set by the mesh rather than by the object's physics); None when there is nothing to say.
         wind_limit: the strongest wind [m/s] the object is made to fly in: the viewer's + key stops there (or at
             the scene's own wind, when that is stronger).
+        keys: the viewer's key bindings of its controls (:class:`~.keys.AxisKeys`, :class:`~.keys.WalkKeys`): what
+            the help shows and the keys steer; the first object with a walked anchor is where the ground camera
+            stands. Empty: the object is watched, not steered.
     """
 
     config: type
@@ -57,6 +61,7 @@ class ObjectSpec:
     oscillations: dict[str, float] = field(default_factory=dict)
     caveat: Callable | None = None
     wind_limit: float = 20.0
+    keys: tuple = ()
 
     def __post_init__(self) -> None:
         # a design is applied on top of the default design's values: one that leaves out a key another design sets
@@ -67,6 +72,9 @@ class ObjectSpec:
                 if want - have:
                     missing = ", ".join(f"{sec}.{k}" for sec, k in sorted(want - have))
                     raise ValueError(f"preset {design!r} leaves out {missing}, which preset {other!r} sets")
+        for binding in self.keys:  # a key bound to a control the object does not have would do nothing, silently
+            if binding.control not in self.controls:
+                raise ValueError(f"a key binding steers {binding.control!r}, which is not one of {self.controls}")
 
 
 OBJECTS: dict[str, ObjectSpec] = {
@@ -99,6 +107,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         figures=figures.GLIDER_FIGURES,
         measure_figures=figures.glider_figures,
         hud=figures.glider_hud,
+        keys=weight_shift_keys("hang glider"),
         wind_limit=15.0,  # above this no hang glider is flown (its trim speed is 11-12 m/s)
     ),
     "kite": ObjectSpec(
@@ -114,6 +123,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         figures=figures.KITE_FIGURES,
         measure_figures=figures.kite_figures,
         hud=figures.kite_hud,
+        keys=(line_walk_keys("kite", "sail"),),
         wind_limit=12.0,  # a delta kite's upper wind range (Beaufort 5-6)
     ),
     "parachute": ObjectSpec(
@@ -139,6 +149,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         figures=mesh.MESH_FIGURES,
         measure_figures=mesh.mesh_figures,
         hud=mesh.mesh_hud,
+        keys=(*weight_shift_keys("your design's pilot"), line_walk_keys("your design", "cloth")),
         wind_limit=12.0,
     ),
 }

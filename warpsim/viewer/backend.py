@@ -68,8 +68,9 @@ class Backend:
     size: tuple[int, int] = (1280, 720)
     closed: bool = False
 
-    def open(self, draw_list: DrawList, title: str) -> None:
-        """Open the window and upload what does not move (terrain, topology)."""
+    def open(self, draw_list: DrawList, title: str, keys: tuple = ()) -> None:
+        """Open the window and upload what does not move (terrain, topology); ``keys``: the scene's key map,
+        ``(keys, what they do)`` lines, for a backend that shows its own help."""
         raise NotImplementedError
 
     def events(self) -> list[tuple]:
@@ -112,8 +113,8 @@ class NullBackend(Backend):
         self.last_overlay: list[str] = []
         self.last_view: View | None = None
 
-    def open(self, draw_list: DrawList, title: str) -> None:
-        self.draw_list, self.title = draw_list, title
+    def open(self, draw_list: DrawList, title: str, keys: tuple = ()) -> None:
+        self.draw_list, self.title, self.keys = draw_list, title, tuple(keys)
 
     def press(self, key: str) -> None:
         """Press ``key`` (held until :meth:`release`)."""

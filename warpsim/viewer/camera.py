@@ -18,9 +18,10 @@ def centre(viewer) -> np.ndarray:
 
 
 def ground_point(viewer) -> np.ndarray:
-    """Where the ground observer stands, eyes at 1.7 m: 10 m behind the kite's anchor and 12 m to its side (the
-    line seen from the side), else 20 m behind and 30 m to the side of the objects' start."""
-    if viewer.kite is not None:
+    """Where the ground observer stands, eyes at 1.7 m: 10 m behind the walked line's anchor (a kite's:
+    :class:`~warpsim.objects.keys.WalkKeys`) and 12 m to its side (the line seen from the side), else 20 m behind
+    and 30 m to the side of the objects' start."""
+    if viewer.walked is not None:
         anchor = np.asarray(viewer._anchor(), dtype=np.float64)
         ahead = viewer._bearing(anchor)
         x, y = anchor - 10.0 * ahead + 12.0 * np.array([-ahead[1], ahead[0]])
@@ -43,7 +44,7 @@ def view(viewer) -> View:
         d = max(viewer.orbit["distance"] * 0.6, 4.0)
         eye = target - d * np.append(viewer._chase_heading, 0.0) + np.array([0.0, 0.0, 0.3 * d])
     elif viewer.camera == "ground":
-        if viewer.kite is not None:  # the observer walks with the anchor
+        if viewer.walked is not None:  # the observer walks with the anchor
             viewer._ground_eye = ground_point(viewer)
         return ground_view(viewer, viewer._ground_eye, target)
     else:

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io.style import COLOURS
+from ..objects.keys import WalkKeys
 from ..objects.registry import OBJECTS
 from ..run.diagnostics import Frame
 from ..run.figures import Figures
@@ -68,6 +69,22 @@ def draw_list(model, terrain_samples: int = 129) -> DrawList:
     )
 
 
+def bindings(model) -> tuple[list, object, object]:
+    """The keys that steer ``model``'s objects, from their :attr:`~warpsim.objects.registry.ObjectSpec.keys`:
+    ``(axis bindings, one per control, walk binding or None, the record it walks or None)``. A control shared by
+    several objects is steered by one binding (the first object's); the first object with a walkable anchor is
+    the one whose anchor walks."""
+    axes, walk, walked = {}, None, None
+    for record in model.objects:
+        for b in OBJECTS[record.kind].keys:
+            if isinstance(b, WalkKeys):
+                if walk is None and b.nail(record) >= 0:
+                    walk, walked = b, record
+            else:
+                axes.setdefault(b.control, b)
+    return list(axes.values()), walk, walked
+
+
 def _towards(value: float, target: float, step: float) -> float:
     """``value`` moved by at most ``step`` towards ``target``."""
     return min(value + step, target) if target > value else max(value - step, target)
@@ -92,11 +109,11 @@ class Viewer:
     """
 
     RAMP = 2.0  # [1/s] of simulated time: a held arrow takes pitch or roll from 0 to 1 in 0.5 s, release back
-    WALK = 2.0  # [m/s] walking speed of the kite's anchor
     WIND_STEP = 1.0  # [m/s] per + or - press
     WIND_RATE = 2.0  # [m/s per simulated second]: how fast the wind moves to what + and - asked for
     WIND_LEAD = 2.0  # [m/s]: what + and - ask for runs at most this far ahead of the wind (a key's auto-repeat
     # adds nothing beyond it: holding + raises the wind at WIND_RATE, and at most WIND_LEAD more once let go)
+    WIND_HOLD = 0.4  # [s] of simulated time: a + or - held longer than this (a page's held key) keeps asking
     WIND_TURN = 15.0  # [deg] per [ or ] press
     BUDGET = 0.05  # [s] of wall time stepping per tick at most, so that the window keeps answering
     MAX_FPS = 60.0  # pictures per wall second at most: the rest of the time is left to stepping or idle
@@ -117,17 +134,13 @@ class Viewer:
         self.seconds = seconds
         self.model = sim.model
         self.frame_interval = sim.steps_per_frame * sim.dt
-        names = sim.control_names()
-        self.has_glider_keys = "pitch" in names and "roll" in names
-        # the first object with a line to a nailed anchor (a kite, a mesh design's line): the one W/A/S/D walks
-        self.kite = next((r for r in self.model.objects if getattr(r, "anchor_nail", -1) >= 0), None)
-        self.has_anchor = "anchor" in names and self.kite is not None
+        self.axis_keys, self.walk_keys, self.walked = bindings(self.model)
         self.draw_list = draw_list(self.model)
         self.figures = Figures(self.model)
         self.initial = sim.checkpoint()
         self.frame: Frame = sim.start_frames()
         self.points = self.draw_list.place(self.frame.positions)  # the frame as drawn [m]
-        self.axes = {"pitch": 0.0, "roll": 0.0}
+        self.axes = {b.control: 0.0 for b in self.axis_keys}
         self.paused = False
         self.show_help = False
         self.camera = "orbit"
@@ -147,6 +160,8 @@ class Viewer:
         self._rate = []  # (wall time, simulated time, steps) of the last ticks, for the rates shown
         self._pending_wind = None
         self._wind_goal: float | None = None  # [m/s] the wind speed + and - asked for, reached at WIND_RATE
+        self._held_frames = {"PLUS": 0, "MINUS": 0}  # frame starts at which each has been held in a row
+        self._initial_heading = self._wind_heading = self._heading(sim.settings.wind.velocity, 0.0)
         self.wind_limit = max(
             min(OBJECTS[r.kind].wind_limit for r in self.model.objects),
             float(np.linalg.norm(sim.settings.wind.velocity[:2])),
@@ -157,7 +172,7 @@ class Viewer:
         self._record_path = Path(record) if record else None
         self.takes: list[Path] = []  # the recordings made: NAME.h5, then NAME.take2.h5, ... after each restart
         self._descriptor_text, self._scene = descriptor_text, scene
-        self.backend.open(self.draw_list, title)
+        self.backend.open(self.draw_list, title, hud.key_map(self))
         if self._record_path is not None:
             try:
                 self._open_recorder(self._record_path)
@@ -211,28 +226,31 @@ class Viewer:
         held = self.backend.held()
         self.backend.applied(index, held)
         values: dict = {}
-        if self.has_glider_keys:
-            for name, minus, plus in (("pitch", "DOWN", "UP"), ("roll", "LEFT", "RIGHT")):
-                value = _towards(self.axes[name], self._held_axis(held, minus, plus), self.RAMP * self.frame_interval)
-                if value != self.axes[name]:  # keys that do not move an axis leave a schedule's value alone
-                    self.axes[name] = value
-                    values[name] = value
-        if self.has_anchor:
-            forward = self._held_axis(held, "S", "W")
-            right = self._held_axis(held, "A", "D")
+        for b in self.axis_keys:
+            value = _towards(self.axes[b.control], self._held_axis(held, b.minus, b.plus), b.rate * self.frame_interval)
+            if value != self.axes[b.control]:  # keys that do not move an axis leave a schedule's value alone
+                self.axes[b.control] = value
+                values[b.control] = value
+        if self.walk_keys is not None:
+            b = self.walk_keys
+            forward = self._held_axis(held, b.back, b.forward)
+            right = self._held_axis(held, b.left, b.right)
             if forward or right:
                 anchor = np.asarray(self._anchor(), dtype=np.float64)
                 ahead = self._bearing(anchor)
                 side = np.array([ahead[1], -ahead[0]])
-                move = (forward * ahead + right * side) * self.WALK * self.frame_interval
-                values["anchor"] = tuple(float(v) for v in anchor + move)
+                move = (forward * ahead + right * side) * b.speed * self.frame_interval
+                values[b.control] = tuple(float(v) for v in anchor + move)
         for key, sign in (("PLUS", 1.0), ("MINUS", -1.0)):
-            if key in held:  # a page's held key (the window's + comes as repeated presses)
+            # a press asks once (its event, :meth:`_handle`); a key held on (a page's: the window's + comes as
+            # repeated presses) keeps asking once held longer than WIND_HOLD, as a keyboard's auto-repeat would
+            self._held_frames[key] = self._held_frames[key] + 1 if key in held else 0
+            if self._held_frames[key] * self.frame_interval > self.WIND_HOLD + 1e-9:
                 self._nudge_wind(sign)
         if self._wind_goal is not None:
             w = np.asarray(self._pending_wind if self._pending_wind is not None else self.wind(), dtype=np.float64)
             speed = float(np.hypot(w[0], w[1]))
-            heading = math.atan2(w[1], w[0]) if speed > 1e-9 else math.atan2(*self._chase_heading[::-1])
+            heading = self._heading(w)
             speed = _towards(speed, self._wind_goal, self.WIND_RATE * self.frame_interval)
             if abs(speed - self._wind_goal) < 1e-9:
                 self._wind_goal = None
@@ -243,16 +261,15 @@ class Viewer:
             self.sim.set_controls(**values)
 
     def _anchor(self) -> tuple[float, float]:
-        """Where the kite's line is anchored now (x, y) [m]."""
-        if "anchor" in self.sim.controls:
-            return self.sim.controls["anchor"]
-        target = self.sim.control.nail_target.numpy()[self.kite.anchor_nail]
+        """Where the walked line is anchored now (x, y) [m] (see :class:`~warpsim.objects.keys.WalkKeys`)."""
+        if self.walk_keys.control in self.sim.controls:
+            return self.sim.controls[self.walk_keys.control]
+        target = self.sim.control.nail_target.numpy()[self.walk_keys.nail(self.walked)]
         return float(target[0]), float(target[1])
 
     def _bearing(self, anchor: np.ndarray) -> np.ndarray:
-        """Unit horizontal vector from the anchor towards the first kite (downwind when right above it)."""
-        flying = self.kite.parts.get("sail", self.kite.parts.get("cloth"))  # a kite's sail, a mesh design's cloth
-        d = self.frame.positions[flying].mean(axis=0)[:2] - anchor
+        """Unit horizontal vector from the anchor towards the walked object (downwind when right above it)."""
+        d = self.frame.positions[self.walk_keys.towards(self.walked)].mean(axis=0)[:2] - anchor
         if np.linalg.norm(d) < 1e-3:
             d = self.wind()[:2]
         n = np.linalg.norm(d)
@@ -264,21 +281,33 @@ class Viewer:
             return np.asarray(self.sim.controls["wind"], dtype=np.float64)
         return np.asarray(self.sim.settings.wind.velocity, dtype=np.float64)
 
+    def _heading(self, wind, default: float | None = None) -> float:
+        """The direction [rad, anticlockwise from +x] ``wind`` blows towards; a calm keeps the last one seen (or
+        ``default``), so that the wind comes back from where it was."""
+        x, y = float(wind[0]), float(wind[1])
+        if math.hypot(x, y) > 1e-9:
+            self._wind_heading = math.atan2(y, x)
+            return self._wind_heading
+        return self._wind_heading if default is None else default
+
     def _nudge_wind(self, sign: float) -> None:
         """+ (``sign`` 1) or - (-1): ask for WIND_STEP more or less wind, unless what is asked for already runs
-        WIND_LEAD ahead of the wind; never below calm nor above :attr:`wind_limit`."""
-        speed = float(np.hypot(*self.wind()[:2]))
+        WIND_LEAD ahead of the wind; never below calm, and + never above :attr:`wind_limit` (nor lowers a wind a
+        schedule took beyond it)."""
+        w = self._pending_wind if self._pending_wind is not None else self.wind()
+        speed = float(np.hypot(w[0], w[1]))
         goal = speed if self._wind_goal is None else self._wind_goal
         if sign * (goal - speed) + self.WIND_STEP <= self.WIND_LEAD + 1e-9:
-            self._wind_goal = min(max(goal + sign * self.WIND_STEP, 0.0), self.wind_limit)
+            limit = max(self.wind_limit, goal)
+            self._wind_goal = min(max(goal + sign * self.WIND_STEP, 0.0), limit)
 
     def _change_wind(self, turn: float = 0.0) -> None:
         """Turn the wind by ``turn`` [deg] (anticlockwise seen from above) at the next frame start."""
         w = self._pending_wind if self._pending_wind is not None else tuple(self.wind())
         x, y, z = w
         speed = math.hypot(x, y)
-        heading = math.atan2(y, x) if speed > 1e-9 else math.atan2(*self._chase_heading[::-1])
-        heading += math.radians(turn)
+        heading = self._heading(w) + math.radians(turn)
+        self._wind_heading = heading  # kept through a calm
         self._pending_wind = (speed * math.cos(heading), speed * math.sin(heading), z)
 
     # ------------------------------------------------------------------ events
@@ -308,9 +337,9 @@ class Viewer:
                 self.camera = CAMERAS[(CAMERAS.index(self.camera) + 1) % len(CAMERAS)]
             elif key in ("H", "?"):
                 self.show_help = not self.show_help
-            elif key == "PLUS" and "PLUS" not in self.backend.held():  # a held key ramps at each frame start
+            elif key == "PLUS":
                 self._nudge_wind(1.0)
-            elif key == "MINUS" and "MINUS" not in self.backend.held():
+            elif key == "MINUS":
                 self._nudge_wind(-1.0)
             elif key == "[":
                 self._change_wind(turn=self.WIND_TURN)
@@ -323,8 +352,10 @@ class Viewer:
             self._close_recorder()  # before the state goes back: its checkpoint is of the last frame flown
         self.sim.restore(self.initial)
         self.frame = self.sim.start_frames()
-        self.axes = {"pitch": 0.0, "roll": 0.0}
+        self.axes = {b.control: 0.0 for b in self.axis_keys}
         self._pending_wind = self._wind_goal = None
+        self._held_frames = dict.fromkeys(self._held_frames, 0)
+        self._wind_heading = self._initial_heading
         self._debt, self.error, self.paused, self.blew_up = 0.0, "", False, False
         self._restarted = True  # the wall time of the tick that restarts is not owed to the new run
         if self._record_path is not None:
@@ -394,6 +425,11 @@ class Viewer:
         self.draw_time += time.perf_counter() - started
         self.pictures += 1
         return not self.quit
+
+    def hold_clock(self) -> None:
+        """The wall time until the next tick is not owed to the flight (after a wait in which nothing was to be
+        flown: the browser view with no page connected)."""
+        self._last = None
 
     def paced_tick(self) -> bool:
         """:meth:`tick` on the wall clock, then sleep what is left of a picture's share (:attr:`MAX_FPS`)."""

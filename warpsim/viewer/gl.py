@@ -102,13 +102,16 @@ def _pyglet():
     try:
         import pyglet
     except ImportError:
-        raise ViewerUnavailableError(f"the viewer needs pyglet: {install_hint('viewer')}") from None
+        raise ViewerUnavailableError(
+            f"the viewer needs pyglet: {install_hint('viewer')} (or fly it in a web page: --browser)"
+        ) from None
     pyglet.options["debug_gl"] = False  # no glGetError after every call: it halves the frame rate
     return pyglet
 
 
 NO_DISPLAY_HINT = (
-    "on a machine without a screen: ssh -X, or xvfb-run -a warpsim view ... --seconds S --screenshot OUT.png"
+    "on a machine without a screen: --browser (and ssh -L 8765:127.0.0.1:8765 to open it from yours), ssh -X, or "
+    "xvfb-run -a warpsim view ... --seconds S --screenshot OUT.png"
 )
 
 
@@ -179,7 +182,7 @@ class PygletBackend(Backend):
         self._held: set[str] = set()
 
     # ------------------------------------------------------------------ window
-    def open(self, draw_list: DrawList, title: str) -> None:
+    def open(self, draw_list: DrawList, title: str, keys: tuple = ()) -> None:
         pyglet = _pyglet()
         try:
             import pyglet.window

@@ -11,9 +11,6 @@ from ..objects.registry import OBJECTS
 from ..run.diagnostics import Frame
 
 KEYS = (
-    ("Up / Down", "hang glider: bar in (pitch +1: nose down, faster) / bar out (pitch -1: slower)"),
-    ("Left / Right", "hang glider: weight shift (roll -1 / +1), to turn that way"),
-    ("W A S D", "kite: walk the line's ground anchor towards / left of / away from / right of the kite"),
     ("+ / -", "wind speed up / down: 1 m/s a press, 2 m/s a second held, up to the scene's limit"),
     ("[ / ]", "wind direction 15 deg anticlockwise / clockwise (seen from above)"),
     ("Space", "pause / go on"),
@@ -24,7 +21,15 @@ KEYS = (
     ("H or ?", "show / hide this help"),
     ("Esc or Q", "quit"),
 )
-"""The key map shown by the help overlay (and the README)."""
+"""The keys of every scene (the help shows the scene's objects' own keys above them, :func:`key_map`)."""
+
+
+def key_map(viewer) -> list[tuple[str, str]]:
+    """``(keys, what they do)`` for the help: the scene's objects' own key bindings, then :data:`KEYS`."""
+    own = [(b.label, b.help) for b in viewer.axis_keys]
+    if viewer.walk_keys is not None:
+        own.append((viewer.walk_keys.label, viewer.walk_keys.help))
+    return own + list(KEYS)
 
 
 def rates(viewer) -> tuple[float, float]:
@@ -50,12 +55,12 @@ def hud_lines(viewer) -> list[str]:
     heading = math.degrees(math.atan2(wind[1], wind[0]))
     where = " (world 0)" if viewer.model.world_count > 1 else ""
     controls = [f"wind{where} {np.linalg.norm(wind[:2]):.1f} m/s towards {heading:.0f} deg"]
-    if viewer.has_glider_keys:
-        pitch, roll = (viewer.sim.controls.get(name, 0.0) for name in ("pitch", "roll"))
-        controls.append(f"pitch {pitch:+.2f}  roll {roll:+.2f}")
-    if viewer.has_anchor:
+    if viewer.axis_keys:
+        values = (f"{b.control} {viewer.sim.controls.get(b.control, 0.0):+.2f}" for b in viewer.axis_keys)
+        controls.append("  ".join(values))
+    if viewer.walk_keys is not None:
         x, y = viewer._anchor()
-        controls.append(f"anchor ({x:.1f}, {y:.1f}) m")
+        controls.append(f"{viewer.walk_keys.control} ({x:.1f}, {y:.1f}) m")
     lines.append("   ".join(controls))
     if viewer.recorder is not None:
         lines.append(f"recording {viewer.recorder.path.name}")
@@ -68,7 +73,7 @@ def overlay_lines(viewer) -> list[str]:
     if viewer.error:
         return ["", viewer.error, "", "R: restart    Esc: quit"]
     if viewer.show_help:
-        return [f"{keys:>13}   {what}" for keys, what in KEYS]
+        return [f"{keys:>13}   {what}" for keys, what in key_map(viewer)]
     return []
 
 

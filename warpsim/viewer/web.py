@@ -11,8 +11,9 @@ Protocol (one WebSocket per page, at ``/ws``):
   meshes, curves, tubes and spheres by point index, the terrain as base64 float32/int32 arrays), the page's role
   (``pilot`` or ``spectator``), its id and the key map.
 - Then one binary message per picture drawn: ``b"WSF1"``, then little-endian uint32 ``picture``, uint32 ``ack``
-  (the number of the last input message whose held keys were applied at a frame start), uint32 ``n`` (bytes of
-  JSON that follow: heads-up lines, overlay, view, origin, roles), the JSON padded with spaces to 4 bytes, then
+  (the number of the last keys message whose held keys were applied at a frame start, counted by the page the
+  JSON's ``pilot`` names: each pilot counts its own from 1), uint32 ``n`` (bytes of JSON that follow: heads-up
+  lines, overlay, view, origin, pilot), the JSON padded with spaces to 4 bytes, then
   ``points`` float32 ``[P, 3]``: the drawn points [m] minus ``origin`` (float64 in the JSON, so that a flight
   10 km out keeps its millimetres). A client that has not taken the last picture gets only the newest: the
   ones in between are dropped, never queued.
@@ -37,6 +38,7 @@ import ipaddress
 import json
 import math
 import secrets
+import socket
 import struct
 import threading
 import time
@@ -174,9 +176,12 @@ class BrowserBackend(Backend):
         self._lock = threading.Lock()
         self._events: deque = deque()
         self._held: frozenset[str] = frozenset()
-        self._seq = 0  # of the pilot's last keys message
+        self._seq = 0  # of the pilot's last keys message (each page counts its own: 0 again at a new pilot)
         self._ack = 0  # of the last keys message read at a frame start
         self._read_seq = 0  # of the keys message held() last returned
+        self._read_pilot: int | None = None  # whose it was
+        self._ack_pilot: int | None = None  # the page whose keys message the pictures acknowledge
+        self._tasks: set = set()  # background sends, referenced until done
         self._last_applied: tuple[str, ...] | None = None
         self._picture = 0
         self._next_id = 1
@@ -185,20 +190,20 @@ class BrowserBackend(Backend):
         self._thread: threading.Thread | None = None
         self._runner = None
         self._stopped = threading.Event()
-        self._connected = threading.Event()
 
     # ------------------------------------------------------------------ server
-    def open(self, draw_list: DrawList, title: str) -> None:
-        from .hud import KEYS
+    def open(self, draw_list: DrawList, title: str, keys: tuple = ()) -> None:
 
         _aiohttp()
         self.draw_list, self.title = draw_list, title
-        self._hello = json.dumps({"type": "hello", **topology(draw_list, title, KEYS)}, separators=(",", ":"))
+        self._hello = json.dumps({"type": "hello", **topology(draw_list, title, keys)}, separators=(",", ":"))
         started = threading.Event()
         failure: list[BaseException] = []
         self._thread = threading.Thread(target=self._serve, args=(started, failure), name="warpsim-web", daemon=True)
         self._thread.start()
-        started.wait()
+        if not started.wait(30.0):
+            self.close()
+            raise ViewerUnavailableError(f"cannot serve on {self.host}:{self.port}: the server did not start in 30 s")
         if failure:
             raise ViewerUnavailableError(f"cannot serve on {self.host}:{self.port}: {failure[0]}") from None
 
@@ -216,8 +221,7 @@ class BrowserBackend(Backend):
             site = web.TCPSite(self._runner, self.host, self.port)
             loop.run_until_complete(site.start())
             self.port = site._server.sockets[0].getsockname()[1]
-            shown = f"[{self.host}]" if ":" in self.host else self.host
-            self.url = f"http://{shown}:{self.port}/" + (f"?token={self.token}" if self.token else "")
+            self.url = self._address()
         except BaseException as err:  # noqa: BLE001 - said by open()
             failure.append(err)
             started.set()
@@ -232,29 +236,45 @@ class BrowserBackend(Backend):
             loop.close()
             self._stopped.set()
 
+    def _address(self) -> str:
+        """The page's address: an address bound to every interface (``0.0.0.0``, ``::``) is shown by this machine's
+        name, which others can type (the bound address itself reaches nothing)."""
+        host = self.host
+        try:
+            if ipaddress.ip_address(host).is_unspecified:
+                host = socket.gethostname()
+        except ValueError:
+            pass
+        shown = f"[{host}]" if ":" in host else host
+        return f"http://{shown}:{self.port}/" + (f"?token={self.token}" if self.token else "")
+
     async def _shutdown(self) -> None:
         for client in list(self.clients.values()):
             await client.ws.close(code=1001, message=b"the flight ended")
         await self._runner.cleanup()
 
-    def _allowed(self, request) -> bool:
-        """The token (when asked for) and the Host header of a request; counts what it refuses."""
-        ok = True
+    def _refusal(self, request) -> str:
+        """Why a request is refused ("" when it is not): a missing or wrong token (when one is asked for), or on a
+        loopback server a Host that is not a loopback name; counts what it refuses."""
+        why = ""
         if self.token is not None:
             given = request.query.get("token", "")
-            ok = hmac.compare_digest(given.encode(), self.token.encode())
+            if not hmac.compare_digest(given.encode(), self.token.encode()):
+                why = "a token is needed: use the address warpsim printed"
         elif request.url.host not in ("localhost", "127.0.0.1", "::1", self.host):
-            ok = False  # a loopback server answers only to loopback names (no DNS rebinding)
-        if not ok:
+            # a loopback server answers only to loopback names (no DNS rebinding)
+            why = f"this server answers to {self.host} only, not to {request.url.host}"
+        if why:
             self.refused += 1
-        return ok
+        return why
 
     async def _file(self, request):
         _, web = _aiohttp()
         # the page's scripts and licence are public code: only the page itself (and /ws) ask for the token, so that the
         # scripts it loads without one are served
-        if request.path == "/" and not self._allowed(request):
-            return web.Response(status=403, text="a token is needed: use the address warpsim printed\n")
+        why = self._refusal(request) if request.path == "/" else ""
+        if why:
+            return web.Response(status=403, text=why + "\n")
         name, kind = FILES[request.path]
         body = resources.files(__package__).joinpath("web", name).read_bytes()
         headers = {"Cache-Control": "no-store", "X-Content-Type-Options": "nosniff"}
@@ -262,8 +282,9 @@ class BrowserBackend(Backend):
 
     async def _websocket(self, request):
         aiohttp, web = _aiohttp()
-        if not self._allowed(request):
-            return web.Response(status=403, text="a token is needed\n")
+        why = self._refusal(request)
+        if why:
+            return web.Response(status=403, text=why + "\n")
         origin = request.headers.get("Origin")
         if origin is not None and origin != f"{request.scheme}://{request.host}":
             self.refused += 1
@@ -277,14 +298,13 @@ class BrowserBackend(Backend):
             if self.pilot is None:
                 self.pilot = client.id
         self.connections += 1
-        self._connected.set()
-        sender = asyncio.ensure_future(self._send_pictures(client))
+        sender = asyncio.get_running_loop().create_task(self._send_pictures(client))
         try:
             await ws.send_str(self._hello)
             await self._send_roles()
             async for message in ws:
                 if message.type != aiohttp.WSMsgType.TEXT or not self._take(client, message.data):
-                    await ws.close(code=1008, message=b"malformed message")
+                    await ws.close(code=1008, message=b"malformed message")  # binary ones too
                     break
         except (ConnectionError, asyncio.CancelledError, RuntimeError):
             pass
@@ -328,8 +348,12 @@ class BrowserBackend(Backend):
             if self.pilot == client.id:
                 for key in sorted(self._held):
                     self._events.append(("release", key))
-                self._held = frozenset()
-                self.pilot = min(self.clients) if self.clients else None
+                self._new_pilot(min(self.clients) if self.clients else None)
+
+    def _new_pilot(self, ident: int | None) -> None:
+        """The keys pass to page ``ident`` (None: no page): nothing held, and its own keys messages counted from 0
+        (under the lock)."""
+        self._held, self.pilot, self._seq = frozenset(), ident, 0
 
     def _take(self, client: _Client, text: str) -> bool:
         """Apply one message from ``client``; False when it is malformed (its connection is then closed)."""
@@ -375,19 +399,23 @@ class BrowserBackend(Backend):
                     if waiting:
                         for key in sorted(self._held):
                             self._events.append(("release", key))
-                        self._held, self.pilot = frozenset(), min(waiting)
-                        asyncio.ensure_future(self._send_roles())
+                        self._new_pilot(min(waiting))
+                        task = asyncio.get_running_loop().create_task(self._send_roles())
+                        self._tasks.add(task)
+                        task.add_done_callback(self._tasks.discard)
             else:
                 return False
         return True
 
     # ------------------------------------------------------------------ the viewer's side
     def wait_for_page(self, timeout: float | None = None, stop=lambda: False) -> bool:
-        """Block until a page connects (True), ``timeout`` seconds pass or ``stop()`` is true (False)."""
+        """Block until a page is connected (True at once if one is), ``timeout`` seconds pass or ``stop()`` is true
+        (False)."""
         started = time.monotonic()
-        while not self._connected.wait(0.1):
+        while not self.clients:
             if stop() or (timeout is not None and time.monotonic() - started > timeout):
                 return False
+            time.sleep(0.05)
         return True
 
     def events(self) -> list[tuple]:
@@ -398,14 +426,14 @@ class BrowserBackend(Backend):
 
     def held(self) -> frozenset[str]:
         with self._lock:
-            self._read_seq = self._seq  # what applied() acknowledges
+            self._read_seq, self._read_pilot = self._seq, self.pilot  # what applied() acknowledges
             return self._held
 
     def applied(self, frame: int, held: frozenset[str]) -> None:
         """Frame ``frame`` is steered by ``held``: the next pictures acknowledge the keys message it came from, and
         :attr:`applied` logs it when it differs from the last frame's."""
         with self._lock:
-            self._ack = self._read_seq
+            self._ack, self._ack_pilot = self._read_seq, self._read_pilot
             keys = tuple(sorted(held))
             if keys != self._last_applied:
                 self.applied_log.append((frame, keys, self._ack))
@@ -418,6 +446,7 @@ class BrowserBackend(Backend):
         header = {
             "hud": list(hud),
             "overlay": list(overlay),
+            "pilot": self._ack_pilot,  # the page whose keys message ``ack`` counts
             "view": {"eye": [float(v) for v in view.eye], "target": [float(v) for v in view.target],
                      "fov": float(view.fov)},
         }  # fmt: skip

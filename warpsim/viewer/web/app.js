@@ -8,11 +8,12 @@ const hudText = document.getElementById("hud");
 const overlayText = document.getElementById("overlay");
 const roleText = document.getElementById("role-text");
 const handover = document.getElementById("handover");
+const roleBox = document.getElementById("role");
 
 // what a test or benchmark reads: pictures received and drawn, bytes received, the role, the last frame's header,
 // the share of the page's pixels drawn (resolution)
 const stats = { pictures: 0, drawn: 0, bytes: 0, started: performance.now(), role: "", id: 0, watchers: 0,
-                ack: 0, sentSeq: 0, header: null, closed: "", resolution: 1 };
+                ack: 0, sentSeq: 0, held: [], header: null, closed: "", resolution: 1 };
 window.warpsim = stats;
 
 const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: false });
@@ -104,9 +105,7 @@ function build(hello) {
     colours[k] *= light; colours[k + 1] *= light; colours[k + 2] *= light;
   }
   terrain.setAttribute("color", new THREE.BufferAttribute(colours, 3));
-  built.terrainBase = terrain.getAttribute("position").array.slice();
-  built.terrain = terrain;
-  const ground = new THREE.Mesh(terrain, new THREE.MeshBasicMaterial({ vertexColors: true, side: THREE.DoubleSide }));
+  const ground = built.ground = new THREE.Mesh(terrain, new THREE.MeshBasicMaterial({ vertexColors: true, side: THREE.DoubleSide }));
   ground.frustumCulled = false;
   scene.add(ground);
   const keys = hello.keys.map(([k, what]) => `${k.padStart(13)}   ${what}`);
@@ -127,23 +126,13 @@ function picture(buffer) {
   const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 16, n)));
   const points = new Float32Array(buffer, 16 + n, header.count * 3);
   stats.pictures += 1;
-  stats.ack = ack;
+  if (header.pilot === stats.id) stats.ack = ack; // each pilot counts its own keys messages
   stats.header = header;
   if (!parts) return;
-  // everything is drawn relative to the frame's origin (a float64 on the server): float32 keeps millimetres
-  const moved = header.origin.some((v, k) => v !== origin[k]);
+  // everything is drawn relative to the frame's origin (a float64 on the server): float32 keeps millimetres; the
+  // ground, whose points never move, moves by -origin as a whole (JavaScript's matrices are float64)
   origin = header.origin;
-  if (moved) {
-    const base = parts.terrainBase;
-    const p = parts.terrain.getAttribute("position");
-    for (let k = 0; k < base.length; k += 3) {
-      p.array[k] = base[k] - origin[0];
-      p.array[k + 1] = base[k + 1] - origin[1];
-      p.array[k + 2] = base[k + 2] - origin[2];
-    }
-    p.needsUpdate = true;
-    parts.terrain.computeBoundingSphere();
-  }
+  parts.ground.position.set(-origin[0], -origin[1], -origin[2]);
   for (const m of parts.meshes) {
     const p = m.geometry.getAttribute("position");
     const a = p.array;
@@ -215,19 +204,31 @@ function draw() {
 requestAnimationFrame(draw);
 
 // a page on a software renderer (no GPU: SwiftShader, llvmpipe) cannot fill every pixel at the server's rate: when
-// it draws fewer than 85 % of the pictures it receives, it draws at a lower resolution (down to 40 % of the side)
-let checked = { at: performance.now(), pictures: 0, drawn: 0 };
+// it draws fewer than 85 % of the pictures it receives, it draws at a lower resolution (down to 40 % of the side);
+// when it keeps up with room to spare for 6 s it goes back up. A hidden tab (the browser stops its drawing) and the
+// seconds after a change do not count.
+let checked = { at: performance.now(), pictures: 0, drawn: 0, good: 0 };
+function resolution(value) {
+  stats.resolution = value;
+  renderer.setPixelRatio(value);
+  drawnSize = [0, 0];
+}
 function adapt() {
   const now = performance.now();
   if (now - checked.at < 2000) return;
   const received = stats.pictures - checked.pictures, drawn = stats.drawn - checked.drawn;
-  checked = { at: now, pictures: stats.pictures, drawn: stats.drawn };
+  const good = received > 20 && drawn >= 0.97 * received ? checked.good + 1 : 0;
+  checked = { at: now, pictures: stats.pictures, drawn: stats.drawn, good };
   if (received > 20 && drawn < 0.85 * received && stats.resolution > 0.4) {
-    stats.resolution = Math.max(0.4, stats.resolution * 0.8);
-    renderer.setPixelRatio(stats.resolution);
-    drawnSize = [0, 0];
+    resolution(Math.max(0.4, stats.resolution * 0.8));
+  } else if (good >= 3 && stats.resolution < 1) {
+    resolution(Math.min(1, stats.resolution / 0.8));
+    checked.good = 0;
   }
 }
+document.addEventListener("visibilitychange", () => { // back from a hidden tab: start counting afresh
+  checked = { at: performance.now(), pictures: stats.pictures, drawn: stats.drawn, good: 0 };
+});
 
 // ------------------------------------------------------------------ the socket
 const token = new URLSearchParams(location.search).get("token");
@@ -256,9 +257,9 @@ socket.onmessage = (event) => {
   picture(event.data);
 };
 socket.onclose = (event) => {
-  stats.closed = event.reason || `closed (${event.code})`;
-  overlayText.textContent = `the flight ended: ${stats.closed}`;
-  roleText.textContent = "";
+  stats.closed = event.reason || `the connection closed (code ${event.code})`;
+  overlayText.textContent = stats.closed === "the flight ended" ? "the flight ended" : `the flight ended: ${stats.closed}`;
+  roleBox.hidden = true;
 };
 
 function send(message) {
@@ -266,21 +267,23 @@ function send(message) {
 }
 
 // ------------------------------------------------------------------ keys: the held set, sent when it changes
-const NAMES = { ArrowUp: "UP", ArrowDown: "DOWN", ArrowLeft: "LEFT", ArrowRight: "RIGHT", " ": "SPACE",
-                Escape: "ESCAPE", "+": "PLUS", "=": "PLUS", "-": "MINUS", "[": "[", "]": "]", ".": ".", "?": "?",
-                "/": "?" };
+// by the physical key (event.code), so that a key let go after Shift (which changes event.key) is the key pressed
+const NAMES = { ArrowUp: "UP", ArrowDown: "DOWN", ArrowLeft: "LEFT", ArrowRight: "RIGHT", Space: "SPACE",
+                Escape: "ESCAPE", Equal: "PLUS", NumpadAdd: "PLUS", Minus: "MINUS", NumpadSubtract: "MINUS",
+                BracketLeft: "[", BracketRight: "]", Period: ".", Slash: "?" };
 const held = new Set();
 let seq = 0;
 
 function keyName(event) {
-  if (event.key in NAMES) return NAMES[event.key];
-  if (event.key.length === 1 && /[a-z]/i.test(event.key)) return event.key.toUpperCase();
-  return null;
+  if (event.code in NAMES) return NAMES[event.code];
+  const letter = /^Key([A-Z])$/.exec(event.code);
+  return letter ? letter[1] : null;
 }
 
 function sendHeld() {
   seq += 1;
   stats.sentSeq = seq;
+  stats.held = [...held].sort();
   send({ type: "keys", seq, held: [...held] });
 }
 
@@ -308,6 +311,8 @@ let dragging = false;
 let drag = [0, 0];
 canvas.addEventListener("pointerdown", (event) => { dragging = true; canvas.setPointerCapture(event.pointerId); canvas.focus(); });
 canvas.addEventListener("pointerup", () => { dragging = false; });
+canvas.addEventListener("pointercancel", () => { dragging = false; });
+canvas.addEventListener("lostpointercapture", () => { dragging = false; });
 canvas.addEventListener("pointermove", (event) => {
   if (!dragging) return;
   drag[0] += event.movementX;
@@ -318,7 +323,10 @@ setInterval(() => { // at most 30 drag messages a second
 }, 33);
 canvas.addEventListener("wheel", (event) => {
   event.preventDefault();
-  send({ type: "scroll", clicks: -Math.sign(event.deltaY) });
+  // a wheel's notch is 100 pixels (or 3 lines); a touchpad's glide sends many small ones
+  const notches = event.deltaMode === 1 ? event.deltaY / 3 : event.deltaMode === 2 ? event.deltaY : event.deltaY / 100;
+  const clicks = Math.max(-10, Math.min(10, -notches));
+  if (clicks) send({ type: "scroll", clicks });
 }, { passive: false });
 handover.addEventListener("click", () => send({ type: "handover" }));
 canvas.focus();

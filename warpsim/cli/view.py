@@ -6,7 +6,7 @@ import contextlib
 import sys
 
 from .._interrupt import interruptible
-from ..viewer.backend import ViewerUnavailableError
+from ..viewer.backend import ViewerUnavailableError, make_backend
 from .common import (
     EXIT_BLOWUP,
     EXIT_INTERRUPTED,
@@ -104,16 +104,12 @@ def command(args) -> int:
     descriptor, _, where = load_scene(args)
     same_file_check(args.scene, {"--h5": h5_path, "--screenshot": shot})
     if browser:
-        from ..viewer import web
-
-        web._aiohttp()  # a missing extra is said before the model is built
-        _check_port(args.host or "127.0.0.1", 8765 if args.port is None else args.port)
-        backend = web.BrowserBackend(args.host or "127.0.0.1", 8765 if args.port is None else args.port, size=args.size)
+        port = 8765 if args.port is None else args.port
+        options = {"host": args.host or "127.0.0.1", "port": port, "size": args.size}
     else:
-        from ..viewer import gl
-
-        gl.check_display()  # a missing extra or display is said before the model is built
-        backend = gl.PygletBackend(args.size, keep_pictures=shot is not None)
+        options = {"size": args.size, "keep_pictures": shot is not None}
+    # a missing extra, display or port is said before the model is built
+    backend = make_backend("browser" if browser else "window", **options)
     sim = Simulation(descriptor, device=device, where=where, threads=args.threads or available_cores())
     interruptible()  # the recording opens next
     try:
@@ -139,26 +135,6 @@ def command(args) -> int:
     for path in viewer.takes:
         print(f"recording: {path}")
     return EXIT_BLOWUP if viewer.blew_up else 0
-
-
-def _check_port(host: str, port: int) -> None:
-    """Say in one line, before the model is built, that ``host:port`` cannot be listened on (taken, out of range,
-    an address not of this machine)."""
-    import socket
-
-    if not 0 <= port <= 65535:
-        raise UsageError(f"--port {port}: a port is 0 to 65535 (0: any free one)")
-    try:
-        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
-    except (OSError, UnicodeError) as err:
-        raise UsageError(f"--host {host}: {err}") from None
-    family, kind, proto, _, address = infos[0]
-    with socket.socket(family, kind, proto) as probe:
-        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as the server binds
-        try:
-            probe.bind(address)
-        except OSError as err:
-            raise UsageError(f"cannot listen on {host}:{port}: {err.strerror or err}") from None
 
 
 def _serve(viewer, backend, sim) -> int:

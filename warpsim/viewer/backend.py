@@ -68,6 +68,11 @@ class Backend:
     size: tuple[int, int] = (1280, 720)
     closed: bool = False
 
+    @classmethod
+    def check(cls, **options) -> None:
+        """Raise :class:`ViewerUnavailableError` (one line) when this backend cannot work here with ``options`` (the
+        arguments its constructor will be given): said before the scene is built. The base accepts anything."""
+
     def open(self, draw_list: DrawList, title: str, keys: tuple = ()) -> None:
         """Open the window and upload what does not move (terrain, topology); ``keys``: the scene's key map,
         ``(keys, what they do)`` lines, for a backend that shows its own help."""
@@ -97,6 +102,33 @@ class Backend:
 
     def close(self) -> None:
         """Close the window (safe to call twice)."""
+
+
+BACKENDS = {
+    "window": "warpsim.viewer.gl:PygletBackend",
+    "browser": "warpsim.viewer.web:BrowserBackend",
+    "null": "warpsim.viewer.backend:NullBackend",
+}
+"""The backends by name (``module:class``, imported when asked for, so that a missing extra costs nothing until
+then): the pyglet window, the web page, and the null backend of the tests."""
+
+
+def backend_class(name: str) -> type[Backend]:
+    """The backend class called ``name`` in :data:`BACKENDS` (a ``ValueError`` for another name)."""
+    import importlib
+
+    if name not in BACKENDS:
+        raise ValueError(f"no viewer backend {name!r}: one of {', '.join(BACKENDS)}")
+    module, cls = BACKENDS[name].split(":")
+    return getattr(importlib.import_module(module), cls)
+
+
+def make_backend(name: str, **options) -> Backend:
+    """Check (:meth:`Backend.check`) and make the backend called ``name`` with ``options``, before the scene is
+    built: what cannot work here is said in one line first."""
+    cls = backend_class(name)
+    cls.check(**options)
+    return cls(**options)
 
 
 class NullBackend(Backend):

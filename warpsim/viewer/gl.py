@@ -182,6 +182,10 @@ class PygletBackend(Backend):
         self._held: set[str] = set()
 
     # ------------------------------------------------------------------ window
+    @classmethod
+    def check(cls, **options) -> None:
+        check_display()
+
     def open(self, draw_list: DrawList, title: str, keys: tuple = ()) -> None:
         pyglet = _pyglet()
         try:

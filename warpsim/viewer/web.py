@@ -191,6 +191,13 @@ class BrowserBackend(Backend):
         self._runner = None
         self._stopped = threading.Event()
 
+    @classmethod
+    def check(cls, host: str = "127.0.0.1", port: int = 8765, **options) -> None:
+        """The ``browser`` extra is there and ``host:port`` can be listened on (not taken, in range, an address of
+        this machine), or :class:`ViewerUnavailableError` says which in one line."""
+        _aiohttp()
+        check_listen(host, port)
+
     # ------------------------------------------------------------------ server
     def open(self, draw_list: DrawList, title: str, keys: tuple = ()) -> None:
 
@@ -472,6 +479,24 @@ class BrowserBackend(Backend):
         if self._loop is not None and self._thread is not None and self._thread.is_alive():
             self._loop.call_soon_threadsafe(self._loop.stop)
             self._stopped.wait(5.0)
+
+
+def check_listen(host: str, port: int) -> None:
+    """Raise :class:`ViewerUnavailableError` when ``host:port`` cannot be listened on: a port out of range, a host
+    name that does not resolve, an address taken or not of this machine."""
+    if not 0 <= port <= 65535:
+        raise ViewerUnavailableError(f"--port {port}: a port is 0 to 65535 (0: any free one)")
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except (OSError, UnicodeError) as err:
+        raise ViewerUnavailableError(f"--host {host}: {err}") from None
+    family, kind, proto, _, address = infos[0]
+    with socket.socket(family, kind, proto) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as the server binds
+        try:
+            probe.bind(address)
+        except OSError as err:
+            raise ViewerUnavailableError(f"cannot listen on {host}:{port}: {err.strerror or err}") from None
 
 
 def _is_number(value) -> bool:

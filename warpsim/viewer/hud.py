@@ -11,7 +11,7 @@ from ..objects.registry import OBJECTS
 from ..run.diagnostics import Frame
 
 KEYS = (
-    ("+ / -", "wind speed up / down: 1 m/s a press, 2 m/s a second held, up to the scene's limit"),
+    ("+ / -", "wind speed up / down: 1 m/s a press, 2 m/s a second held, up to the objects' wind limit"),
     ("[ / ]", "wind direction 15 deg anticlockwise / clockwise (seen from above)"),
     ("Space", "pause / go on"),
     (".", "one frame (when paused)"),

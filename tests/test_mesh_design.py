@@ -217,6 +217,16 @@ def test_a_weight_shift_sets_the_hanging_sticks_and_the_keys_walk_a_line(tmp_pat
     for s, corner in zip(record.shift_sticks, (0, 4, 20, 24), strict=True):
         assert targets["stick_rest"][s] == pytest.approx(np.linalg.norm(q0[corner] - payload), rel=1e-9)
     np.testing.assert_allclose(targets["nail_target"][record.anchor_nail], (4.0, 1.0, 0.0))
+    # the viewer offers the arrows for a design with shifting masses, and not for one without (they did nothing there)
+    from warpsim.viewer import NullBackend, Viewer
+
+    plain = descriptor.resolve("diamond_kite", [SCENES])[0]
+    offered = {}
+    for name, scene in (("shifting", d), ("plain", plain)):
+        viewer = Viewer(Simulation(scene), NullBackend(), say=lambda line: None)
+        offered[name] = [b.control for b in viewer.axis_keys], viewer.walk_keys is not None
+        viewer.close()
+    assert offered == {"shifting": (["pitch", "roll"], True), "plain": ([], True)}
 
 
 # ---------------------------------------------------------------------------------------------------------- flights

@@ -17,7 +17,9 @@ class AxisKeys:
     which the keys do not move the value leaves the control alone (a schedule may be setting it).
 
     Attributes: control (its name in :mod:`warpsim.scene.controls`), minus, plus (key names), rate [1/s],
-    label (the keys as the help shows them), help (what they do, one line).
+    label (the keys as the help shows them), help (what they do, one line); active: ``active(record) -> bool``,
+    whether this object as built has what the control moves (None: always), so that the help offers no key that
+    does nothing.
     """
 
     control: str
@@ -26,6 +28,7 @@ class AxisKeys:
     label: str
     help: str
     rate: float = 2.0
+    active: Callable | None = None
 
 
 @dataclass(frozen=True)
@@ -69,13 +72,19 @@ def flying_part(*names: str) -> Callable:
     return towards
 
 
-def weight_shift_keys(what: str) -> tuple[AxisKeys, AxisKeys]:
+def weight_shift_keys(what: str, active: Callable | None = None) -> tuple[AxisKeys, AxisKeys]:
     """The arrows of a pilot hung under a wing (``what`` names it in the help): Up/Down the bar in and out
-    (``pitch``), Left/Right the weight shift (``roll``)."""
+    (``pitch``), Left/Right the weight shift (``roll``); ``active`` as in :class:`AxisKeys`."""
     return (
-        AxisKeys("pitch", "DOWN", "UP", "Up / Down", f"{what}: bar in (pitch +1: nose down, faster) / out (slower)"),
-        AxisKeys("roll", "LEFT", "RIGHT", "Left / Right", f"{what}: weight shift (roll -1 / +1), to turn that way"),
-    )
+        AxisKeys(
+            "pitch", "DOWN", "UP", "Up / Down", f"{what}: bar in (pitch +1: nose down, faster) / out (slower)",
+            active=active,
+        ),
+        AxisKeys(
+            "roll", "LEFT", "RIGHT", "Left / Right", f"{what}: weight shift (roll -1 / +1), to turn that way",
+            active=active,
+        ),
+    )  # fmt: skip
 
 
 def line_walk_keys(what: str, *parts: str) -> WalkKeys:

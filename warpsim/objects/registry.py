@@ -149,7 +149,10 @@ OBJECTS: dict[str, ObjectSpec] = {
         figures=mesh.MESH_FIGURES,
         measure_figures=mesh.mesh_figures,
         hud=mesh.mesh_hud,
-        keys=(*weight_shift_keys("your design's pilot"), line_walk_keys("your design", "cloth")),
+        keys=(
+            *weight_shift_keys("your design's point masses", active=lambda record: len(record.shift_sticks) > 0),
+            line_walk_keys("your design", "cloth"),
+        ),
         wind_limit=12.0,
     ),
 }

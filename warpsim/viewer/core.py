@@ -80,7 +80,7 @@ def bindings(model) -> tuple[list, object, object]:
             if isinstance(b, WalkKeys):
                 if walk is None and b.nail(record) >= 0:
                     walk, walked = b, record
-            else:
+            elif b.active is None or b.active(record):
                 axes.setdefault(b.control, b)
     return list(axes.values()), walk, walked
 

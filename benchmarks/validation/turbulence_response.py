@@ -114,14 +114,18 @@ def plot(table, out: Path, seconds: float) -> None:
     a.errorbar(i, table["line_angle_deg"], table["line_angle_std_deg"], marker="o", capsize=3, label="line angle [°]")
     spread = [table["line_pull_n"] - table["line_pull_p10_n"], table["line_pull_p90_n"] - table["line_pull_n"]]
     a.errorbar(i, table["line_pull_n"], spread, marker="s", capsize=3, label="line pull [N] (median, 10-90 %)")
-    a.plot(i, 10 * table["sideways_std_m"], marker="^", label="sideways wander ×10 [m, std]")
     a.set(
         xlabel="turbulence intensity σ/U",
-        ylabel="each in the unit its legend gives",
+        ylabel="line angle [°], line pull [N]",
         title=f"kite in 6 m/s, L = 24.5 m ({seconds:g} s each)",
     )
-    a.set_ylim(0.0, 80.0)  # room above the points for the legend
-    a.legend(loc="upper center", fontsize="small")
+    a.set_ylim(0.0, 1.6 * max(80.0, float(table["line_pull_p90_n"].max())))  # room above the points for the legends
+    a.legend(loc="upper left", fontsize="small")
+    a2 = a.twinx()
+    a2.plot(i, table["sideways_std_m"], "g^-", label="sideways wander [m, std]")
+    a2.set_ylabel("sideways wander [m]")
+    a2.set_ylim(0.0, 1.6 * max(1.0, float(table["sideways_std_m"].max())))
+    a2.legend(loc="upper left", bbox_to_anchor=(0.0, 0.84), fontsize="small")
     b.errorbar(i, table["descent_m_s"], table["descent_std_m_s"], marker="o", capsize=3, label="descent [m/s]")
     b2 = b.twinx()
     b2.plot(i, table["swing_max_deg"], "r^-", label="largest swing [°]")

@@ -26,10 +26,10 @@ VON_KARMAN = (
 
 
 MISSING = (
-    "a model limit where it misses: the grid (12 cells per L) holds eddies down to about two cells; the von Kármán "
-    "spectrum beyond carries about 11 % of the variance, which the field leaves out rather than give to the larger "
-    "eddies (so that their spectrum stays von Kármán's), and trilinear sampling softens what is near the grid's "
-    "scale; a finer field (more cells per L, 8x the memory for twice as many) would carry them"
+    "a model limit where it misses: the grid (20 cells per L) holds eddies down to about two cells; the von Kármán "
+    "spectrum beyond carries about 7-8 % of the variance, which the field leaves out rather than give to the larger "
+    "eddies (so that their spectrum stays von Kármán's); a finer field (more cells per L, 8x the memory for twice as "
+    "many) would carry them"
 )
 
 
@@ -51,18 +51,20 @@ def correlations(r: float, length: float) -> tuple[float, float]:
     return f, g
 
 
-def sample_lines(field: turbulence.Field, every: int = 2, per_cell: int = 2) -> np.ndarray:
-    """``[lines, n, 3]`` the field along straight paths the length of the box along x (the mean wind), through every
-    ``every``-th grid line across it (half a cell off in x at every other sample, as points carried by the wind meet
-    it between the grid's nodes), at ``per_cell`` samples per cell, sampled trilinearly as the kernels sample."""
+def sample_lines(field: turbulence.Field, every: int = 2, per_cell: int = 2, across: float = 0.0) -> np.ndarray:
+    """``[lines, n, 3]`` the field along straight paths the length of the box along x (the mean wind), one near every
+    ``every``-th grid line across it but off it by a random part of a cell in y and z (as points carried by the wind
+    meet the field anywhere between its nodes), at ``per_cell`` samples per cell, sampled trilinearly as the kernels
+    sample; ``across`` [m] moves every path that far along y."""
     nx, ny, nz = field.velocity.shape[:3]
     n = nx * per_cell
     x = np.arange(n) * (field.cell / per_cell)
     ys, zs = np.meshgrid(np.arange(0, ny, every) * field.cell, np.arange(0, nz, every) * field.cell, indexing="ij")
     starts = np.column_stack([ys.ravel(), zs.ravel()])
+    starts = starts + np.random.default_rng(1).random(starts.shape) * field.cell
     points = np.empty((len(starts), n, 3))
     points[..., 0] = x[None, :]
-    points[..., 1] = starts[:, :1]
+    points[..., 1] = starts[:, :1] + across
     points[..., 2] = starts[:, 1:]
     return field.sample(points.reshape(-1, 3)).reshape(len(starts), n, 3)
 
@@ -89,7 +91,8 @@ def field_rows(length: float = 24.5) -> list[Row]:
                 note=MISSING,
             )
         )
-    a = u[..., 0] - u[..., 0].mean()
+    mean = u[..., 0].mean()
+    a = u[..., 0] - mean
     spectrum = np.fft.rfft(a, axis=1)
     auto = np.fft.irfft(np.abs(spectrum) ** 2, axis=1).mean(axis=0)
     auto /= auto[0]
@@ -137,11 +140,13 @@ def field_rows(length: float = 24.5) -> list[Row]:
         worst = 0.0
         got = []
         for r in (0.25 * length, 0.5 * length, length):
-            shift = int(round(r / field.cell))
-            v = field.velocity[..., 0].astype(np.float64)
-            other = np.roll(v, -shift, axis=1 if across else 0)
-            measured = float((v * other).mean() / (v * v).mean())
-            f, g = correlations(shift * field.cell, length)
+            shift = int(round(r / h))
+            if across:  # the same paths and another set moved r across the wind, as the kernels sample both
+                other = sample_lines(field, across=shift * h)[..., 0]
+                measured = float(((u[..., 0] - mean) * (other - mean)).mean() / u[..., 0].var())
+            else:
+                measured = float(auto[shift])
+            f, g = correlations(shift * h, length)
             expected = g if across else f
             got.append(f"{measured:.2f}/{expected:.2f}")
             worst = max(worst, abs(measured - expected))

@@ -137,7 +137,9 @@ def test_recording_layout_and_round_trip(tmp_path):
         assert f["diagnostics/worst_stretch"][-1] > 0.0 and np.all(f["diagnostics/kinetic_energy"][:] >= 0)
 
 
-@pytest.mark.parametrize("scene", ["scenes/kite_gusty.toml", "scenes/hang_glider_dive.toml"])
+@pytest.mark.parametrize(
+    "scene", ["scenes/kite_gusty.toml", "scenes/hang_glider_dive.toml", "scenes/hang_glider_lattice.toml"]
+)
 def test_resume_equals_one_run_bit_for_bit(scene, tmp_path, monkeypatch):
     """2 s in one run == 1 s, then --resume for 1 s (gusts and control schedules included)."""
     monkeypatch.chdir(os.path.dirname(os.path.dirname(__file__)))

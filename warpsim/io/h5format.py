@@ -20,7 +20,7 @@ EXTENSIONS = (".h5", ".hdf5")
 FORMAT = "warpsim-recording"
 
 
-FORMAT_VERSION = 6
+FORMAT_VERSION = 7
 
 
 SLOTS = ("slot0", "slot1")

@@ -34,6 +34,10 @@ class Checkpoint:
         nail_target_goal: ``[N, 3]`` float64 where the controlled nails are moving to [m].
         canopy_side: ``[max(K, 1), 3]`` float32 the lagged side force [Pa] of each of the ``K`` parachute canopies
             (:mod:`warpsim.physics.kernels.canopy`; zeros without canopies).
+        vortex_state: ``[1 + 16 V + 4 S]`` float32 the vortex law's step counter, then the inputs of its latest
+            factorisations for the ``V`` panels and ``S`` surfaces of every world, in world order: corners, centroids,
+            normals, wakes (:meth:`warpsim.physics.kernels.vortex.VortexScratch.save`; ``[1]`` without lifting
+            surfaces), from which a resumed run factorises again, whatever its threads.
         wind: ``[W, 3]`` float32 current wind of each world [m/s].
         gust_active: ``[W]`` uint8, 1 where the world has gusts.
         gust_g: ``[W, 3]`` float64 the gust processes' current values (dimensionless).
@@ -56,6 +60,7 @@ class Checkpoint:
     nail_target: np.ndarray
     nail_target_goal: np.ndarray
     canopy_side: np.ndarray
+    vortex_state: np.ndarray
     wind: np.ndarray
     gust_active: np.ndarray
     gust_g: np.ndarray
@@ -154,6 +159,7 @@ def take_checkpoint(sim) -> Checkpoint:
         nail_target=c.nail_target.numpy().copy(),
         nail_target_goal=c.nail_target_goal.numpy().copy(),
         canopy_side=canopy_sides(sim),
+        vortex_state=vortex_states(sim),
         wind=c.wind.numpy().copy(),
         **sim.inputs.save(),
         control_names=sim.inputs.names,
@@ -181,6 +187,17 @@ def restore_checkpoint(sim, checkpoint: Checkpoint) -> None:
             side[:count] = checkpoint.canopy_side[k : k + count]
             group.solver.canopy_side.assign(side)
             k += count
+    groups = [g for g in sim.groups if g.solver.vortex is not None]  # and the lifting surfaces' factors
+    if groups:
+        state = checkpoint.vortex_state
+        sizes = [g.solver.vortex.sizes() for g in groups]
+        k, parts = 1, [[] for _ in groups]
+        for kind in range(len(sizes[0])):  # each kind of input for every group, one after another
+            for g, size in enumerate(sizes):
+                parts[g].append(state[k : k + size[kind]])
+                k += size[kind]
+        for group, basis in zip(groups, parts, strict=True):
+            group.solver.vortex.load(group.model, int(state[0]), basis)
     sim.inputs.load(checkpoint)
 
 
@@ -189,3 +206,12 @@ def canopy_sides(sim) -> np.ndarray:
     groups = [g for g in sim.groups if g.model.canopy_count]
     sides = [g.solver.canopy_side.numpy()[: g.model.canopy_count] for g in groups]
     return np.concatenate(sides).astype(np.float32) if sides else np.zeros((1, 3), dtype=np.float32)
+
+
+def vortex_states(sim) -> np.ndarray:
+    """The checkpoint's ``vortex_state`` (see :class:`Checkpoint`) of every group with lifting surfaces."""
+    saved = [g.solver.vortex.save() for g in sim.groups if g.solver.vortex is not None]
+    if not saved:
+        return np.zeros(1, dtype=np.float32)
+    kinds = zip(*(basis for _, basis in saved), strict=True)
+    return np.concatenate([np.array([saved[0][0]], dtype=np.float32), *(a for kind in kinds for a in kind)])

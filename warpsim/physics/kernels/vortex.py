@@ -188,6 +188,33 @@ def _surfaces(
 
 
 @wp.kernel
+def _keep_basis(
+    panel_surface: wp.array(dtype=wp.int32),
+    surface_start: wp.array(dtype=wp.int32),
+    counter: wp.array(dtype=wp.int32),
+    factored: wp.array(dtype=wp.int32),
+    corners: wp.array(dtype=wp.vec3),
+    point: wp.array(dtype=wp.vec3),
+    normal: wp.array(dtype=wp.vec4),
+    wake: wp.array(dtype=wp.vec4),
+    basis_corners_out: wp.array(dtype=wp.vec3),
+    basis_point_out: wp.array(dtype=wp.vec3),
+    basis_normal_out: wp.array(dtype=wp.vec4),
+    basis_wake_out: wp.array(dtype=wp.vec4),
+):
+    i = wp.tid()  # what _matrix builds panel i's row from, kept when it does: a checkpoint's way to the same factors
+    s = panel_surface[i]
+    if counter[0] != 0 and factored[s] != 0:
+        return
+    for e in range(3):
+        basis_corners_out[3 * i + e] = corners[3 * i + e]
+    basis_point_out[i] = point[i]
+    basis_normal_out[i] = normal[i]
+    if i == surface_start[s]:
+        basis_wake_out[s] = wake[s]
+
+
+@wp.kernel
 def _matrix(
     panel_surface: wp.array(dtype=wp.int32),
     panel_trailing: wp.array(dtype=wp.int32),
@@ -553,7 +580,8 @@ class VortexScratch:
     factorisation, modulo the steps in ``air.vortex_interval``), ``gamma [V]`` (circulations [m^2/s]), ``stall [V]``
     (separated-flow blend, 0-1), ``induced [E]`` (the wake's downwash at each trailing edge's midpoint [m/s]),
     ``edge_force [E]`` [N], ``edge_side [E]`` (0: the load stays on the edge; 1, 2: its first or second panel is
-    downstream).
+    downstream), ``basis`` (the ``corners``, ``point``, ``normal`` and ``wake`` each surface's latest factors were
+    made from: what a checkpoint keeps, :meth:`save` and :meth:`load`).
     """
 
     def __init__(self, model):
@@ -574,6 +602,57 @@ class VortexScratch:
         self.pivot = wp.zeros(v, dtype=wp.int32, device=device)
         self.factored = wp.zeros(s, dtype=wp.int32, device=device)
         self.counter = wp.zeros(1, dtype=wp.int32, device=device)
+        self.basis = (  # the inputs of each surface's latest factorisation (what a checkpoint keeps)
+            wp.zeros(3 * v, dtype=wp.vec3, device=device),
+            wp.zeros(v, dtype=wp.vec3, device=device),
+            wp.zeros(v, dtype=wp.vec4, device=device),
+            wp.zeros(s, dtype=wp.vec4, device=device),
+        )
+
+    def save(self) -> tuple[int, list[np.ndarray]]:
+        """The state the next steps' circulations depend on, besides the particles: the step counter and the
+        inputs of each surface's latest factorisation (corners, centroids, normals, wakes), flat float32 arrays."""
+        return int(self.counter.numpy()[0]), [a.numpy().reshape(-1).astype(np.float32) for a in self.basis]
+
+    def sizes(self) -> list[int]:
+        """The lengths of :meth:`save`'s arrays."""
+        return [a.shape[0] * a.dtype._length_ for a in self.basis]
+
+    def load(self, model, counter: int, basis: list[np.ndarray]) -> None:
+        """Put a :meth:`save` back and factorise again from its inputs: the same factors, bit for bit, as the
+        run that saved it had (the factorisation is deterministic), so a resumed run steps on exactly."""
+        for a, values in zip(self.basis, basis, strict=True):
+            a.assign(np.asarray(values, dtype=np.float32).reshape(a.shape[0], a.dtype._length_))
+        lat, arrays, dev = model.lattice, model.vortex_arrays, model.device
+        self.counter.zero_()
+        self.factored.zero_()
+        corners, point, normal, wake = self.basis
+        wp.launch(
+            _matrix,
+            dim=lat.panel_count,
+            inputs=[
+                arrays["panel_surface"],
+                arrays["panel_trailing"],
+                arrays["surface_start"],
+                arrays["matrix_start"],
+                self.counter,
+                self.factored,
+                corners,
+                point,
+                normal,
+                wake,
+            ],
+            outputs=[self.matrix],
+            device=dev,
+        )
+        wp.launch(
+            _factor,
+            dim=lat.surface_count,
+            inputs=[arrays["surface_start"], arrays["matrix_start"], self.counter, wake],
+            outputs=[self.matrix, self.pivot, self.factored],
+            device=dev,
+        )
+        self.counter.assign(np.array([counter], dtype=np.int32))
 
 
 def vortex_air_force(
@@ -616,6 +695,22 @@ def vortex_air_force(
         dim=lat.surface_count,
         inputs=[arrays["surface_start"], sc.normal, sc.wind],
         outputs=[sc.wake, sc.plane],
+        device=dev,
+    )
+    wp.launch(
+        _keep_basis,
+        dim=lat.panel_count,
+        inputs=[
+            arrays["panel_surface"],
+            arrays["surface_start"],
+            sc.counter,
+            sc.factored,
+            sc.corners,
+            sc.point,
+            sc.normal,
+            sc.wake,
+        ],
+        outputs=list(sc.basis),
         device=dev,
     )
     wp.launch(

@@ -234,6 +234,13 @@ class AirConfig(Checked):
         vortex_interval: ``vortex`` law: how often [s] the lattice's influence matrix is rebuilt and factorised
             (0 = every step); the circulations are solved from those factors every step
             (:mod:`warpsim.physics.kernels.vortex`).
+        wake: ``vortex`` law: ``steady`` (a quasi-steady wake along the relative wind of the moment) or ``shed``
+            (a wake shed from the trailing edges over time and carried by the wind: the lift builds up and lags as
+            in unsteady flow, :mod:`warpsim.physics.kernels.wake`).
+        wake_rows: ``shed`` wake: rows of vortex rings kept behind each trailing edge (the oldest row ends in
+            semi-infinite legs along the relative wind).
+        wake_interval: ``shed`` wake: how often [s] a row is shed (rows lie ``wake_interval`` times the airspeed
+            apart; at most one a step).
     """
 
     model: AeroModel = choice(AeroModel.PAPER, AeroModel)
@@ -242,6 +249,14 @@ class AirConfig(Checked):
     elevation: float = number(0.0, Bounds(-2000.0, 20000.0))
     temperature_offset: float = number(0.0, Bounds(-70.0, 50.0))
     vortex_interval: float = number(0.1, Bounds(0.0, 10.0))
+    wake: str = choice("steady", ("steady", "shed"))
+    wake_rows: int = number(40, Bounds(1, 2000))
+    wake_interval: float = number(0.02, Bounds(0.0, 10.0, low_open=True))
+
+    def __post_init__(self):
+        super().__post_init__()
+        if isinstance(self.wake_rows, bool) or int(self.wake_rows) != self.wake_rows:
+            raise ValueError(f"wake_rows must be a whole number >= 1, got {self.wake_rows}")
 
 
 @dataclass(frozen=True, kw_only=True)

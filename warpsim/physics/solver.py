@@ -16,7 +16,20 @@ import numpy as np
 import warp as wp
 
 from .config import AirConfig, GroundConfig, SolverConfig, WindConfig
-from .kernels import MODULES, aero, bending, canopy, collision, constraints, controls, momentum, springs, verlet, vortex
+from .kernels import (
+    MODULES,
+    aero,
+    bending,
+    canopy,
+    collision,
+    constraints,
+    controls,
+    momentum,
+    springs,
+    verlet,
+    vortex,
+    wake,
+)
 from .kernels.aero import AeroModel, body_drag, triangle_air_force
 from .kernels.bending import bending_force
 from .kernels.canopy import canopy_air_force
@@ -94,6 +107,8 @@ class _Solver:
             self.particle_force = wp.zeros(model.particle_count, dtype=wp.vec3, device=model.device)
         self.vortex = vortex.VortexScratch(model) if model.lattice.panel_count else None
         """The vortex law's buffers when the model has lifting surfaces (:mod:`warpsim.physics.kernels.vortex`)."""
+        if self.vortex is not None and self.air.wake == "shed":
+            self.vortex.shed = wake.ShedWake(model, self.air.wake_rows, self.air.wake_interval)
         self.canopy_load = wp.zeros(max(model.canopy_count, 1), dtype=wp.vec4, device=model.device)
         self.canopy_side = wp.zeros(max(model.canopy_count, 1), dtype=wp.vec3, device=model.device)
         sticks = np.unique(np.concatenate([np.zeros(0, np.int32), *(r.controlled_sticks() for r in model.objects)]))
@@ -202,7 +217,7 @@ class SolverVerlet(_Solver):
     None = fused on the CPU, gather on CUDA.
     """
 
-    modules = (aero, bending, canopy, collision, constraints, controls, momentum, verlet, vortex)
+    modules = (aero, bending, canopy, collision, constraints, controls, momentum, verlet, vortex, wake)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, *, constraint_scheme=None, **kwargs):
         super().__init__(model, config, **kwargs)
@@ -233,7 +248,7 @@ class SolverEuler(_Solver):
     ``spring_stiffness`` [N/m] and ``spring_damping`` [N s/m] from its :class:`~warpsim.physics.config.SolverConfig`;
     arguments as for :class:`SolverVerlet`, without a constraint scheme)."""
 
-    modules = (aero, bending, canopy, collision, controls, springs, vortex)
+    modules = (aero, bending, canopy, collision, controls, springs, vortex, wake)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, **kwargs):
         super().__init__(model, config, **kwargs)

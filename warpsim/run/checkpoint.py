@@ -38,6 +38,9 @@ class Checkpoint:
             factorisations for the ``V`` panels and ``S`` surfaces of every world, in world order: corners, centroids,
             normals, wakes (:meth:`warpsim.physics.kernels.vortex.VortexScratch.save`; ``[1]`` without lifting
             surfaces), from which a resumed run factorises again, whatever its threads.
+        vortex_wake: ``[1 + ...]`` float64 the shed wake's counter, then for every world its rows' points [m], its
+            rings' circulations, its smoothed rates and its panels' circulations
+            (:meth:`warpsim.physics.kernels.wake.ShedWake.save`; ``[1]`` without a shed wake).
         wind: ``[W, 3]`` float32 current wind of each world [m/s].
         gust_active: ``[W]`` uint8, 1 where the world has gusts.
         gust_g: ``[W, 3]`` float64 the gust processes' current values (dimensionless).
@@ -61,6 +64,7 @@ class Checkpoint:
     nail_target_goal: np.ndarray
     canopy_side: np.ndarray
     vortex_state: np.ndarray
+    vortex_wake: np.ndarray
     wind: np.ndarray
     gust_active: np.ndarray
     gust_g: np.ndarray
@@ -160,6 +164,7 @@ def take_checkpoint(sim) -> Checkpoint:
         nail_target_goal=c.nail_target_goal.numpy().copy(),
         canopy_side=canopy_sides(sim),
         vortex_state=vortex_states(sim),
+        vortex_wake=wake_states(sim),
         wind=c.wind.numpy().copy(),
         **sim.inputs.save(),
         control_names=sim.inputs.names,
@@ -189,15 +194,16 @@ def restore_checkpoint(sim, checkpoint: Checkpoint) -> None:
             k += count
     groups = [g for g in sim.groups if g.solver.vortex is not None]  # and the lifting surfaces' factors
     if groups:
-        state = checkpoint.vortex_state
         sizes = [g.solver.vortex.sizes() for g in groups]
-        k, parts = 1, [[] for _ in groups]
-        for kind in range(len(sizes[0])):  # each kind of input for every group, one after another
-            for g, size in enumerate(sizes):
-                parts[g].append(state[k : k + size[kind]])
-                k += size[kind]
+        counter, parts = _unpack(checkpoint.vortex_state, sizes)
         for group, basis in zip(groups, parts, strict=True):
-            group.solver.vortex.load(group.model, int(state[0]), basis)
+            group.solver.vortex.load(group.model, counter, basis)
+    groups = [g for g in groups if g.solver.vortex.shed is not None]  # and their shed wakes
+    if groups:
+        sizes = [g.solver.vortex.shed.sizes(g.solver.vortex.gamma) for g in groups]
+        counter, parts = _unpack(checkpoint.vortex_wake, sizes)
+        for group, state in zip(groups, parts, strict=True):
+            group.solver.vortex.shed.load(counter, state, group.solver.vortex.gamma)
     sim.inputs.load(checkpoint)
 
 
@@ -208,10 +214,31 @@ def canopy_sides(sim) -> np.ndarray:
     return np.concatenate(sides).astype(np.float32) if sides else np.zeros((1, 3), dtype=np.float32)
 
 
+def _pack(saved: list[tuple[int, list[np.ndarray]]], dtype) -> np.ndarray:
+    """One array of the groups' ``(counter, arrays)``: the counter, then each kind of array for every group in world
+    order (so that the layout does not depend on how the worlds are split into groups)."""
+    if not saved:
+        return np.zeros(1, dtype=dtype)
+    kinds = zip(*(arrays for _, arrays in saved), strict=True)
+    return np.concatenate([np.array([saved[0][0]], dtype=dtype), *(a.astype(dtype) for kind in kinds for a in kind)])
+
+
+def _unpack(packed: np.ndarray, sizes: list[list[int]]) -> tuple[int, list[list[np.ndarray]]]:
+    """The counter and each group's arrays of a :func:`_pack` (``sizes``: each group's array lengths)."""
+    k, parts = 1, [[] for _ in sizes]
+    for kind in range(len(sizes[0])):
+        for g, size in enumerate(sizes):
+            parts[g].append(packed[k : k + size[kind]])
+            k += size[kind]
+    return int(packed[0]), parts
+
+
 def vortex_states(sim) -> np.ndarray:
     """The checkpoint's ``vortex_state`` (see :class:`Checkpoint`) of every group with lifting surfaces."""
-    saved = [g.solver.vortex.save() for g in sim.groups if g.solver.vortex is not None]
-    if not saved:
-        return np.zeros(1, dtype=np.float32)
-    kinds = zip(*(basis for _, basis in saved), strict=True)
-    return np.concatenate([np.array([saved[0][0]], dtype=np.float32), *(a for kind in kinds for a in kind)])
+    return _pack([g.solver.vortex.save() for g in sim.groups if g.solver.vortex is not None], np.float32)
+
+
+def wake_states(sim) -> np.ndarray:
+    """The checkpoint's ``vortex_wake`` (see :class:`Checkpoint`) of every group with a shed wake."""
+    vortices = [g.solver.vortex for g in sim.groups if g.solver.vortex is not None and g.solver.vortex.shed is not None]
+    return _pack([v.shed.save(v.gamma) for v in vortices], np.float64)

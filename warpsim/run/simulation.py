@@ -29,7 +29,14 @@ from ..physics.solver import SOLVERS, load_modules, make_solver
 from ..scene.build import build_model, settings
 from ..scene.controls import ControlError, ControlSchedule
 from ..scene.descriptor import DescriptorError, world_descriptor
-from .checkpoint import Checkpoint, canopy_sides, restore_checkpoint, take_checkpoint, vortex_states
+from .checkpoint import (
+    Checkpoint,
+    canopy_sides,
+    restore_checkpoint,
+    take_checkpoint,
+    vortex_states,
+    wake_states,
+)
 from .diagnostics import Frame, FrameSource, GroundContacts, find_blowup
 from .groups import GroupThreads, WorldGroup, split_worlds
 from .inputs import Inputs, control_names
@@ -387,6 +394,7 @@ class Simulation:
                 nail_target_goal=nail_target_goal,
                 canopy_side=canopy_sides(self),  # as now: the frame probes keep positions, not these
                 vortex_state=vortex_states(self),  # (a factorisation that fails is tried again at the next step)
+                vortex_wake=wake_states(self),
                 wind=wind,
                 **inputs,
                 control_names=self.inputs.names,

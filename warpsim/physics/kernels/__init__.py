@@ -5,9 +5,9 @@ shared math lives in ``@wp.func`` helpers. Launch parameters are grouped as mode
 scalars, then outputs (``_out``).
 """
 
-from . import aero, bending, canopy, collision, constraints, controls, frame, momentum, springs, verlet, vortex
+from . import aero, bending, canopy, collision, constraints, controls, frame, momentum, springs, verlet, vortex, wake
 
-MODULES = (aero, bending, canopy, collision, constraints, controls, momentum, springs, verlet, vortex)
+MODULES = (aero, bending, canopy, collision, constraints, controls, momentum, springs, verlet, vortex, wake)
 """The solvers' kernel modules (``frame`` is the runner's)."""
 
 __all__ = [
@@ -23,4 +23,5 @@ __all__ = [
     "springs",
     "verlet",
     "vortex",
+    "wake",
 ]

@@ -320,6 +320,7 @@ def _substitute(
     matrix: wp.array(dtype=wp.float32),
     pivot: wp.array(dtype=wp.int32),
     factored: wp.array(dtype=wp.int32),
+    wake_normal: wp.array(dtype=wp.float32),
     gamma_out: wp.array(dtype=wp.float32),
 ):
     s = wp.tid()  # this step's circulations from the latest factors: no air through any centroid
@@ -328,7 +329,7 @@ def _substitute(
     base = matrix_start[s]
     for i in range(n):
         nv = normal[first + i]
-        gamma_out[first + i] = -wp.dot(panel_wind[first + i], wp.vec3(nv[0], nv[1], nv[2]))
+        gamma_out[first + i] = -wp.dot(panel_wind[first + i], wp.vec3(nv[0], nv[1], nv[2])) - wake_normal[first + i]
     if factored[s] == 0:
         for i in range(n):
             gamma_out[first + i] = 0.0
@@ -476,6 +477,8 @@ def _edge_force(
     gamma: wp.array(dtype=wp.float32),
     stall: wp.array(dtype=wp.float32),
     induced: wp.array(dtype=wp.vec3),
+    shed: int,
+    attached: wp.array(dtype=wp.float32),
     edge_force_out: wp.array(dtype=wp.vec3),
     edge_side_out: wp.array(dtype=wp.int32),
 ):
@@ -489,7 +492,17 @@ def _edge_force(
     edge_side_out[e] = 0
     air_density = world_density[particle_world[ends[0]]]
     if panels[1] == TRAILING:  # the wake's downwash on the circulation it carries away: induced drag (Trefftz)
-        edge_force_out[e] = wp.cross(induced[e], wp.vec3(a - b)) * (air_density * g * aero_scale * (1.0 - sigma))
+        drag = wp.cross(induced[e], wp.vec3(a - b)) * (air_density * g * aero_scale * (1.0 - sigma))
+        if shed != 0:  # a shed wake: the edge's own vortex, its panel's circulation less its first ring's
+            mid = (a + b) * wp.float64(0.5)
+            moved = (a - particle_q_prev[ends[0]]) + (b - particle_q_prev[ends[1]])
+            height = float(mid[2] - terrain_height(hf, mid[0], mid[1]))
+            world = particle_world[ends[0]]
+            w = wind_at(wind[world], height, shear_reference_height, shear_exponent) + turbulence_at(turb, world, mid)
+            velocity = w - wp.vec3(moved) / (2.0 * dt)
+            net = (g - attached[e]) * air_density * aero_scale * (1.0 - sigma)
+            drag += wp.cross(velocity, wp.vec3(b - a)) * net
+        edge_force_out[e] = drag
         return
     # the load acts a quarter of the way to the far corner of the panel downstream (the classical lattice's
     # bound vortex lies a quarter panel behind the panel's leading edge): which panel is downstream?
@@ -602,6 +615,11 @@ class VortexScratch:
         self.pivot = wp.zeros(v, dtype=wp.int32, device=device)
         self.factored = wp.zeros(s, dtype=wp.int32, device=device)
         self.counter = wp.zeros(1, dtype=wp.int32, device=device)
+        self.no_trailing = wp.zeros(v, dtype=wp.int32, device=device)  # the matrix of a shed wake: no legs
+        self.no_wake = wp.zeros(v, dtype=wp.float32, device=device)  # nor a wake's velocity on the right-hand side
+        self.no_edges = wp.zeros(e, dtype=wp.float32, device=device)
+        self.shed = None
+        """The wake shed over time (:class:`warpsim.physics.kernels.wake.ShedWake`) under ``air.wake = "shed"``."""
         self.basis = (  # the inputs of each surface's latest factorisation (what a checkpoint keeps)
             wp.zeros(3 * v, dtype=wp.vec3, device=device),
             wp.zeros(v, dtype=wp.vec3, device=device),
@@ -632,7 +650,7 @@ class VortexScratch:
             dim=lat.panel_count,
             inputs=[
                 arrays["panel_surface"],
-                arrays["panel_trailing"],
+                arrays["panel_trailing"] if self.shed is None else self.no_trailing,
                 arrays["surface_start"],
                 arrays["matrix_start"],
                 self.counter,
@@ -667,6 +685,9 @@ def vortex_air_force(
     if lat.panel_count == 0:
         return
     arrays, dev, rho, scale = model.vortex_arrays, model.device, control.air_density, float(air.scale)
+    shed = scratch.shed  # a wake shed over time (air.wake = "shed", :mod:`.wake`), or None: the quasi-steady wake
+    if shed is not None:
+        shed.before_solve(model, state, control, dt, wind, scratch.gamma)
     interval = max(1, int(round(float(air.vortex_interval) / float(dt))))  # steps between factorisations
     shear = (float(wind.shear_exponent), float(wind.reference_height))
     sc = scratch
@@ -718,7 +739,7 @@ def vortex_air_force(
         dim=lat.panel_count,
         inputs=[
             arrays["panel_surface"],
-            arrays["panel_trailing"],
+            arrays["panel_trailing"] if shed is None else sc.no_trailing,  # a shed wake keeps the edges' vortices
             arrays["surface_start"],
             arrays["matrix_start"],
             sc.counter,
@@ -738,29 +759,43 @@ def vortex_air_force(
         outputs=[sc.matrix, sc.pivot, sc.factored],
         device=dev,
     )
+    if shed is not None:
+        shed.right_hand_side(model, state, sc)
     wp.launch(
         _substitute,
         dim=lat.surface_count,
-        inputs=[arrays["surface_start"], arrays["matrix_start"], sc.normal, sc.wind, sc.matrix, sc.pivot, sc.factored],
+        inputs=[
+            arrays["surface_start"],
+            arrays["matrix_start"],
+            sc.normal,
+            sc.wind,
+            sc.matrix,
+            sc.pivot,
+            sc.factored,
+            sc.no_wake if shed is None else shed.normal,
+        ],
         outputs=[sc.gamma],
         device=dev,
     )
-    wp.launch(
-        _wake_downwash,
-        dim=lat.edge_count,
-        inputs=[
-            arrays["edge_panels"],
-            arrays["edge_corner"],
-            arrays["panel_surface"],
-            arrays["panel_trailing"],
-            arrays["surface_start"],
-            sc.corners,
-            sc.wake,
-            sc.gamma,
-        ],
-        outputs=[sc.induced],
-        device=dev,
-    )
+    if shed is not None:
+        shed.downwash(model, state, sc)
+    if shed is None:
+        wp.launch(
+            _wake_downwash,
+            dim=lat.edge_count,
+            inputs=[
+                arrays["edge_panels"],
+                arrays["edge_corner"],
+                arrays["panel_surface"],
+                arrays["panel_trailing"],
+                arrays["surface_start"],
+                sc.corners,
+                sc.wake,
+                sc.gamma,
+            ],
+            outputs=[sc.induced],
+            device=dev,
+        )
     wp.launch(
         _polar,
         dim=lat.panel_count,
@@ -779,6 +814,8 @@ def vortex_air_force(
         outputs=[sc.stall, tri_force_out],
         device=dev,
     )
+    if shed is not None:
+        shed.unsteady(model, control, dt, scale, sc, tri_force_out)
     wp.launch(
         _edge_force,
         dim=lat.edge_count,
@@ -801,6 +838,8 @@ def vortex_air_force(
             sc.gamma,
             sc.stall,
             sc.induced,
+            int(shed is not None),
+            sc.no_edges if shed is None else shed.attached,
         ],
         outputs=[sc.edge_force, sc.edge_side],
         device=dev,
@@ -813,3 +852,5 @@ def vortex_air_force(
         device=dev,
     )
     wp.launch(_tick, dim=1, inputs=[interval], outputs=[sc.counter], device=dev)
+    if shed is not None:
+        shed.after_step(model, dt)

@@ -5,7 +5,8 @@ NumPy operations in float64 and ``np.linalg.solve`` (LAPACK's LU with partial pi
 float32 and their own elimination: the two agree to float32 rounding, which the tests check. It takes from the model
 only the surfaces as declared (their triangles and trailing edges) and finds their edges, neighbours and far corners
 itself (:func:`edge_table`), so the host topology of :mod:`warpsim.physics.lattice` is checked too. Uniform wind (no
-shear profile) only.
+shear profile) only. With a shed wake (:mod:`warpsim.physics.kernels.wake`) it takes the wake's rows of points and
+rings' circulations by trailing edge, ``(a, b)`` particles in the ring's order, and finds the trailing edges itself.
 """
 
 from __future__ import annotations
@@ -101,11 +102,41 @@ def edge_table(tris: np.ndarray, panel_tri: np.ndarray, surface_start: np.ndarra
     )
 
 
-def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, density, scale: float = 1.0):
+def shed_wake_velocity(x: np.ndarray, rings: dict, origin: np.ndarray, d: np.ndarray, core2: float) -> np.ndarray:
+    """``[M, 3]`` velocity at ``x [M, 3]`` (from ``origin``) of a shed wake: ``rings`` maps a trailing edge ``(a, b)``
+    to the rows of points behind ``a`` and behind ``b`` (``[R + 1, 3]`` [m] each, row 0 the edge) and its rings'
+    circulations ``[R]``; each ring runs
+    ``b_k -> a_k -> a_k+1 -> b_k+1 -> b_k``, the oldest ending in two legs along ``d``."""
+    v = np.zeros((len(x), 3))
+    for pa, pb, g in rings.values():
+        pa = (pa - origin).astype(np.float32).astype(np.float64)
+        pb = (pb - origin).astype(np.float32).astype(np.float64)
+        rows = len(g)
+        for k in range(rows):
+            if g[k] == 0.0:
+                continue
+            u = segment_velocity(x, pb[k : k + 1], pa[k : k + 1], core2)
+            u += segment_velocity(x, pa[k : k + 1], pa[k + 1 : k + 2], core2)
+            u += segment_velocity(x, pb[k + 1 : k + 2], pb[k : k + 1], core2)
+            if k == rows - 1:
+                u += ray_velocity(x, pa[k + 1 : k + 2], d, core2) - ray_velocity(x, pb[k + 1 : k + 2], d, core2)
+            else:
+                u += segment_velocity(x, pa[k + 1 : k + 2], pb[k + 1 : k + 2], core2)
+            v += u[:, 0] * g[k]
+    return v
+
+
+def vortex_forces(
+    model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, density, scale: float = 1.0, shed: dict | None = None
+):
     """The vortex law's forces on ``model`` at positions ``q`` and ``q_prev`` ``[P, 3]`` [m] for steps of ``dt`` [s],
     in a uniform ``wind`` ``[W, 3]`` [m/s] and air of ``density`` ``[W]`` [kg/m^3] per world: ``(particle_force
     [P, 3], tri_force {triangle: per-vertex force [3]}, gamma [V])``, as the kernels write them into ``particle_air``
-    and ``tri_force`` [N] and their circulations [m^2/s]."""
+    and ``tri_force`` [N] and their circulations [m^2/s].
+
+    ``shed``: a shed wake's state at the solve, ``{"rings": {(a, b): (points of a, points of b, circulations)},
+    "gamma_before": [V], "rate": [V] (the smoothed rates of the step before), "smoothing": s}`` (the first ring's
+    circulation already its panel's of the step before); ``shed["rate"]`` is then set to this step's."""
     lat = model.lattice
     tris = model.tri_indices_np
     sail = model.tri_sail.numpy().astype(np.float64)
@@ -120,6 +151,7 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, den
     )
     induced = np.zeros((len(edge_corner), 3))
     wake_dir = np.zeros((lat.surface_count, 3))
+    rates = np.zeros(lat.panel_count)
     for s in range(lat.surface_count):
         v0, v1 = lat.surface_start[s], lat.surface_start[s + 1]
         idx = tris[lat.panel_tri[v0:v1]]
@@ -139,16 +171,25 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, den
         if area.sum() > 0 and np.linalg.norm(mean) > 0:
             d = wake_dir[s] = mean / np.linalg.norm(mean)
             core2 = CORE_FRACTION**2 * area.sum() / (v1 - v0)
-            a = (ring_velocities(point, corners, trailing, d, core2) * n[:, None, :]).sum(-1)
-            gamma[v0:v1] = np.linalg.solve(a, -(w * n).sum(1))
             mine = (edge_panels[:, 0] >= v0) & (edge_panels[:, 0] < v1) & (edge_panels[:, 1] == TRAILING)
             p, k = edge_panels[mine, 0] - v0, edge_corner[mine]
             mid = 0.5 * (corners[p, k] + corners[p, (k + 1) % 3])
-            legs = ring_velocities(mid, corners, trailing, d, core2) - ring_velocities(
-                mid, corners, 0 * trailing, d, core2
-            )
-            legs += _bound_of_trailing(mid, corners, trailing, core2)
-            induced[mine] = (legs * gamma[v0:v1][None, :, None]).sum(1)
+            if shed is None:
+                a = (ring_velocities(point, corners, trailing, d, core2) * n[:, None, :]).sum(-1)
+                gamma[v0:v1] = np.linalg.solve(a, -(w * n).sum(1))
+                legs = ring_velocities(mid, corners, trailing, d, core2) - ring_velocities(
+                    mid, corners, 0 * trailing, d, core2
+                )
+                legs += _bound_of_trailing(mid, corners, trailing, core2)
+                induced[mine] = (legs * gamma[v0:v1][None, :, None]).sum(1)
+            else:  # the sail's own rings, edges and all; the wake on the right-hand side
+                ring_of = tris[lat.panel_tri[v0 + p]]
+                ends = {(int(ring_of[j, k[j]]), int(ring_of[j, (k[j] + 1) % 3])) for j in range(len(p))}
+                rings = {key: value for key, value in shed["rings"].items() if key in ends}
+                a = (ring_velocities(point, corners, 0 * trailing, d, core2) * n[:, None, :]).sum(-1)
+                through = (shed_wake_velocity(point, rings, origin, d, core2) * n).sum(1)
+                gamma[v0:v1] = np.linalg.solve(a, -(w * n).sum(1) - through)
+                induced[mine] = shed_wake_velocity(mid, rings, origin, d, core2)
         for row, t in enumerate(lat.panel_tri[v0:v1]):
             coef = sail[t]
             speed = np.linalg.norm(w[row])
@@ -164,6 +205,12 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, den
             stall[v0 + row] = sigma
             rho = rho_world[world[tris[int(t)][0]]]
             tri_force[int(t)] = force * (0.5 * rho * area[row] * scale / 3.0)
+            if shed is not None:  # the unsteady pressure -rho A dG/dt n, its rate smoothed
+                i = v0 + row
+                before = shed["rate"][i]
+                rate = before + shed["smoothing"] * ((gamma[i] - shed["gamma_before"][i]) / dt - before)
+                rates[i] = rate
+                tri_force[int(t)] = tri_force[int(t)] + n[row] * (-rho * area[row] * rate * (1.0 - sigma) * scale / 3.0)
     g = gamma[edge_panels[:, 0]].copy()
     sigma = stall[edge_panels[:, 0]].copy()
     inner = edge_panels[:, 1] >= 0
@@ -173,9 +220,24 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, den
     moved = (q[a] - q_prev[a]) + (q[b] - q_prev[b])
     velocity = wind[world[a]] - moved / (2.0 * dt)
     edge = q[b] - q[a]
-    shed = edge_panels[:, 1] == TRAILING
-    velocity[shed], edge[shed] = induced[shed], -edge[shed]  # the wake's downwash on the trailing edges
+    trailing_edge = edge_panels[:, 1] == TRAILING
+    ring_order = tris[lat.panel_tri[edge_panels[:, 0]]]
+    edge_ab = (
+        ring_order[np.arange(len(edge_corner)), edge_corner],
+        ring_order[np.arange(len(edge_corner)), (edge_corner + 1) % 3],
+    )
+    local = velocity.copy()
+    velocity[trailing_edge], edge[trailing_edge] = induced[trailing_edge], -edge[trailing_edge]  # induced drag
     edge_force = np.cross(velocity, edge) * (rho_world[world[a]] * g * scale * (1.0 - sigma))[:, None]
+    if shed is not None:  # a shed wake's trailing edge: its own vortex, the panel's circulation less its first ring's
+        first = np.array(
+            [
+                shed["rings"][(int(pa), int(pb))][2][0] if t else 0.0
+                for pa, pb, t in zip(*edge_ab, trailing_edge, strict=True)
+            ]
+        )
+        net = rho_world[world[a]] * (g - first) * scale * (1.0 - sigma)
+        edge_force[trailing_edge] += (np.cross(local, -edge) * net[:, None])[trailing_edge]
     # each load a quarter of the way to the far corner of the panel downstream (none on the trailing edges)
     d = wake_dir[lat.panel_surface[edge_panels[:, 0]]]
     mid = 0.5 * (q[a] + q[b])
@@ -184,11 +246,13 @@ def vortex_forces(model, q: np.ndarray, q_prev: np.ndarray, dt: float, wind, den
     behind = np.where(far[:, 1] >= 0, ((q[np.maximum(far[:, 1], 0)] - mid) * d).sum(1), -np.inf)
     side = np.where(ahead > 0, 1, 0)
     side = np.where((behind > 0) & (behind > ahead), 2, side)
-    side[shed] = 0
+    side[trailing_edge] = 0
     corner = np.where(side == 2, far[:, 1], far[:, 0])
     share = np.where(side > 0, 0.25, 0.0)[:, None]
     particle_force = np.zeros_like(q)
     np.add.at(particle_force, a, 0.5 * (1.0 - share) * edge_force)
     np.add.at(particle_force, b, 0.5 * (1.0 - share) * edge_force)
     np.add.at(particle_force, corner, share * edge_force)
+    if shed is not None:
+        shed["rate"] = rates
     return particle_force, tri_force, gamma

@@ -3,9 +3,8 @@
 
 import json
 
-import pytest
-
 import golden
+import pytest
 
 RECORD = json.loads(golden.FILE.read_text())
 

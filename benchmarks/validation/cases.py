@@ -1867,6 +1867,7 @@ CASES: dict[str, Callable[[], list[Row]]] = {
     "vortex": lambda: _vortex_rows(),
     "atmosphere": lambda: _rows_of("atmosphere_rows", "rows"),
     "turbulence": lambda: _rows_of("turbulence_rows", "field_rows"),
+    "unsteady": lambda: _rows_of("unsteady", "wagner_rows"),
 }
 
 

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..physics.builder import ModelBuilder, check_memory
 from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
+from ..physics.lattice import trailing_edges
 from ..physics.model import ObjectRecord
 from ..physics.shapes import edge_halves
 from ..physics.terrain import Heightfield
@@ -72,6 +73,11 @@ class FlagConfig(Checked):
             trend is what their locking would do; docs/objects.md).
         pole_height: height of the flag's top edge above the terrain at the pole's foot [m].
         position: (x, y) of the pole [m].
+        lattice: the cloth is a lifting surface of the vortex law too (its free edge, downstream of the pole, the
+            trailing edge; no profile drag and no stall): under ``air.model = "vortex"`` its air is the lattice's
+            (with ``air.wake = "shed"``, a wake shed over time), otherwise the per-triangle law's as before. An
+            experiment, not validated: the flag's flapping on the lattice depends on its mesh (docs/validation.md,
+            "The flag on the lattice").
     """
 
     width: float = number(2.0, POSITIVE)
@@ -85,6 +91,7 @@ class FlagConfig(Checked):
     shear_compliance: float = number(1e-2, NON_NEGATIVE)
     pole_height: float = number(5.0, POSITIVE)
     position: tuple[float, float] = (0.0, 0.0)
+    lattice: bool = False
 
 
 _DESIGN_KEYS = ("resolution", "mass_lumping", "bending_stiffness", "cloth_compliance", "shear_compliance")
@@ -170,6 +177,11 @@ def build_flag(builder: ModelBuilder, cfg: FlagConfig, terrain: Heightfield) -> 
         builder.set_compliance(diagonals, cfg.shear_compliance)
     if cfg.bending_stiffness > 0.0:
         add_plate_hinges(builder, ids, cfg.width / (count_u - 1), cfg.height / (count_v - 1), cfg.bending_stiffness)
+    if cfg.lattice:  # a lifting surface for the vortex law, its free edge (downstream of the pole) the trailing edge
+        points = np.asarray(builder.particle_q, dtype=np.float64)
+        tri_idx = np.asarray(builder.tri_indices, dtype=np.int64)[tris]
+        builder.set_triangle_sail(tris, (0.0, 0.0, 0.0, np.radians(60.0)))  # potential flow: no profile drag, no stall
+        builder.add_lifting_surface(tris, trailing_edges(points, tri_idx, (1.0, 0.0, 0.0)))
     particles = np.arange(p0, builder.particle_count)
     return builder.add_object(
         ObjectRecord(

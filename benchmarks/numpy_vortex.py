@@ -221,23 +221,8 @@ def vortex_forces(
     velocity = wind[world[a]] - moved / (2.0 * dt)
     edge = q[b] - q[a]
     trailing_edge = edge_panels[:, 1] == TRAILING
-    ring_order = tris[lat.panel_tri[edge_panels[:, 0]]]
-    edge_ab = (
-        ring_order[np.arange(len(edge_corner)), edge_corner],
-        ring_order[np.arange(len(edge_corner)), (edge_corner + 1) % 3],
-    )
-    local = velocity.copy()
     velocity[trailing_edge], edge[trailing_edge] = induced[trailing_edge], -edge[trailing_edge]  # induced drag
     edge_force = np.cross(velocity, edge) * (rho_world[world[a]] * g * scale * (1.0 - sigma))[:, None]
-    if shed is not None:  # a shed wake's trailing edge: its own vortex, the panel's circulation less its first ring's
-        first = np.array(
-            [
-                shed["rings"][(int(pa), int(pb))][2][0] if t else 0.0
-                for pa, pb, t in zip(*edge_ab, trailing_edge, strict=True)
-            ]
-        )
-        net = rho_world[world[a]] * (g - first) * scale * (1.0 - sigma)
-        edge_force[trailing_edge] += (np.cross(local, -edge) * net[:, None])[trailing_edge]
     # each load a quarter of the way to the far corner of the panel downstream (none on the trailing edges)
     d = wake_dir[lat.panel_surface[edge_panels[:, 0]]]
     mid = 0.5 * (q[a] + q[b])

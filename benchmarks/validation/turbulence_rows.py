@@ -53,8 +53,8 @@ def correlations(r: float, length: float) -> tuple[float, float]:
 
 def sample_lines(field: turbulence.Field, every: int = 2, per_cell: int = 2, across: float = 0.0) -> np.ndarray:
     """``[lines, n, 3]`` the field along straight paths the length of the box along x (the mean wind), one near every
-    ``every``-th grid line across it but off it by a random part of a cell in y and z (as points carried by the wind
-    meet the field anywhere between its nodes), at ``per_cell`` samples per cell, sampled trilinearly as the kernels
+    ``every``-th grid line across it but off it by a random part of a cell in x, y and z (as points carried by the
+    wind meet the field anywhere between its nodes), at ``per_cell`` samples per cell, sampled trilinearly as the kernels
     sample; ``across`` [m] moves every path that far along y."""
     nx, ny, nz = field.velocity.shape[:3]
     n = nx * per_cell
@@ -63,7 +63,7 @@ def sample_lines(field: turbulence.Field, every: int = 2, per_cell: int = 2, acr
     starts = np.column_stack([ys.ravel(), zs.ravel()])
     starts = starts + np.random.default_rng(1).random(starts.shape) * field.cell
     points = np.empty((len(starts), n, 3))
-    points[..., 0] = x[None, :]
+    points[..., 0] = x[None, :] + np.random.default_rng(2).random((len(starts), 1)) * field.cell
     points[..., 1] = starts[:, :1] + across
     points[..., 2] = starts[:, 1:]
     return field.sample(points.reshape(-1, 3)).reshape(len(starts), n, 3)

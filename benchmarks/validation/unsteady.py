@@ -49,15 +49,18 @@ def lift_build_up(
     chords: float = 8.0,
     rows: int | None = None,
     alpha_deg: float = 5.0,
+    steps_per_row: int = 1,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The wing's lift after the step, ``(s, C_L(s) / C_L(steady))`` at every step: a rectangle of chord 1 m and
     ``span_panels x chord_panels`` cells in a wind of 1 m/s, ``steps_per_chord`` steps (and rows shed) per chord
-    travelled, for ``chords`` chords; the wake keeps ``rows`` rows (default: all it sheds). ``C_L(steady)`` is the
-    quasi-steady wake's, at the same angle."""
+    travelled, a row shed every ``steps_per_row`` steps (``air.wake_interval``, over which the unsteady term's rate is
+    smoothed too), for ``chords`` chords; the wake keeps ``rows`` rows (default: all it sheds). ``C_L(steady)`` is the
+    quasi-steady wake's, at the same angle. Step ``k`` (from 0) is ``t = k dt``: it solves with the vorticity shed
+    ``k`` steps before, carried ``k dt`` downstream, and step 0 is the start, with no wake yet."""
     wing = rectangle(aspect_ratio, span_panels, chord_panels)
     m = wing.model
     dt = 1.0 / steps_per_chord
-    steps = int(round(chords * steps_per_chord))
+    steps = int(round(chords * steps_per_chord)) + 1
     steady = loads(wing, alpha_deg)["CL"]
     a = math.radians(alpha_deg)
     wind = np.array([math.cos(a), 0.0, math.sin(a)])  # the air towards +x and up: the wing flies to -x at +alpha
@@ -67,7 +70,7 @@ def lift_build_up(
     control.wind.assign(np.array([wind], dtype=np.float32))
     control.air_density.fill_(1.0)
     scratch = VortexScratch(m)
-    scratch.shed = ShedWake(m, rows or steps + 1, dt)
+    scratch.shed = ShedWake(m, rows or steps // steps_per_row + 1, steps_per_row * dt)
     air = AirConfig(model=AeroModel.VORTEX, density=1.0, vortex_interval=10.0)  # a rigid wing: factorised once
     lift_dir = np.array([-wind[2], 0.0, wind[0]])
     ratio = np.zeros(steps)
@@ -78,7 +81,7 @@ def lift_build_up(
         f = particle.numpy().astype(np.float64)
         np.add.at(f, m.tri_indices_np.reshape(-1), np.repeat(tri_force.numpy().astype(np.float64), 3, axis=0))
         ratio[k] = f.sum(0) @ lift_dir / (0.5 * wing.area) / steady
-    s = 2.0 * dt * np.arange(1, steps + 1)
+    s = 2.0 * dt * np.arange(steps)
     return s, ratio
 
 
@@ -121,6 +124,10 @@ def main() -> None:
             {"aspect_ratio": 40.0, "span_panels": 80, "chord_panels": 4, "steps_per_chord": 4},
         ),
         ("aspect ratio 8, 16 x 8 cells, 8 steps a chord", {"aspect_ratio": 8.0, "span_panels": 16}),
+        (
+            "aspect ratio 20, 40 x 8 cells, 16 steps a chord, a row every 2",
+            {"steps_per_chord": 16, "steps_per_row": 2},
+        ),
     ):
         s, ratio = lift_build_up(**kwargs)
         print(f"{label}: " + ", ".join(f"s={x:g} {at(s, ratio, x):.3f}" for x in STATIONS))

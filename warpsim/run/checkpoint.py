@@ -106,6 +106,10 @@ class Checkpoint:
             raise ValueError("checkpoint positions or time are not finite")
         if not all(np.isfinite(a).all() for a in (self.gust_g, self.gust_mean, self.turbulence_shift)):
             raise ValueError("checkpoint gusts or turbulence are not finite")
+        if not (np.isfinite(self.vortex_state).all() and np.isfinite(self.vortex_wake).all()):
+            raise ValueError("checkpoint vortex lattice or wake is not finite")
+        if not (0 <= self.vortex_state[0] <= 2**24 and 0 <= self.vortex_wake[0] <= 2**24):
+            raise ValueError("checkpoint vortex counters are out of range")
         if (self.gust_step < 0).any():
             raise ValueError("checkpoint gust step counts are negative")
         if not 0 <= self.steps[0] <= MAX_STEPS:

@@ -393,13 +393,20 @@ class Simulation:
                 nail_target=nail_target,
                 nail_target_goal=nail_target_goal,
                 canopy_side=canopy_sides(self),  # as now: the frame probes keep positions, not these
-                vortex_state=vortex_states(self),  # (a factorisation that fails is tried again at the next step)
-                vortex_wake=wake_states(self),
+                # the lattice's as now (a blow-up's NaN put to 0), then factorised again and its wake reset (below)
+                vortex_state=np.nan_to_num(vortex_states(self), nan=0.0, posinf=0.0, neginf=0.0),
+                vortex_wake=np.nan_to_num(wake_states(self), nan=0.0, posinf=0.0, neginf=0.0),
                 wind=wind,
                 **inputs,
                 control_names=self.inputs.names,
             )
         )
+        for group in self._groups:  # the lattice: factorised again, and its shed wake started afresh, from here
+            vortex = group.solver.vortex
+            if vortex is not None:
+                vortex.factored.zero_()
+                if vortex.shed is not None:
+                    vortex.shed.reset(group.model, group.state, vortex.gamma)
         wp.synchronize_device(self.model.device)
 
     def run(

@@ -477,8 +477,6 @@ def _edge_force(
     gamma: wp.array(dtype=wp.float32),
     stall: wp.array(dtype=wp.float32),
     induced: wp.array(dtype=wp.vec3),
-    shed: int,
-    attached: wp.array(dtype=wp.float32),
     edge_force_out: wp.array(dtype=wp.vec3),
     edge_side_out: wp.array(dtype=wp.int32),
 ):
@@ -492,17 +490,7 @@ def _edge_force(
     edge_side_out[e] = 0
     air_density = world_density[particle_world[ends[0]]]
     if panels[1] == TRAILING:  # the wake's downwash on the circulation it carries away: induced drag (Trefftz)
-        drag = wp.cross(induced[e], wp.vec3(a - b)) * (air_density * g * aero_scale * (1.0 - sigma))
-        if shed != 0:  # a shed wake: the edge's own vortex, its panel's circulation less its first ring's
-            mid = (a + b) * wp.float64(0.5)
-            moved = (a - particle_q_prev[ends[0]]) + (b - particle_q_prev[ends[1]])
-            height = float(mid[2] - terrain_height(hf, mid[0], mid[1]))
-            world = particle_world[ends[0]]
-            w = wind_at(wind[world], height, shear_reference_height, shear_exponent) + turbulence_at(turb, world, mid)
-            velocity = w - wp.vec3(moved) / (2.0 * dt)
-            net = (g - attached[e]) * air_density * aero_scale * (1.0 - sigma)
-            drag += wp.cross(velocity, wp.vec3(b - a)) * net
-        edge_force_out[e] = drag
+        edge_force_out[e] = wp.cross(induced[e], wp.vec3(a - b)) * (air_density * g * aero_scale * (1.0 - sigma))
         return
     # the load acts a quarter of the way to the far corner of the panel downstream (the classical lattice's
     # bound vortex lies a quarter panel behind the panel's leading edge): which panel is downstream?
@@ -617,7 +605,6 @@ class VortexScratch:
         self.counter = wp.zeros(1, dtype=wp.int32, device=device)
         self.no_trailing = wp.zeros(v, dtype=wp.int32, device=device)  # the matrix of a shed wake: no legs
         self.no_wake = wp.zeros(v, dtype=wp.float32, device=device)  # nor a wake's velocity on the right-hand side
-        self.no_edges = wp.zeros(e, dtype=wp.float32, device=device)
         self.shed = None
         """The wake shed over time (:class:`warpsim.physics.kernels.wake.ShedWake`) under ``air.wake = "shed"``."""
         self.basis = (  # the inputs of each surface's latest factorisation (what a checkpoint keeps)
@@ -838,8 +825,6 @@ def vortex_air_force(
             sc.gamma,
             sc.stall,
             sc.induced,
-            int(shed is not None),
-            sc.no_edges if shed is None else shed.attached,
         ],
         outputs=[sc.edge_force, sc.edge_side],
         device=dev,

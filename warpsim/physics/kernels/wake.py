@@ -15,10 +15,11 @@ the air:
   semi-infinite legs along the relative wind, so that a steady flight's wake is the quasi-steady one again;
 * the influence matrix then holds the sails' own rings only (a trailing edge's ring keeps its edge), and the wake's
   velocity at each centroid goes to the right-hand side: ``sum_j A_ij G_j = -(w_i + v_wake,i) . n_i``;
-* the loads: Kutta-Joukowski on every edge as in the quasi-steady law, a trailing edge carrying the net of its
-  panel's circulation and its first ring's; the induced drag from the wake's velocity at the trailing edges' midpoints;
-  and the unsteady term of the panels' pressure, ``-rho A (dG/dt) n`` (Katz & Plotkin eq. 13.150), which makes the
-  lift of a sail whose circulation grows lag behind it.
+* the loads: Kutta-Joukowski on every edge inside the sail and on its leading and side edges as in the quasi-steady
+  law (a trailing edge's net vortex, its panel's circulation less its first ring's, is vorticity just shed and is not
+  loaded, as in Katz & Plotkin eq. 13.150); the induced drag from the wake's velocity at the trailing edges'
+  midpoints; and the unsteady term of the panels' pressure, ``-rho A (dG/dt) n`` (eq. 13.150), which makes the lift
+  of a sail whose circulation grows lag behind it.
 
 Cost: every step, each panel reads every ring behind its surface's trailing edges, ``V x E_T x R`` ring evaluations
 (``E_T`` trailing edges), and the matrix is rebuilt on the schedule of ``air.vortex_interval`` as before.
@@ -38,7 +39,7 @@ wp.set_module_options({"enable_backward": False})
 
 
 @wp.func
-def wake_velocity(
+def shed_wake_velocity(
     x: wp.vec3,
     o: wp.vec3d,
     first: int,
@@ -107,16 +108,12 @@ def _move(
 @wp.kernel
 def _attach(
     edge_panel: wp.array(dtype=wp.int32),
-    edge_index: wp.array(dtype=wp.int32),
     gamma: wp.array(dtype=wp.float32),
     rows: int,
     ring_out: wp.array(dtype=wp.float32),
-    attached_out: wp.array(dtype=wp.float32),
 ):
     e = wp.tid()  # the ring at the edge carries its panel's circulation of the step before
-    g = gamma[edge_panel[e]]
-    ring_out[e * rows] = g
-    attached_out[edge_index[e]] = g
+    ring_out[e * rows] = gamma[edge_panel[e]]
 
 
 @wp.kernel
@@ -137,7 +134,7 @@ def _rhs(
     i = wp.tid()  # the wake's velocity through centroid i, for the right-hand side
     s = panel_surface[i]
     wk = wake[s]
-    v = wake_velocity(
+    v = shed_wake_velocity(
         point[i],
         particle_q[surface_origin[s]],
         surface_edges[s],
@@ -177,7 +174,7 @@ def _downwash(
     x = 0.5 * (corners[3 * p + k] + corners[3 * p + (k + 1) % 3])
     s = panel_surface[p]
     wk = wake[s]
-    induced_out[e] = wake_velocity(
+    induced_out[e] = shed_wake_velocity(
         x,
         particle_q[surface_origin[s]],
         surface_edges[s],
@@ -276,11 +273,11 @@ def trailing_edge_tables(model) -> dict[str, np.ndarray]:
 class ShedWake:
     """The shed wake's tables and state on the model's device (``air.wake = "shed"``).
 
-    Attributes: the tables of :func:`trailing_edge_tables` as device arrays; ``points [T * (R + 1)]`` vec3d the wake's
-    rows of points [m] behind each trailing-edge particle (row 0 the particle); ``ring [E_T * R]`` the rings'
-    circulations [m^2/s]; ``attached [E]`` each lattice edge's first ring's circulation (zero off the trailing
-    edges); ``normal [V]`` the wake's velocity through each centroid [m/s]; ``gamma_before [V]`` the circulations of
-    the step before; ``counter [1]`` steps since the last row was shed, modulo ``interval`` steps.
+    Attributes: the tables of :func:`trailing_edge_tables` as device arrays; ``points [T * (R + 1)]`` vec3d the
+    wake's rows of points [m] behind each trailing-edge particle (row 0 the particle); ``ring [E_T * R]`` the rings'
+    circulations [m^2/s]; ``normal [V]`` the wake's velocity through each centroid [m/s]; ``gamma_before [V]`` the
+    circulations of the step before; ``rate [V]`` their smoothed rates of change [m^2/s^2]; ``counter [1]`` steps
+    since the last row was shed, modulo ``interval`` steps.
     """
 
     def __init__(self, model, rows: int, interval: float):
@@ -306,7 +303,6 @@ class ShedWake:
             start = np.asarray(model.particle_q0, dtype=np.float64)[tables["vertex_particle"]]
         self.points = wp.array(np.repeat(start, self.rows + 1, axis=0), dtype=wp.vec3d, device=device)
         self.ring = wp.zeros(self.edge_count * self.rows, dtype=wp.float32, device=device)
-        self.attached = wp.zeros(max(model.lattice.edge_count, 1), dtype=wp.float32, device=device)
         self.normal = wp.zeros(max(model.lattice.panel_count, 1), dtype=wp.float32, device=device)
         self.gamma_before = wp.zeros(max(model.lattice.panel_count, 1), dtype=wp.float32, device=device)
         self.rate = wp.zeros(max(model.lattice.panel_count, 1), dtype=wp.float32, device=device)
@@ -319,6 +315,7 @@ class ShedWake:
     def before_solve(self, model, state, control, dt: float, wind, gamma) -> None:
         """Move the wake's rows with the air, attach the first ring to its panel's circulation of the step before
         (still in ``gamma``), and keep those circulations for the unsteady term."""
+        wp.copy(self.gamma_before, gamma)
         if self.trailing_edges == 0:
             return
         shear = (float(wind.shear_exponent), float(wind.reference_height))
@@ -342,11 +339,10 @@ class ShedWake:
         wp.launch(
             _attach,
             dim=self.trailing_edges,
-            inputs=[self.tables["edge_panel"], self.tables["edge_index"], gamma, self.rows],
-            outputs=[self.ring, self.attached],
+            inputs=[self.tables["edge_panel"], gamma, self.rows],
+            outputs=[self.ring],
             device=model.device,
         )
-        wp.copy(self.gamma_before, gamma)
 
     def right_hand_side(self, model, state, scratch) -> None:
         """The wake's velocity through every centroid, along its normal, into ``normal``."""
@@ -442,17 +438,40 @@ class ShedWake:
 
     def save(self, gamma) -> tuple[int, list[np.ndarray]]:
         """The wake's state: the counter, then the rows' points [m], the rings' circulations, the smoothed rates and
-        the panels' circulations ``gamma`` [m^2/s] (which the next step's first rings take), flat float64 arrays."""
-        arrays = (self.points, self.ring, self.rate, gamma)
-        return int(self.counter.numpy()[0]), [a.numpy().reshape(-1).astype(np.float64) for a in arrays]
+        the panels' circulations ``gamma`` [m^2/s] (which the next step's first rings take), flat float64 arrays
+        without the padding of a surface without trailing edges (so that the layout is the same however the worlds
+        are split into groups)."""
+        points = self.points.numpy()[: self.trailing_vertices * (self.rows + 1)]
+        ring = self.ring.numpy()[: self.trailing_edges * self.rows]
+        arrays = (points.reshape(-1), ring, self.rate.numpy(), gamma.numpy())
+        return int(self.counter.numpy()[0]), [np.asarray(a, dtype=np.float64).reshape(-1) for a in arrays]
 
     def sizes(self, gamma) -> list[int]:
         """The lengths of :meth:`save`'s arrays."""
-        return [3 * self.points.shape[0], self.ring.shape[0], self.rate.shape[0], gamma.shape[0]]
+        rows = self.rows
+        return [3 * self.trailing_vertices * (rows + 1), self.trailing_edges * rows, self.rate.shape[0], gamma.shape[0]]
 
     def load(self, counter: int, state: list[np.ndarray], gamma) -> None:
         """Put a :meth:`save` back."""
         self.counter.assign(np.array([counter], dtype=np.int32))
-        self.points.assign(np.asarray(state[0]).reshape(-1, 3))
-        for a, values in zip((self.ring, self.rate, gamma), state[1:], strict=True):
-            a.assign(np.asarray(values, dtype=np.float32))
+        if self.trailing_edges:
+            points = self.points.numpy()
+            points[: self.trailing_vertices * (self.rows + 1)] = np.asarray(state[0]).reshape(-1, 3)
+            self.points.assign(points)
+            ring = self.ring.numpy()
+            ring[: self.trailing_edges * self.rows] = state[1]
+            self.ring.assign(ring)
+        self.rate.assign(np.asarray(state[2], dtype=np.float32))
+        gamma.assign(np.asarray(state[3], dtype=np.float32))
+
+    def reset(self, model, state, gamma) -> None:
+        """Start the wake afresh from the trailing edges where they are now (no rings, no rates, no circulations):
+        after a blow-up, the state goes back to the last good frame, whose wake is not kept."""
+        particles = self.tables["vertex_particle"].numpy()
+        points = np.zeros((self.points.shape[0], 3))
+        if self.trailing_vertices:
+            where = state.particle_q.numpy()[particles[: self.trailing_vertices]]
+            points[: self.trailing_vertices * (self.rows + 1)] = np.repeat(where, self.rows + 1, axis=0)
+        self.points.assign(points)
+        for a in (self.ring, self.rate, self.gamma_before, gamma, self.counter):
+            a.zero_()

@@ -54,8 +54,8 @@ def correlations(r: float, length: float) -> tuple[float, float]:
 def sample_lines(field: turbulence.Field, every: int = 2, per_cell: int = 2, across: float = 0.0) -> np.ndarray:
     """``[lines, n, 3]`` the field along straight paths the length of the box along x (the mean wind), one near every
     ``every``-th grid line across it but off it by a random part of a cell in x, y and z (as points carried by the
-    wind meet the field anywhere between its nodes), at ``per_cell`` samples per cell, sampled trilinearly as the kernels
-    sample; ``across`` [m] moves every path that far along y."""
+    wind meet the field anywhere between its nodes), at ``per_cell`` samples per cell, sampled trilinearly as the
+    kernels sample; ``across`` [m] moves every path that far along y."""
     nx, ny, nz = field.velocity.shape[:3]
     n = nx * per_cell
     x = np.arange(n) * (field.cell / per_cell)

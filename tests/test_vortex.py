@@ -421,3 +421,14 @@ def test_a_shed_wake_flight_resumes_bit_for_bit_and_a_blow_up_starts_its_wake_af
     assert not shed.ring.numpy().any() and np.isfinite(shed.points.numpy()).all()
     sim.step(50)  # and it flies on from the good frame
     assert np.isfinite(sim.state.positions()).all()
+
+
+def test_a_checkpoint_with_a_non_finite_lattice_or_wake_is_refused():
+    d = merge("test", resolve(str(ROOT / "scenes" / "hang_glider_lattice.toml"))[0], {"air": {"wake": "shed"}})
+    sim = Simulation(d)
+    sim.step(30)
+    for field, index, value in (("vortex_state", 5, np.nan), ("vortex_wake", 7, np.inf), ("vortex_state", 0, -1.0)):
+        saved = sim.checkpoint()
+        getattr(saved, field)[index] = value
+        with pytest.raises(ValueError, match="vortex"):
+            Simulation(d).restore(saved)

@@ -124,6 +124,8 @@ def main() -> None:
             {"aspect_ratio": 40.0, "span_panels": 80, "chord_panels": 4, "steps_per_chord": 4},
         ),
         ("aspect ratio 8, 16 x 8 cells, 8 steps a chord", {"aspect_ratio": 8.0, "span_panels": 16}),
+        ("aspect ratio 20, 40 x 16 cells, 16 steps a chord", {"chord_panels": 16, "steps_per_chord": 16}),
+        ("aspect ratio 20, 40 x 8 cells, 16 steps a chord", {"steps_per_chord": 16}),
         (
             "aspect ratio 20, 40 x 8 cells, 16 steps a chord, a row every 2",
             {"steps_per_chord": 16, "steps_per_row": 2},

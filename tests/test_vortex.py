@@ -287,30 +287,29 @@ def test_lattice_glider_lateral_derivatives_have_their_stable_signs():
     assert d["C_n_p"] > 0.0
 
 
+def _resumes_exactly(d: dict, before: int, after: int, threads: tuple[int, int] = (1, 1)) -> None:
+    """``d`` flown ``before + after`` steps in one run, and checkpointed at ``before`` then restored into a fresh
+    simulation (on ``threads[1]`` threads instead of ``threads[0]``): the same positions, bit for bit."""
+    whole = Simulation(d, threads=threads[0])
+    whole.step(before)
+    saved = whole.checkpoint()
+    whole.step(after)
+    resumed = Simulation(d, threads=threads[1])
+    assert len(resumed.groups) == threads[1]
+    resumed.restore(saved)
+    resumed.step(after)
+    np.testing.assert_array_equal(whole.state.positions(), resumed.state.positions())
+
+
 def test_a_vortex_law_flight_resumes_bit_for_bit_whatever_its_threads():
     """The lattice's factors are made again from the inputs of its latest factorisation, which the checkpoint keeps:
     a lattice glider checkpointed between two factorisations (777 steps, a factorisation every 0.1 s) and restored
     into a fresh simulation flies on exactly as the run that was not stopped, also three worlds restored onto two
     threads (510 steps: between factorisations too). Without them the resumed run drifted 3 um in 600 steps."""
     d = resolve(str(ROOT / "scenes" / "hang_glider_lattice.toml"))[0]
-    whole = Simulation(d)
-    whole.step(777)
-    saved = whole.checkpoint()
-    whole.step(600)
-    resumed = Simulation(d)
-    resumed.restore(saved)
-    resumed.step(600)
-    np.testing.assert_array_equal(whole.state.positions(), resumed.state.positions())
+    _resumes_exactly(d, 777, 600)
     three = merge("test", d, {"worlds": {"count": 3, "hang_glider": {"position": [[0, 0], [40, 0], [0, 40]]}}})
-    whole = Simulation(three, threads=1)
-    whole.step(510)
-    saved = whole.checkpoint()
-    whole.step(400)
-    resumed = Simulation(three, threads=2)
-    assert len(resumed.groups) == 2
-    resumed.restore(saved)
-    resumed.step(400)
-    np.testing.assert_array_equal(whole.state.positions(), resumed.state.positions())
+    _resumes_exactly(three, 510, 400, threads=(1, 2))
 
 
 def test_numpy_reference_agrees_with_the_kernels_on_a_shed_wake():
@@ -390,23 +389,9 @@ def test_a_shed_wake_flight_resumes_bit_for_bit_and_a_blow_up_starts_its_wake_af
     three worlds restored onto two threads. After a blow-up the state goes back to the last good frame and the wake
     starts again from its trailing edges (its rows at the edges, no rings)."""
     d = merge("test", resolve(str(ROOT / "scenes" / "hang_glider_lattice.toml"))[0], {"air": {"wake": "shed"}})
-    whole = Simulation(d)
-    whole.step(777)
-    saved = whole.checkpoint()
-    whole.step(300)
-    resumed = Simulation(d)
-    resumed.restore(saved)
-    resumed.step(300)
-    np.testing.assert_array_equal(whole.state.positions(), resumed.state.positions())
+    _resumes_exactly(d, 777, 300)
     three = merge("test", d, {"worlds": {"count": 3, "hang_glider": {"position": [[0, 0], [40, 0], [0, 40]]}}})
-    whole = Simulation(three, threads=1)
-    whole.step(333)
-    saved = whole.checkpoint()
-    whole.step(200)
-    resumed = Simulation(three, threads=2)
-    resumed.restore(saved)
-    resumed.step(200)
-    np.testing.assert_array_equal(whole.state.positions(), resumed.state.positions())
+    _resumes_exactly(three, 333, 200, threads=(1, 2))
     sim = Simulation(d)
     shed = sim.solver.vortex.shed
 

@@ -628,28 +628,20 @@ class VortexScratch:
         run that saved it had (the factorisation is deterministic), so a resumed run steps on exactly."""
         for a, values in zip(self.basis, basis, strict=True):
             a.assign(np.asarray(values, dtype=np.float32).reshape(a.shape[0], a.dtype._length_))
-        lat, arrays, dev = model.lattice, model.vortex_arrays, model.device
         self.counter.zero_()
         self.factored.zero_()
-        corners, point, normal, wake = self.basis
-        wp.launch(
-            _matrix,
-            dim=lat.panel_count,
-            inputs=[
-                arrays["panel_surface"],
-                arrays["panel_trailing"] if self.shed is None else self.no_trailing,
-                arrays["surface_start"],
-                arrays["matrix_start"],
-                self.counter,
-                self.factored,
-                corners,
-                point,
-                normal,
-                wake,
-            ],
-            outputs=[self.matrix],
-            device=dev,
-        )
+        self.factorise(model, *self.basis)
+        self.counter.assign(np.array([counter], dtype=np.int32))
+
+    def factorise(self, model, corners, point, normal, wake) -> None:
+        """Build the influence matrix of every surface due a factorisation (the counter at 0, or its last try
+        failed) from ``corners``, ``point``, ``normal`` and ``wake`` and factorise it in place; a shed wake's matrix
+        keeps the trailing edges' own vortices (no wake legs)."""
+        lat, arrays, dev = model.lattice, model.vortex_arrays, model.device
+        trailing = arrays["panel_trailing"] if self.shed is None else self.no_trailing
+        inputs = [arrays["panel_surface"], trailing, arrays["surface_start"], arrays["matrix_start"]]
+        inputs += [self.counter, self.factored, corners, point, normal, wake]
+        wp.launch(_matrix, dim=lat.panel_count, inputs=inputs, outputs=[self.matrix], device=dev)
         wp.launch(
             _factor,
             dim=lat.surface_count,
@@ -657,7 +649,6 @@ class VortexScratch:
             outputs=[self.matrix, self.pivot, self.factored],
             device=dev,
         )
-        self.counter.assign(np.array([counter], dtype=np.int32))
 
 
 def vortex_air_force(
@@ -721,31 +712,7 @@ def vortex_air_force(
         outputs=list(sc.basis),
         device=dev,
     )
-    wp.launch(
-        _matrix,
-        dim=lat.panel_count,
-        inputs=[
-            arrays["panel_surface"],
-            arrays["panel_trailing"] if shed is None else sc.no_trailing,  # a shed wake keeps the edges' vortices
-            arrays["surface_start"],
-            arrays["matrix_start"],
-            sc.counter,
-            sc.factored,
-            sc.corners,
-            sc.point,
-            sc.normal,
-            sc.wake,
-        ],
-        outputs=[sc.matrix],
-        device=dev,
-    )
-    wp.launch(
-        _factor,
-        dim=lat.surface_count,
-        inputs=[arrays["surface_start"], arrays["matrix_start"], sc.counter, sc.wake],
-        outputs=[sc.matrix, sc.pivot, sc.factored],
-        device=dev,
-    )
+    sc.factorise(model, sc.corners, sc.point, sc.normal, sc.wake)
     if shed is not None:
         shed.right_hand_side(model, state, sc)
     wp.launch(

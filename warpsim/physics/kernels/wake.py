@@ -247,7 +247,7 @@ def _tick(interval: int, counter_out: wp.array(dtype=wp.int32)):
 def trailing_edge_tables(model) -> dict[str, np.ndarray]:
     """The lattice's trailing edges as the shed wake numbers them: ``vertex_particle [T]`` (the trailing edges'
     particles), ``edge_vertex [E_T, 2]`` (each edge's ends ``a, b`` in its panel's ring order, as indices into
-    those), ``edge_panel [E_T]``, ``edge_index [E_T]`` (the edge in the lattice's edge list) and ``surface_edges
+    those), ``edge_panel [E_T]`` and ``surface_edges
     [S + 1]`` (where each surface's trailing edges start)."""
     lat = model.lattice
     tris = model.tri_indices_np
@@ -265,7 +265,6 @@ def trailing_edge_tables(model) -> dict[str, np.ndarray]:
         "vertex_particle": vertex_particle.astype(np.int32),
         "edge_vertex": index.reshape(2, -1).T.astype(np.int32),
         "edge_panel": panel.astype(np.int32),
-        "edge_index": trailing.astype(np.int32),
         "surface_edges": np.searchsorted(surface, np.arange(lat.surface_count + 1)).astype(np.int32),
     }
 

@@ -171,7 +171,7 @@ def test_mass_lumping_by_area_gives_each_particle_its_own_cloth():
 def _droop(shear_compliance: float) -> float:
     """The default flag at resolution 9, its threads stiff (6.25e-5 m/N) and its diagonals ``shear_compliance``
     [m/N], hung in still air: the trailing edge's mean drop [m] below where it was built, 1-5 s after its release."""
-    from benchmarks.validation.cases import flag_samples
+    from benchmarks.validation.flag_rows import flag_samples
     from warpsim.scene import descriptor
 
     d = descriptor.merge(
@@ -272,7 +272,7 @@ def test_the_sheet_flag_flaps_with_waves_running_to_its_tip():
     lambda/L 2.57 (measured 2026-11-27 with the woven cloth; the validation's 'sheet flag' rows). Without the
     bending stiffness the same cloth flaps otherwise (resolution 9: 0.93 Hz, 17: 1.17 Hz, the picture's runs: the
     mesh's)."""
-    from benchmarks.validation.cases import flag_wave
+    from benchmarks.validation.flag_rows import flag_wave
     from warpsim.scene import descriptor
 
     sheet = descriptor.resolve("scenes/flag.toml")[0]

@@ -2,7 +2,7 @@
 
 import pytest
 
-from benchmarks.validation.cases import FLAG_ITERATIONS_PER_RESOLUTION, flag_flapping
+from benchmarks.validation.flag_rows import FLAG_ITERATIONS_PER_RESOLUTION, flag_flapping
 
 
 def test_fine_flag_sticks_hold_with_iterations_in_proportion_to_resolution():

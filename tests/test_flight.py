@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 import warp as wp
 
-from benchmarks.validation.cases import fly as _fly
-from benchmarks.validation.cases import glide as _glide
-from benchmarks.validation.cases import turn_rate
-from benchmarks.validation.cases import window as _window
+from benchmarks.validation.glider_rows import fly as _fly
+from benchmarks.validation.glider_rows import glide as _glide
+from benchmarks.validation.glider_rows import turn_rate
+from benchmarks.validation.glider_rows import window as _window
 from benchmarks.validation.handling import bank_holder, fly_piloted
 from warpsim.physics.kernels.aero import sail_coefficients, sail_force
 from warpsim.run.simulation import Simulation

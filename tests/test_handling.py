@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from benchmarks.validation import cases
+from benchmarks.validation import cases, glider_rows
 from benchmarks.validation.handling import (
     FINE,
     delta_pitch_lag,
@@ -64,7 +64,7 @@ def test_intermediate_glider_handles_as_the_default_at_both_time_steps():
     rows = cases.CASES["flying-glider-intermediate"]()
     assert len(rows) == 15
     missing = {r.case.removeprefix("intermediate ") for r in rows if not r.ok}
-    assert missing == set(cases.FLYING_MISSES), [r for r in rows if not r.ok]
+    assert missing == set(glider_rows.FLYING_MISSES), [r for r in rows if not r.ok]
     turn40 = next(r for r in rows if r.case.endswith("~40°"))
     assert math.isfinite(float(turn40.measured.split()[0]))
 

@@ -140,12 +140,12 @@ def test_the_anchor_walks_instead_of_jumping():
 
 
 # Issue 35: the sail's trim, the kite launched across the wind range and the line's pull at the anchor. The runs
-# are those of the validation's kite-flight rows (benchmarks.validation.cases.kite_flight: 40 s, second half).
+# are those of the validation's kite-flight rows (benchmarks.validation.kite_rows.kite_flight: 40 s, second half).
 
 
 @pytest.fixture(scope="module")
 def launched():
-    from benchmarks.validation.cases import KITE_STEPS, kite_flight
+    from benchmarks.validation.kite_rows import KITE_STEPS, kite_flight
 
     runs, iterations = {}, dict(KITE_STEPS)
 
@@ -194,7 +194,7 @@ def test_light_wind_kite_flies_beyond_the_ladder():
     # (kite.frame_compliance, 1e-4 m/N): with the paper's rigid ties the iterations approach a rigid frame as the
     # steps are refined, and there the trim rose over the stall (this flight: 23.4 deg, line 42.2-51.5 deg, 8.9 m to
     # the side; validation row "kite in 3 m/s, beyond the ladder")
-    from benchmarks.validation.cases import kite_flight
+    from benchmarks.validation.kite_rows import kite_flight
 
     r = kite_flight(3.0, 0.000625, seconds=30.0, iterations=220)
     assert r["alpha"] < 18.0, r
@@ -206,7 +206,7 @@ def test_kite_follows_a_small_crosswind_as_its_geometry_says_and_mirrors_it():
     # launched in 6 m/s with 0.05 m/s across (0.5 deg): a laterally stable, symmetric kite turns with the wind about
     # its anchor, by its reach times the wind's angle (0.133 m); measured at the defaults 0.104 m at 20 s (still
     # creeping towards it), and the same to 1e-5 m the other way with the crosswind reversed
-    from benchmarks.validation.cases import kite_crosswind_offset
+    from benchmarks.validation.kite_rows import kite_crosswind_offset
 
     plus = kite_crosswind_offset(6.0, 0.05, 0.005, 55, seconds=20.0)
     minus = kite_crosswind_offset(6.0, -0.05, 0.005, 55, seconds=20.0)
@@ -223,7 +223,7 @@ def test_kite_follows_a_small_crosswind_at_an_eighth_of_the_time_step(compliance
     # 0.5° crosswind, time step"). With rigid sticks (both 0, the paper's) they converge towards a rigid kite, and
     # it goes to one side: +5.5 m at 5 s, +10.7 m at 10 s, line 52 deg (docs/objects.md, the kite's limits;
     # python -m benchmarks.validation.kite_side)
-    from benchmarks.validation.cases import kite_crosswind_offset
+    from benchmarks.validation.kite_rows import kite_crosswind_offset
 
     overrides = (
         None if compliance is None else {"kite": {"sail_compliance": compliance, "frame_compliance": compliance}}

@@ -10,7 +10,7 @@ import re
 import numpy as np
 import pytest
 
-from benchmarks.validation import cases
+from benchmarks.validation import cases, common, convergence_rows, flag_rows, glider_rows
 from benchmarks.validation.__main__ import long_run, table
 from benchmarks.validation.svg import loglog_panels
 from warpsim.scene import descriptor
@@ -64,10 +64,10 @@ def test_flying_glider_rows_at_both_time_steps():
     recovery, never tail first): inside, none excused. The dive recovery (Jones 1977), the phugoid period
     (Lanchester), the roll-in's sideslip (53°) and the sideslip under half weight shift (33°) miss their bands and
     are reported as failures (no model-limit excuse); if one starts passing, take it out of FLYING_MISSES."""
-    rows = cases.flying_glider()
+    rows = glider_rows.flying_glider()
     assert len(rows) == 15
     missing = {r.case.removeprefix("glider ") for r in rows if not r.ok}
-    assert missing == set(cases.FLYING_MISSES), [r for r in rows if not r.ok]
+    assert missing == set(glider_rows.FLYING_MISSES), [r for r in rows if not r.ok]
     assert not any(r.model_limit for r in rows)
 
 
@@ -81,7 +81,7 @@ def test_lattice_glider_rows_at_both_time_steps():
     rows = {r.case.removeprefix("lattice glider "): r for r in cases.CASES["flying-glider-lattice"]()}
     assert len(rows) == 15
     missing = {case for case, r in rows.items() if not r.ok}
-    assert missing == set(cases.LATTICE_MISSES), [r for r in rows.values() if not r.ok]
+    assert missing == set(glider_rows.LATTICE_MISSES), [r for r in rows.values() if not r.ok]
     slips = [float(v) for v in re.findall(r"([0-9.]+)°", rows["sideslip, roll-in and reversal"].measured)]
     assert len(slips) == 4
     assert max(slips) < 25.0  # measured 22°; the sail law's glider: over 50°
@@ -94,8 +94,8 @@ def test_kite_rows_pass_with_no_model_limit():
 
 
 def test_elliptic_integral():
-    assert cases.complete_elliptic_k(0.0) == pytest.approx(math.pi / 2)
-    assert cases.complete_elliptic_k(math.sin(math.radians(30))) == pytest.approx(1.685750354812596, rel=1e-12)
+    assert common.complete_elliptic_k(0.0) == pytest.approx(math.pi / 2)
+    assert common.complete_elliptic_k(math.sin(math.radians(30))) == pytest.approx(1.685750354812596, rel=1e-12)
 
 
 @pytest.mark.slow
@@ -109,7 +109,7 @@ def test_long_run_bounded_flat_and_readable_while_written():
 
 
 def test_table_and_plot(tmp_path):
-    row = cases.Row("a|b", "c", "1", "s", "2", "band", False, model_limit=True)
+    row = common.Row("a|b", "c", "1", "s", "2", "band", False, model_limit=True)
     assert "a\\|b" in table([row]) and "**model limit**" in table([row])
     path = loglog_panels(
         [{"title": "t", "xlabel": "x", "ylabel": "y", "series": [("s", [1, 10, 100], [5.0, np.nan, 0.5])]}],
@@ -123,7 +123,9 @@ def test_table_and_plot(tmp_path):
 def test_glider_converges_as_dt_halves_and_iterations_double():
     """Issue 33: the hands-off glide and trim speed at the defaults lie within 4 % of the finest run (dt 0.0025,
     220 iterations), each refinement closer (measured +3.9 % and +3.4 %)."""
-    rows = {r.case: r for r in cases.convergence_figures(["glider glide ratio", "glider trim speed"])}  # no dt/8
+    rows = {
+        r.case: r for r in convergence_rows.convergence_figures(["glider glide ratio", "glider trim speed"])
+    }  # no dt/8
     assert len(rows) == 2 and all(r.ok and not r.model_limit for r in rows.values()), list(rows.values())
     for row in rows.values():  # each refinement closer to the finest (within 0.1 % of it)
         values = [float(v) for v in row.measured.split(", ")]
@@ -153,7 +155,7 @@ def test_flight_figures_converge(figure):
     test, so that the workers share them."""
     names = list(figure) if isinstance(figure, tuple) else [figure]
     # the band compares the defaults with the finest; the validation runs every rung
-    rows = cases.convergence_figures(names, ends_only=True)
+    rows = convergence_rows.convergence_figures(names, ends_only=True)
     assert len(rows) == len(names) and all(r.ok and not r.model_limit for r in rows), rows
 
 
@@ -163,9 +165,9 @@ def test_the_validations_sheet_flag_is_the_default_flag():
     from warpsim.objects.flag import PRESETS
 
     sheet = PRESETS["sheet"]
-    assert cases.SHEET_FLAG is sheet
+    assert flag_rows.SHEET_FLAG is sheet
     assert sheet["solver"]["iterations"] == SHEET_ITERATIONS * sheet["flag"]["resolution"]
-    sim = cases.flag_simulation(9, cases.SHEET_DT, cases.sheet_overrides(9), "sheet")
+    sim = flag_rows.flag_simulation(9, flag_rows.SHEET_DT, flag_rows.sheet_overrides(9), "sheet")
     default = descriptor.defaults("flag")
     for section in ("flag", "solver", "air", "wind"):
         differ = {k for k, v in sim.descriptor[section].items() if default[section][k] != v}
@@ -175,30 +177,30 @@ def test_the_validations_sheet_flag_is_the_default_flag():
 def test_flag_convergence_rows_read_each_rungs_own_run(monkeypatch):
     """The default flag's convergence rows take each rung's run (flown one process per core, cached by dt, iterations
     and design): here the runs measured on 2026-11-27, given, so that no flag flies."""
-    _, dt, _, _, iterations = cases.CONVERGENCE["flag flapping frequency"]
-    ladder = cases._ladder(dt, iterations)
+    _, dt, _, _, iterations = convergence_rows.CONVERGENCE["flag flapping frequency"]
+    ladder = convergence_rows._ladder(dt, iterations)
     runs = {
         (dt, it, "sheet"): {"frequency": f, "amplitude": a}
         for (dt, it), f, a in zip(
             ladder, (0.9002, 0.9002, 0.8957, 0.8919), (0.8167, 0.8167, 0.8179, 0.8187), strict=True
         )
     }
-    monkeypatch.setattr(cases, "_FLAPS", runs)
-    monkeypatch.setattr(cases, "in_processes", lambda *a, **k: pytest.fail("every rung was given"))
-    frequency, amplitude = cases.flag_convergence()
+    monkeypatch.setattr(convergence_rows, "_FLAPS", runs)
+    monkeypatch.setattr(convergence_rows, "in_processes", lambda *a, **k: pytest.fail("every rung was given"))
+    frequency, amplitude = convergence_rows.flag_convergence()
     assert frequency.measured == "0.900, 0.900, 0.896, 0.892" and frequency.ok and "+0.9 %" in frequency.note
     assert amplitude.measured == "0.817, 0.817, 0.818, 0.819" and amplitude.ok and "-0.2 %" in amplitude.note
     runs[ladder[-1] + ("sheet",)] = {"frequency": 0.80, "amplitude": 0.8187}  # the defaults 12.5 % off: outside 5 %
-    assert not cases.flag_convergence()[0].ok
+    assert not convergence_rows.flag_convergence()[0].ok
 
 
 def test_in_processes_returns_each_jobs_result_in_the_jobs_order(monkeypatch):
-    """cases.in_processes (the sheet flag's flights, one spawned process per core): every job's own result, keyed and
+    """common.in_processes (the sheet flag's flights, one spawned process per core): every job's own result, keyed and
     ordered as the jobs were given whatever order they ran in (costliest first), the same as in one process; with
     one core it runs them in this process."""
     jobs = {"coarse": (9, 0.0005, None, {}), "fine": (33, 0.0005, None, {}), ("twice", 17): (17, 0.001, 476, {})}
-    expected = {name: cases._sheet_cost(*args) for name, args in jobs.items()}
-    spawned = cases.in_processes(cases._sheet_cost, jobs, cases._sheet_cost)
+    expected = {name: flag_rows._sheet_cost(*args) for name, args in jobs.items()}
+    spawned = common.in_processes(flag_rows._sheet_cost, jobs, flag_rows._sheet_cost)
     assert list(spawned) == list(jobs) and spawned == expected
-    monkeypatch.setattr(cases, "available_cores", lambda: 1)
-    assert cases.in_processes(cases._sheet_cost, jobs) == expected
+    monkeypatch.setattr(common, "available_cores", lambda: 1)
+    assert common.in_processes(flag_rows._sheet_cost, jobs) == expected

@@ -25,7 +25,8 @@ import warp as wp
 from warpsim.run.simulation import BlowUpError, Simulation
 from warpsim.scene import descriptor
 
-from .cases import CASES, Row
+from .cases import CASES
+from .common import Row
 from .svg import loglog_panels
 
 HERE = Path(__file__).resolve().parent

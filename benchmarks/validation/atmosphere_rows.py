@@ -14,7 +14,7 @@ from warpsim.physics.atmosphere import isa
 from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
 
-from .cases import Row
+from .common import Row
 
 ISO_2533 = (
     "ISO 2533:1975 Standard Atmosphere (= U.S. Standard Atmosphere 1976 below 32 km), table by geometric altitude: "

@@ -4,7 +4,7 @@ resolutions 9, 17 and 33, beside the same cloth without its bending stiffness at
     python -m benchmarks.validation.flag_sheet_plot [OUT.png]
 
 Each panel draws the middle row's sideways offset against its distance from the pole over the last period of a
-25 s run (dt ``SHEET_DT``, :data:`~benchmarks.validation.cases.SHEET_FLAG`); the sheet flag's rows keep one shape
+25 s run (dt ``SHEET_DT``, :data:`~benchmarks.validation.flag_rows.SHEET_FLAG`); the sheet flag's rows keep one shape
 of wave as the mesh is refined, the bending-free cloth does not. The five runs share the machine's cores (one
 process each).
 """
@@ -14,14 +14,14 @@ from __future__ import annotations
 import numpy as np
 
 from benchmarks.validation import picture_command, save_picture
-from benchmarks.validation.cases import (
+from benchmarks.validation.common import in_processes
+from benchmarks.validation.flag_rows import (
     FLAG_SAMPLE,
     SHEET_DT,
     flag_corner,
     flag_middle_row,
     flag_samples,
     flag_simulation,
-    in_processes,
     reduced_frequency,
     refined_peak_frequency,
     sheet_overrides,

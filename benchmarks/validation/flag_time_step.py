@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from benchmarks.validation import picture_command, save_picture
-from benchmarks.validation.cases import FLAG_TIME_STEPS, flag_corner_series, flag_simulation, peak_frequency
+from benchmarks.validation.flag_rows import FLAG_TIME_STEPS, flag_corner_series, flag_simulation, peak_frequency
 
 
 def handed_over(resolution: int, dt_from: float, dt_to: float, before: float, after: float) -> dict:

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import argparse
 
-from benchmarks.validation.cases import KITE_CROSSWIND, KITE_CROSSWIND_STEPS, kite_crosswind_offset
+from benchmarks.validation.kite_rows import KITE_CROSSWIND, KITE_CROSSWIND_STEPS, kite_crosswind_offset
 from warpsim.scene.values import DescriptorError, parse_override
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from warpsim.physics import turbulence
 from warpsim.physics.turbulence import VON_KARMAN_KE, longitudinal_spectrum
 
-from .cases import Row
+from .common import Row
 
 VON_KARMAN = (
     "von Kármán (1948) isotropic spectrum: longitudinal spectrum F_u = (2σ²L/π)(1 + (k/k_e)²)^(-5/6), "

@@ -24,7 +24,7 @@ from warpsim.physics.kernels.aero import AeroModel
 from warpsim.physics.kernels.vortex import VortexScratch, vortex_air_force
 from warpsim.physics.kernels.wake import ShedWake
 
-from .cases import Row
+from .common import Row
 from .wings import loads, rectangle
 
 WAGNER = (

@@ -11,8 +11,9 @@ import math
 
 from warpsim.scene import descriptor
 
-from .cases import Row, kite_flight
+from .common import Row
 from .handling import body_angles, fly_piloted, glide_flight, scene_descriptor
+from .kite_rows import kite_flight
 from .wings import delta, helmbold, lift_slope, lifting_line, lifting_line_roll, loads, rectangle, tuck
 
 HELMBOLD = "Helmbold 1942 / USAF DATCOM 4.1.3.2 (thin section, 2 pi); 5-9 % above lifting-surface solutions at A 2-8"
@@ -246,8 +247,7 @@ def _roll_rows(d: dict, label: str) -> list[Row]:
     return [
         Row(
             f"vortex glider sideslip, full roll-in ({label})",
-            "largest sideslip at the mass centre from trim to 30° of bank at full weight shift (dt 0.01/55; "
-            "0.005/110)",
+            "largest sideslip at the mass centre from trim to 30° of bank at full weight shift (dt 0.01/55; 0.005/110)",
             "under 15°",
             "a swept flex wing rolls with a small, brief adverse yaw (Cook & Spottiswoode 2006; issue 53's band)",
             ", ".join(

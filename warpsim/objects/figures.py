@@ -138,7 +138,7 @@ def flag_hud(f: dict[str, float]) -> str:
 
 SHEET_ITERATIONS = 7
 """Iterations per particle along the flag at which the validation's sheet flag is converged in its iterations (twice
-as many flap the same at resolutions 9, 17 and 33; benchmarks/validation/cases.py SHEET_FLAG)."""
+as many flap the same at resolutions 9, 17 and 33; benchmarks/validation/flag_rows.py SHEET_FLAG)."""
 
 
 def flag_caveat(descriptor: dict) -> str:

@@ -224,7 +224,7 @@ def test_factors_are_reused_between_rebuilds_and_rebuilt_on_schedule():
 def test_the_factorisation_pivots():
     # a matrix whose diagonal is zero needs the row swaps of partial pivoting: the kernels' factors and substitution
     # solve it as LAPACK does
-    from warpsim.physics.kernels import vortex
+    from warpsim.physics.kernels import influence
 
     a = np.array([[0.0, 1.0, 2.0], [1.0, 0.0, 3.0], [4.0, 5.0, 0.0]])
     b = np.array([1.0, -2.0, 0.5])
@@ -233,12 +233,13 @@ def test_the_factorisation_pivots():
     matrix = wp.array(a.reshape(-1).astype(np.float32))
     pivot, factored, gamma = wp.zeros(3, dtype=wp.int32), wp.zeros(1, dtype=wp.int32), wp.zeros(3, dtype=wp.float32)
     wake = wp.array([[1.0, 0.0, 0.0, 1e-4]], dtype=wp.vec4)
-    wp.launch(vortex._factor, 1, inputs=[start, matrix_start, wp.array(one), wake], outputs=[matrix, pivot, factored])
+    inputs = [start, matrix_start, wp.array(one), wake]
+    wp.launch(influence.factor_lu, 1, inputs=inputs, outputs=[matrix, pivot, factored])
     normal = wp.array(np.tile([1.0, 0.0, 0.0, 1.0], (3, 1)).astype(np.float32), dtype=wp.vec4)
     wind = wp.array(np.stack([-b, 0 * b, 0 * b], axis=1).astype(np.float32), dtype=wp.vec3)  # -w.n = b
     no_wake = wp.zeros(3, dtype=wp.float32)
     wp.launch(
-        vortex._substitute,
+        influence.substitute,
         1,
         inputs=[start, matrix_start, normal, wind, matrix, pivot, factored, no_wake],
         outputs=[gamma],

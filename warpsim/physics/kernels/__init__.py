@@ -5,9 +5,23 @@ shared math lives in ``@wp.func`` helpers. Launch parameters are grouped as mode
 scalars, then outputs (``_out``).
 """
 
-from . import aero, bending, canopy, collision, constraints, controls, frame, momentum, springs, verlet, vortex, wake
+from . import (
+    aero,
+    bending,
+    canopy,
+    collision,
+    constraints,
+    controls,
+    frame,
+    influence,
+    momentum,
+    springs,
+    verlet,
+    vortex,
+    wake,
+)
 
-MODULES = (aero, bending, canopy, collision, constraints, controls, momentum, springs, verlet, vortex, wake)
+MODULES = (aero, bending, canopy, collision, constraints, controls, influence, momentum, springs, verlet, vortex, wake)
 """The solvers' kernel modules (``frame`` is the runner's)."""
 
 __all__ = [
@@ -19,6 +33,7 @@ __all__ = [
     "constraints",
     "controls",
     "frame",
+    "influence",
     "momentum",
     "springs",
     "verlet",

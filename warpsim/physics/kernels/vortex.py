@@ -46,68 +46,16 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
-from .. import lattice
 from .aero import TurbulenceData, plate_normal_coefficient, stall_blend, turbulence_at, wind_at
 from .collision import HeightfieldData, terrain_height
+from .influence import TRAILING, factor_lu, matrix_rows, substitute, tick, wake_velocity
 
 wp.set_module_options({"enable_backward": False})
 
 CORE_FRACTION = wp.constant(0.05)
 """Vortex core radius as a fraction of the surface's mean panel size (square root of the mean panel area)."""
-INV_FOUR_PI = wp.constant(0.07957747154594767)
-TRAILING = wp.constant(lattice.TRAILING)
 LOAD_SHIFT = wp.constant(0.25)
 """Share of an edge's load moved to the far corner of its downstream panel: a quarter of the way there."""
-
-
-@wp.func
-def segment_velocity(x: wp.vec3, a: wp.vec3, b: wp.vec3, core2: float) -> wp.vec3:
-    """Velocity [m/s] at ``x`` induced by a straight vortex segment ``a -> b`` [m] of unit circulation [m^2/s]
-    (Biot-Savart, Katz & Plotkin eq. 10.115), with a cut-off core of squared radius ``core2`` [m^2]."""
-    r1 = x - a
-    r2 = x - b
-    r0 = b - a
-    c = wp.cross(r1, r2)
-    n1 = wp.length(r1)
-    n2 = wp.length(r2)
-    if n1 == 0.0 or n2 == 0.0:
-        return wp.vec3(0.0)
-    den = wp.dot(c, c) + core2 * wp.dot(r0, r0)
-    if den == 0.0:
-        return wp.vec3(0.0)
-    return c * (INV_FOUR_PI * wp.dot(r0, r1 / n1 - r2 / n2) / den)
-
-
-@wp.func
-def ray_velocity(x: wp.vec3, a: wp.vec3, d: wp.vec3, core2: float) -> wp.vec3:
-    """Velocity [m/s] at ``x`` induced by a semi-infinite vortex line of unit circulation leaving ``a`` [m] along the
-    unit direction ``d`` (the segment's law as its far end goes to infinity), cut-off core ``core2`` [m^2]."""
-    r1 = x - a
-    n1 = wp.length(r1)
-    if n1 == 0.0:
-        return wp.vec3(0.0)
-    c = wp.cross(d, r1)
-    den = wp.dot(c, c) + core2
-    if den == 0.0:
-        return wp.vec3(0.0)
-    return c * (INV_FOUR_PI * (1.0 + wp.dot(d, r1) / n1) / den)
-
-
-@wp.func
-def ring_velocity(
-    x: wp.vec3, panel: int, corners: wp.array(dtype=wp.vec3), trailing: int, d: wp.vec3, core2: float
-) -> wp.vec3:
-    """Velocity [m/s] at ``x`` from ``panel``'s ring of unit circulation and, at its trailing edges (bits of
-    ``trailing``), the wake legs along ``d`` that replace them."""
-    v = wp.vec3(0.0)
-    for e in range(3):
-        a = corners[3 * panel + e]
-        b = corners[3 * panel + (e + 1) % 3]
-        if ((trailing >> e) & 1) != 0:
-            v += ray_velocity(x, a, d, core2) - ray_velocity(x, b, d, core2)
-        else:
-            v += segment_velocity(x, a, b, core2)
-    return v
 
 
 @wp.kernel
@@ -202,7 +150,7 @@ def _keep_basis(
     basis_normal_out: wp.array(dtype=wp.vec4),
     basis_wake_out: wp.array(dtype=wp.vec4),
 ):
-    i = wp.tid()  # what _matrix builds panel i's row from, kept when it does: a checkpoint's way to the same factors
+    i = wp.tid()  # what matrix_rows builds panel i's row from, kept when it does: a checkpoint's way to its factors
     s = panel_surface[i]
     if counter[0] != 0 and factored[s] != 0:
         return
@@ -212,185 +160,6 @@ def _keep_basis(
     basis_normal_out[i] = normal[i]
     if i == surface_start[s]:
         basis_wake_out[s] = wake[s]
-
-
-@wp.kernel
-def _matrix(
-    panel_surface: wp.array(dtype=wp.int32),
-    panel_trailing: wp.array(dtype=wp.int32),
-    surface_start: wp.array(dtype=wp.int32),
-    matrix_start: wp.array(dtype=wp.int64),
-    counter: wp.array(dtype=wp.int32),
-    factored: wp.array(dtype=wp.int32),
-    corners: wp.array(dtype=wp.vec3),
-    point: wp.array(dtype=wp.vec3),
-    normal: wp.array(dtype=wp.vec4),
-    wake: wp.array(dtype=wp.vec4),
-    matrix_out: wp.array(dtype=wp.float32),
-):
-    i = wp.tid()  # one row: the normal velocity at centroid i of every ring of its surface
-    s = panel_surface[i]
-    if counter[0] != 0 and factored[s] != 0:  # rebuilt on schedule, or at once while the last try failed
-        return
-    first = surface_start[s]
-    count = surface_start[s + 1] - first
-    wk = wake[s]
-    d = wp.vec3(wk[0], wk[1], wk[2])
-    nv = normal[i]
-    n = wp.vec3(nv[0], nv[1], nv[2])
-    x = point[i]
-    row = matrix_start[s] + wp.int64((i - first) * count)
-    j = int(0)  # noqa: UP018
-    while j < count:
-        v = ring_velocity(x, first + j, corners, panel_trailing[first + j], d, wk[3])
-        matrix_out[row + wp.int64(j)] = wp.dot(v, n)
-        j += 1
-
-
-@wp.kernel
-def _factor(
-    surface_start: wp.array(dtype=wp.int32),
-    matrix_start: wp.array(dtype=wp.int64),
-    counter: wp.array(dtype=wp.int32),
-    wake: wp.array(dtype=wp.vec4),
-    matrix_out: wp.array(dtype=wp.float32),
-    pivot_out: wp.array(dtype=wp.int32),
-    factored_out: wp.array(dtype=wp.int32),
-):
-    s = wp.tid()  # LU factors of one surface's matrix, in place (Gaussian elimination, partial pivoting)
-    if counter[0] != 0 and factored_out[s] != 0:
-        return
-    first = surface_start[s]
-    n = surface_start[s + 1] - first
-    base = matrix_start[s]
-    ok = int(1)  # noqa: UP018 -- Warp needs int() for a variable a loop changes
-    if wake[s][3] == 0.0:  # no relative wind, no wake direction: no circulation (tried again next step)
-        ok = 0
-    scale = float(0.0)  # noqa: UP018
-    for e in range(n * n):
-        scale = wp.max(scale, wp.abs(matrix_out[base + wp.int64(e)]))
-    tiny = 1.0e-6 * scale  # a pivot below this is singular in float32: no circulation rather than a huge one
-    k = int(0)  # noqa: UP018
-    while k < n and ok == 1:
-        p = int(k)
-        big = float(wp.abs(matrix_out[base + wp.int64(k * n + k)]))
-        r = int(k + 1)
-        while r < n:
-            value = wp.abs(matrix_out[base + wp.int64(r * n + k)])
-            if value > big:
-                big = value
-                p = r
-            r += 1
-        pivot_out[first + k] = p
-        if not (big > tiny):  # also catches NaN
-            ok = 0
-        else:
-            if p != k:
-                c = int(0)  # noqa: UP018
-                while c < n:
-                    t = matrix_out[base + wp.int64(k * n + c)]
-                    matrix_out[base + wp.int64(k * n + c)] = matrix_out[base + wp.int64(p * n + c)]
-                    matrix_out[base + wp.int64(p * n + c)] = t
-                    c += 1
-            inv = 1.0 / matrix_out[base + wp.int64(k * n + k)]
-            r = int(k + 1)
-            while r < n:
-                f = matrix_out[base + wp.int64(r * n + k)] * inv
-                matrix_out[base + wp.int64(r * n + k)] = f  # L below the diagonal
-                if f != 0.0:
-                    c = int(k + 1)
-                    upper = base + wp.int64(k * n)
-                    lower = base + wp.int64(r * n)
-                    while c < n:
-                        matrix_out[lower + wp.int64(c)] = (
-                            matrix_out[lower + wp.int64(c)] - f * matrix_out[upper + wp.int64(c)]
-                        )
-                        c += 1
-                r += 1
-        k += 1
-    factored_out[s] = ok
-
-
-@wp.kernel
-def _substitute(
-    surface_start: wp.array(dtype=wp.int32),
-    matrix_start: wp.array(dtype=wp.int64),
-    normal: wp.array(dtype=wp.vec4),
-    panel_wind: wp.array(dtype=wp.vec3),
-    matrix: wp.array(dtype=wp.float32),
-    pivot: wp.array(dtype=wp.int32),
-    factored: wp.array(dtype=wp.int32),
-    wake_normal: wp.array(dtype=wp.float32),
-    gamma_out: wp.array(dtype=wp.float32),
-):
-    s = wp.tid()  # this step's circulations from the latest factors: no air through any centroid
-    first = surface_start[s]
-    n = surface_start[s + 1] - first
-    base = matrix_start[s]
-    for i in range(n):
-        nv = normal[first + i]
-        gamma_out[first + i] = -wp.dot(panel_wind[first + i], wp.vec3(nv[0], nv[1], nv[2])) - wake_normal[first + i]
-    if factored[s] == 0:
-        for i in range(n):
-            gamma_out[first + i] = 0.0
-        return
-    for k in range(n):  # the rows' swaps, in order
-        p = pivot[first + k]
-        if p != k:
-            t = gamma_out[first + k]
-            gamma_out[first + k] = gamma_out[first + p]
-            gamma_out[first + p] = t
-    r = int(1)  # noqa: UP018
-    while r < n:  # forward: L has ones on its diagonal
-        acc = float(gamma_out[first + r])
-        row = base + wp.int64(r * n)
-        c = int(0)  # noqa: UP018
-        while c < r:
-            acc -= matrix[row + wp.int64(c)] * gamma_out[first + c]
-            c += 1
-        gamma_out[first + r] = acc
-        r += 1
-    r = n - 1  # noqa: PLW2901
-    while r >= 0:  # backward
-        acc = float(gamma_out[first + r])
-        row = base + wp.int64(r * n)
-        c = int(r + 1)
-        while c < n:
-            acc -= matrix[row + wp.int64(c)] * gamma_out[first + c]
-            c += 1
-        gamma_out[first + r] = acc / matrix[row + wp.int64(r)]
-        r -= 1
-
-
-@wp.kernel
-def _tick(interval: int, counter_out: wp.array(dtype=wp.int32)):
-    counter_out[0] = (counter_out[0] + 1) % interval
-
-
-@wp.func
-def wake_velocity(
-    x: wp.vec3,
-    first: int,
-    end: int,
-    panel_trailing: wp.array(dtype=wp.int32),
-    corners: wp.array(dtype=wp.vec3),
-    gamma: wp.array(dtype=wp.float32),
-    d: wp.vec3,
-    core2: float,
-) -> wp.vec3:
-    """Velocity [m/s] at ``x`` induced by the wake legs of panels ``first .. end - 1`` (their circulations)."""
-    v = wp.vec3(0.0)
-    j = first
-    while j < end:
-        bits = panel_trailing[j]
-        if bits != 0:
-            for e in range(3):
-                if ((bits >> e) & 1) != 0:
-                    a = corners[3 * j + e]
-                    b = corners[3 * j + (e + 1) % 3]
-                    v += (ray_velocity(x, a, d, core2) - ray_velocity(x, b, d, core2)) * gamma[j]
-        j += 1
-    return v
 
 
 @wp.kernel
@@ -641,9 +410,9 @@ class VortexScratch:
         trailing = arrays["panel_trailing"] if self.shed is None else self.no_trailing
         inputs = [arrays["panel_surface"], trailing, arrays["surface_start"], arrays["matrix_start"]]
         inputs += [self.counter, self.factored, corners, point, normal, wake]
-        wp.launch(_matrix, dim=lat.panel_count, inputs=inputs, outputs=[self.matrix], device=dev)
+        wp.launch(matrix_rows, dim=lat.panel_count, inputs=inputs, outputs=[self.matrix], device=dev)
         wp.launch(
-            _factor,
+            factor_lu,
             dim=lat.surface_count,
             inputs=[arrays["surface_start"], arrays["matrix_start"], self.counter, wake],
             outputs=[self.matrix, self.pivot, self.factored],
@@ -716,7 +485,7 @@ def vortex_air_force(
     if shed is not None:
         shed.right_hand_side(model, state, sc)
     wp.launch(
-        _substitute,
+        substitute,
         dim=lat.surface_count,
         inputs=[
             arrays["surface_start"],
@@ -803,6 +572,6 @@ def vortex_air_force(
         outputs=[particle_air_out],
         device=dev,
     )
-    wp.launch(_tick, dim=1, inputs=[interval], outputs=[sc.counter], device=dev)
+    wp.launch(tick, dim=1, inputs=[interval], outputs=[sc.counter], device=dev)
     if shed is not None:
         shed.after_step(model, dt)

@@ -33,7 +33,7 @@ import warp as wp
 from .. import lattice
 from .aero import TurbulenceData, turbulence_at, wind_at
 from .collision import HeightfieldData, terrain_height
-from .vortex import TRAILING, ray_velocity, segment_velocity
+from .influence import TRAILING, ray_velocity, segment_velocity
 
 wp.set_module_options({"enable_backward": False})
 

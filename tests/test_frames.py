@@ -153,3 +153,43 @@ def test_a_low_frame_rate_starts_in_bounded_time(fps):
     assert sim.startup_time < 5.0
     sim.run(0.1)
     assert sim.steps_taken == round(0.1 / sim.dt)
+
+
+def test_the_frame_iterator_gives_run_s_frames_and_checks_each_world_alone():
+    """`Simulation.frames` is what `run`, the viewer and a sweep's chunk step by: it yields the current state, then
+    `run`'s frames, bit for bit; it steps only when asked (a consumer that stops leaves the state at its last
+    frame); checked world by world, a world that goes bad is named in that frame's `blowups` and the others go
+    on, where the whole check goes back to the last good frame and ends the iterator."""
+    ran, seen = _kites(2), []
+    ran.run(12 * ran.steps_per_frame * ran.dt, on_frame=lambda f: seen.append((f.index, f.steps, f.positions.copy())))
+    it = _kites(2)
+    got = [(f.index, f.steps, f.positions.copy()) for f in it.frames(12 * it.steps_per_frame * it.dt)]
+    assert [g[:2] for g in got] == [s[:2] for s in seen] and len(got) == 13
+    for (_, _, a), (_, _, b) in zip(got, seen, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+    sim = _kites(2)
+    frames = sim.frames()  # for as long as it is asked
+    for _ in range(4):
+        next(frames)
+    assert sim.steps_taken == 3 * sim.steps_per_frame  # the fourth frame given is the third stepped; no more
+    frames.close()
+
+    poisoned = sim.model.objects[1].particles[5]  # a particle of the second world
+
+    def poison(index):
+        q = sim.state.particle_q.numpy()
+        q[poisoned] = np.nan
+        sim.state.particle_q.assign(q)
+
+    alone = sim.frames(5 * sim.steps_per_frame * sim.dt, before=poison, each_world=True)
+    frames = list(alone)
+    assert len(frames) == 6 and frames[0].blowups == {}
+    assert all(set(f.blowups) == {1} and "non-finite" in f.blowups[1] for f in frames[1:])
+    assert np.isfinite(frames[-1].positions[sim.model.objects[0].particles]).all()  # the first world flew on
+    whole = _kites(2)
+    whole.run(3 * whole.steps_per_frame * whole.dt)
+    good = whole.state.positions()
+    with pytest.raises(Exception, match="non-finite"):
+        list(whole.frames(1.0, before=lambda index: (whole.state.particle_q.assign(np.full_like(good, np.nan)))))
+    np.testing.assert_array_equal(whole.state.positions(), good)  # back to the last good frame

@@ -51,6 +51,9 @@ class Frame:
         world_nonfinite: host ``[W]`` number of particles of each world with a non-finite position or velocity.
         clearance: host ``[K]`` lowest height [m] above the terrain of each object's particles that can touch it
             (:class:`GroundContacts`), ``1e30`` for an object with none.
+        blowups: what is wrong in each world that is bad in this frame, by world index, where the worlds are
+            checked one by one (:meth:`warpsim.run.simulation.Simulation.frames` with ``each_world``); empty
+            otherwise (a frame checked whole is handed out only when it is good).
         controls: the controls in force when the frame's stepping began (after the keys or a replay set theirs
             at its start; a schedule may change them at its own steps within the frame), by name (what
             :meth:`warpsim.run.simulation.Simulation.set_controls` takes; empty when none was set).
@@ -76,6 +79,7 @@ class Frame:
     ):
         self.index, self.time, self.steps = index, time, steps
         self.world_stretch, self.world_nonfinite, self.clearance = report
+        self.blowups: dict[int, str] = {}
         self.finite = not self.world_nonfinite.any()
         self.worst_stretch = float(self.world_stretch.max()) if self.finite else float("nan")
         self.controls = {} if controls is None else controls

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import time
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,7 +37,7 @@ from .checkpoint import (
     vortex_states,
     wake_states,
 )
-from .diagnostics import Frame, FrameSource, GroundContacts, find_blowup
+from .diagnostics import Frame, FrameSource, GroundContacts, find_blowup, world_blowups
 from .groups import GroupThreads, WorldGroup, split_worlds
 from .inputs import Inputs, control_names
 from .summary import BlowUpError, RunSummary, _Pace, available_cores
@@ -352,14 +352,7 @@ class Simulation:
         state goes back to the last good frame (see :meth:`start_frames`, which must have been called once) and
         :class:`BlowUpError` is raised, its ``summary`` None.
         """
-        spf = self.steps_per_frame
-        into = self.steps_taken % spf
-        if into == 0 and before is not None:  # a frame starts: a keyboard or a recorded flight sets its controls
-            self.apply_schedule()
-            before(self.steps_taken // spf + 1)
-        n = spf - into if limit is None else min(spf - into, limit)
-        self._step_frame(n)
-        frame = self._hand_out(-(-self.steps_taken // spf))
+        frame = self._to_frame_end(limit, before)
         problem = self.blowup(frame)
         if problem:
             bad_step = self.steps_taken
@@ -368,6 +361,57 @@ class Simulation:
         self.contacts.note(frame)
         self._keep_good(frame)
         return frame
+
+    def _to_frame_end(self, limit: int | None, before: Callable[[int], None] | None) -> Frame:
+        """Step to the end of the current frame (at most ``limit`` steps; ``before`` at a frame start, as in
+        :meth:`advance`) and hand out that frame, unchecked."""
+        spf = self.steps_per_frame
+        into = self.steps_taken % spf
+        if into == 0 and before is not None:  # a frame starts: a keyboard or a recorded flight sets its controls
+            self.apply_schedule()
+            before(self.steps_taken // spf + 1)
+        n = spf - into if limit is None else min(spf - into, limit)
+        self._step_frame(n)
+        return self._hand_out(-(-self.steps_taken // spf))
+
+    def frames(
+        self,
+        seconds: float | None = None,
+        before: Callable[[int], None] | None = None,
+        *,
+        each_world: bool = False,
+    ) -> Iterator[Frame]:
+        """The run's frames, checked, one per ``next``: the current state first, then every frame stepped for
+        ``seconds`` of simulated time from now (None: for as long as the consumer asks). What :meth:`run`, the
+        viewer and a sweep's chunk step by.
+
+        The frames lie on :meth:`run`'s grid and ``before`` acts at frame starts as in :meth:`advance`. The
+        iterator steps only when the next frame is asked for, so a consumer that stops asking (Ctrl-C, the
+        window closed, every case of a sweep blown up) leaves the state at the last frame it was given.
+
+        Checked: a bad frame is not yielded; the state goes back to the last good frame and :class:`BlowUpError`
+        (its ``summary`` None) ends the iterator, as :meth:`advance` does. With ``each_world`` the worlds are
+        checked one by one instead (a sweep's cases, which go on when one of them blows up): every frame is
+        yielded, its :attr:`~warpsim.run.diagnostics.Frame.blowups` naming the worlds that are bad in it (a world
+        once bad steps on unchecked; nothing goes back).
+        """
+        end = None if seconds is None else self.steps_taken + int(round(seconds / self.dt))
+        if each_world:
+            frame = self.frame(-(-self.steps_taken // self.steps_per_frame))
+            frame.blowups = world_blowups(self.model, frame, self.settings.solver.max_stretch)
+        else:
+            frame = self.start_frames()
+        yield frame
+        del frame  # a frame nobody holds is not copied when the state moves on
+        while end is None or self.steps_taken < end:
+            limit = None if end is None else end - self.steps_taken
+            if each_world:
+                frame = self._to_frame_end(limit, before)
+                frame.blowups = world_blowups(self.model, frame, self.settings.solver.max_stretch)
+            else:
+                frame = self.advance(limit, before)
+            yield frame
+            del frame
 
     def _go_back(self) -> None:
         """Put the state, the control arrays and the inputs back to the last good frame (:meth:`advance` and
@@ -435,36 +479,34 @@ class Simulation:
         Every frame is checked (:meth:`blowup`) before ``on_frame`` sees it. A bad frame is not passed on:
         the state goes back to the last good frame and :class:`BlowUpError` is raised.
         """
-        total_steps = int(round(seconds / self.dt))
         pace = _Pace(self.dt, realtime, on_progress, seconds)
-        worst, steps, interrupted = 0.0, 0, False
+        start = self.steps_taken
+        worst, interrupted = 0.0, False
+        frames = self.frames(seconds, before)
         try:
-            first = self.start_frames()
-            worst = first.worst_stretch
-            if on_frame and self.steps_taken == 0:
-                on_frame(first)
-            del first  # a frame nobody holds is not copied when the state moves on
-            while steps < total_steps:
-                if stop is not None and stop():
-                    interrupted = True
-                    break
-                before_steps = self.steps_taken
-                try:
-                    frame = self.advance(total_steps - steps, before)
-                except BlowUpError as err:
-                    steps -= before_steps - self._good.steps  # the run's count up to the good frame
-                    err.summary = self._summary(steps, worst, pace, blew_up=True)
-                    raise
-                steps += self.steps_taken - before_steps
+            for frame in frames:
                 worst = max(worst, frame.worst_stretch)
-                if on_frame:
-                    on_frame(frame)
+                if frame.steps == start:  # the current state: passed on only at the scene's start
+                    if on_frame and start == 0:
+                        on_frame(frame)
+                else:
+                    if on_frame:
+                        on_frame(frame)
+                    pace.after_frame(self.state.time, self.steps_taken - start)
                 del frame
-                pace.after_frame(self.state.time, steps)
+                if stop is not None and stop():
+                    interrupted = self.steps_taken < start + int(round(seconds / self.dt))
+                    break
+        except BlowUpError as err:
+            if err.summary is None:  # a frame stepped here (not the state the run started from) was bad
+                err.summary = self._summary(self._good.steps - start, worst, pace, blew_up=True)
+            raise
         except KeyboardInterrupt:
             interrupted = True
+        finally:
+            frames.close()
         wp.synchronize_device(self.model.device)
-        return self._summary(steps, worst, pace, interrupted=interrupted)
+        return self._summary(self.steps_taken - start, worst, pace, interrupted=interrupted)
 
     def _summary(self, steps: int, worst: float, pace: _Pace, **flags) -> RunSummary:
         """The :class:`RunSummary` of ``steps`` steps whose worst stretch was ``worst``."""

@@ -138,7 +138,8 @@ class Viewer:
         self.draw_list = draw_list(self.model)
         self.figures = Figures(self.model)
         self.initial = sim.checkpoint()
-        self.frame: Frame = sim.start_frames()
+        self._frames = sim.frames(before=self._controls_at_frame_start)  # the flight's frames, stepped by tick
+        self.frame: Frame = next(self._frames)  # the current state, checked
         self.points = self.draw_list.place(self.frame.positions)  # the frame as drawn [m]
         self.axes = {b.control: 0.0 for b in self.axis_keys}
         self.paused = False
@@ -351,7 +352,8 @@ class Viewer:
         if self._record_path is not None:
             self._close_recorder()  # before the state goes back: its checkpoint is of the last frame flown
         self.sim.restore(self.initial)
-        self.frame = self.sim.start_frames()
+        self._frames = self.sim.frames(before=self._controls_at_frame_start)
+        self.frame = next(self._frames)
         self.axes = {b.control: 0.0 for b in self.axis_keys}
         self._pending_wind = self._wind_goal = None
         self._held_frames = dict.fromkeys(self._held_frames, 0)
@@ -370,8 +372,12 @@ class Viewer:
         """Step one frame with the keyboard's controls, record it; False (and paused) after a blow-up."""
         started = time.perf_counter()
         try:
-            self.frame = self.sim.advance(before=self._controls_at_frame_start)
+            if self._frames is None:  # after a blow-up: on from the good frame it went back to
+                self._frames = self.sim.frames(before=self._controls_at_frame_start)
+                next(self._frames)
+            self.frame = next(self._frames)
         except BlowUpError as err:
+            self._frames = None
             self.frame = self.sim.frame(err.last_good_frame)
             self.blew_up = True
             self._fail(f"{err}; press R to restart")

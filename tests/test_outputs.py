@@ -5,6 +5,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -262,3 +263,62 @@ def test_a_huge_terrain_is_sampled_in_the_stage(tmp_path, monkeypatch):
     assert len(points) == 33 * 33
     assert points[:, 2].min() == pytest.approx(heights.min(), abs=1e-5)
     assert points[:, 2].max() == pytest.approx(heights.max(), abs=1e-5)
+
+
+def test_png_output_draws_the_last_frame_and_a_bad_name_is_one_line(tmp_path, capsys):
+    """`warpsim run --png` (the picture output, from the outputs table) draws the run's last frame as
+    `warpsim render` draws a recording's: a 960 x 540 picture with the sail's blue in it, listed in the run's last
+    lines; a name that is not a .png is a usage error before the run starts."""
+    from PIL import Image
+
+    out = tmp_path / "glider.png"
+    assert main(["run", "hang_glider", "--seconds", "0.5", "--png", str(out)]) == 0
+    assert f"picture: {out}" in capsys.readouterr().out
+    pixels = np.asarray(Image.open(out).convert("RGB"), dtype=np.int64)
+    assert pixels.shape == (540, 960, 3)
+    blue = (pixels[..., 2] > pixels[..., 0] + 60) & (
+        pixels[..., 2] > 150
+    )  # the sail (the sky is pale, the ground green)
+    assert 0.01 < blue.mean() < 0.6
+    assert main(["run", "hang_glider", "--seconds", "0.5", "--png", str(tmp_path / "glider.gif")]) == 2
+    err = capsys.readouterr().err
+    assert "--png" in err and ".png" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "glider.gif").exists()
+
+
+def test_a_new_output_is_one_line_of_the_outputs_table(tmp_path, monkeypatch, capsys):
+    """A format added to `warpsim.io.outputs.OUTPUTS` is offered by `warpsim run --help`, checked before the run,
+    opened with the run and handed every frame, and listed when the run ends: nothing else to touch."""
+    from warpsim.io import OutputPathError, outputs
+    from warpsim.io.protocol import FrameOutput
+
+    frames = []
+
+    class Counter(FrameOutput):
+        def __init__(self, path):
+            self.path = path
+
+        def log_state(self, frame):
+            frames.append(frame.index)
+
+        def close(self):
+            Path(self.path).write_text(f"{len(frames)} frames\n")
+
+    def check(path):
+        if not str(path).endswith(".count"):
+            raise OutputPathError(f"{path}: a count is a .count")
+        return Path(path)
+
+    kind = outputs.OutputKind(
+        "--count", "OUT.count", "count the frames", "frame count", check, lambda p, s, r: Counter(p)
+    )
+    monkeypatch.setattr(outputs, "OUTPUTS", (*outputs.OUTPUTS, kind))
+    with pytest.raises(SystemExit):
+        main(["run", "--help"])
+    assert "--count OUT.count" in capsys.readouterr().out
+    assert main(["run", "kite", "--seconds", "0.5", "--count", str(tmp_path / "a.txt")]) == 2
+    assert "a count is a .count" in capsys.readouterr().err
+    out = tmp_path / "a.count"
+    assert main(["run", "kite", "--seconds", "0.5", "--count", str(out)]) == 0
+    assert f"frame count: {out}" in capsys.readouterr().out
+    assert frames == list(range(16)) and out.read_text() == "16 frames\n"  # 0.5 s at 30 frames a second, and frame 0

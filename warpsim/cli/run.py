@@ -63,7 +63,8 @@ def command(args) -> int:
     from ..run.replay import RecordedControls
     from ..run.simulation import BlowUpError
 
-    usd_path, h5_path = _check_run_options(args)
+    paths = _check_run_options(args)
+    h5_path = paths["--h5"]
     table = checked_output(check_table_path, args.table, "--table")
     device = check_device(args.device)
     with contextlib.ExitStack() as outputs:
@@ -72,7 +73,7 @@ def command(args) -> int:
         sim = _start(run, device, args)
         stop = _StopRequests()
         outputs.callback(stop.restore)
-        writer = _Outputs(outputs, sim, run, args, h5_path, usd_path, lock, stop)
+        writer = _Outputs(outputs, sim, run, args, paths, lock, stop)
         figures = None if args.quiet and not table else _flight_figures(sim, run.seconds)
         on_frame = writer.on_frame if writer.any else None
         if figures is not None:
@@ -95,7 +96,7 @@ def command(args) -> int:
             write_world_table(table, figures, sim.descriptor)
         except OutputWriteError as err:
             writer.failures.append(err)
-    return _report(args, run, summary, blowup, writer.failures, h5_path, usd_path, figures, table)
+    return _report(args, run, summary, blowup, writer.failures, paths, figures, table)
 
 
 def _flight_figures(sim, seconds: float):
@@ -119,10 +120,10 @@ def _both(first, second):
     return on_frame
 
 
-def _check_run_options(args) -> tuple[Path | None, Path | None]:
-    """The checked ``--usd`` and ``--h5`` paths; a contradictory or bad option is a usage error."""
-    from ..io import check_stage_path
-    from ..io.hdf5 import check_recording_path
+def _check_run_options(args) -> dict[str, Path | None]:
+    """The checked path of every output (:data:`~warpsim.io.outputs.OUTPUTS`), by flag (None where not given); a
+    contradictory or bad option is a usage error."""
+    from ..io.outputs import OUTPUTS
 
     given = [
         flag for flag, value in (("SCENE", args.scene), ("--resume", args.resume), ("--replay", args.replay)) if value
@@ -140,13 +141,12 @@ def _check_run_options(args) -> tuple[Path | None, Path | None]:
                     raise UsageError(f"--{name} cannot change a {flag} run; it uses the recording's settings")
             if not Path(source).is_file():
                 raise UsageError(f"{flag} {source}: no such file")
-    usd_path = checked_output(check_stage_path, args.usd, "--usd")
-    h5_path = checked_output(check_recording_path, args.h5, "--h5")
+    paths = {kind.flag: checked_output(kind.check, getattr(args, kind.dest), kind.flag) for kind in OUTPUTS}
     if args.scene:
-        same_file_check(args.scene, {"--h5": h5_path, "--usd": usd_path})
+        same_file_check(args.scene, paths)
     if args.replay:
-        same_file_check(args.replay, {"--h5": h5_path, "--usd": usd_path}, "the recording replayed")
-    return usd_path, h5_path
+        same_file_check(args.replay, paths, "the recording replayed")
+    return paths
 
 
 def _claim_recording(outputs, args, h5_path: Path | None):
@@ -275,28 +275,27 @@ class _Outputs:
     now and closed (always) by :meth:`close`; a write that fails stops the run at that frame, and its error is kept
     in ``failures``."""
 
-    def __init__(self, stack, sim, run: _RunInputs, args, h5_path, usd_path, lock, stop):
-        from ..io.outputs import open_recording, open_stage
+    def __init__(self, stack, sim, run: _RunInputs, args, paths: dict, lock, stop):
+        from ..io.outputs import OUTPUTS, RunOutputs
         from ..scene.descriptor import to_toml
 
         self.stop, self.failures = stop, []
         self.outputs: list = []
         self._failed: set[int] = set()
         stack.callback(self.close)
-        if args.resume or h5_path:  # a RecordingError is exit 2 (main._exit_code)
-            self.outputs.append(
-                open_recording(
-                    args.resume or h5_path,
-                    sim,
-                    "" if args.resume else to_toml(run.descriptor),
-                    "" if args.resume else run.where,
-                    descriptor=run.descriptor,
-                    resume=bool(args.resume),
-                    lock=lock,
-                )
-            )
-        if usd_path:  # USD loads here, after Ctrl-C no longer raises (see _StopRequests)
-            self.outputs.append(open_stage(usd_path, sim))
+        opened = RunOutputs(
+            run.descriptor,
+            "" if args.resume else to_toml(run.descriptor),
+            "" if args.resume else run.where,
+            resume=bool(args.resume),
+            lock=lock,
+        )
+        # in the table's order, the recording first; USD loads here, after Ctrl-C no longer raises (_StopRequests);
+        # a RecordingError is exit 2 (main._exit_code)
+        for kind in OUTPUTS:
+            path = args.resume if kind.flag == "--h5" and args.resume else paths[kind.flag]
+            if path:
+                self.outputs.append(kind.open(path, sim, opened))
         self.any = bool(self.outputs)
 
     def on_frame(self, frame) -> None:
@@ -327,15 +326,18 @@ class _Outputs:
                     self.failures.append(err)
 
 
-def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path, figures=None, table=None) -> int:
+def _report(args, run: _RunInputs, summary, blowup, failures, paths: dict, figures=None, table=None) -> int:
     """Print the summary, the flight figures, the outputs and any error line; return the exit code."""
+    from ..io.outputs import OUTPUTS
+
     if not args.quiet and sys.stderr.isatty():
         sys.stderr.write("\r" + " " * 70 + "\r")
     if not args.quiet:
         print(summary.text())
         for line in figures.lines() if figures is not None else ():
             print(line)
-        for label, path in (("recording", args.resume or h5_path), ("USD stage", usd_path), ("table", table)):
+        written = [(k.label, args.resume if k.flag == "--h5" and args.resume else paths[k.flag]) for k in OUTPUTS]
+        for label, path in [*written, ("table", table)]:
             if path and not any(str(path) in str(err) for err in failures):
                 print(f"  {label}: {path}")
     for err in failures:
@@ -356,6 +358,8 @@ def _report(args, run: _RunInputs, summary, blowup, failures, h5_path, usd_path,
 
 def add_parser(sub) -> None:
     """Add the ``run`` command to the subparsers ``sub``."""
+    from ..io.outputs import OUTPUTS
+
     run = sub.add_parser(
         "run",
         help="simulate a scene",
@@ -372,18 +376,8 @@ def add_parser(sub) -> None:
     add_scene_options(run)
     run.add_argument("--realtime", action="store_true", help="pace the run to the wall clock")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
-    run.add_argument(
-        "--usd",
-        metavar="OUT",
-        help="write an animated USD stage (.usda text, .usdc binary, .usdz package), one time sample per frame; "
-        "written when the run ends, also on Ctrl-C",
-    )
-    run.add_argument(
-        "--h5",
-        metavar="OUT.h5",
-        help="stream a recording (positions, diagnostics, topology, descriptor) frame by frame; "
-        "an interrupted run keeps every completed frame",
-    )
+    for kind in OUTPUTS:  # warpsim.io.outputs: one line there per format
+        run.add_argument(kind.flag, metavar=kind.metavar, help=kind.help)
     run.add_argument(
         "--table",
         metavar="OUT.parquet|OUT.csv",

@@ -1,9 +1,15 @@
 """Opening a run's outputs, each in one place: the HDF5 recording (:func:`open_recording`, what ``warpsim run``,
 the viewer and the sweeps' chunks all call), the USD stage (:func:`open_stage`) and a picture of the last frame
-(:func:`open_picture`); every one is an :class:`~warpsim.io.protocol.Output`."""
+(:func:`open_picture`); every one is an :class:`~warpsim.io.protocol.Output`.
+
+:data:`OUTPUTS` is the table ``warpsim run`` offers them from: each kind's flag, help, path check and opener. A new
+format is its module (an ``Output``) and one line there.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 
@@ -50,3 +56,104 @@ def open_picture(path: str | Path, sim, size: tuple[int, int] = (960, 540), azim
     from .picture import PictureOutput
 
     return PictureOutput(path, sim.model, sim.descriptor["scene"]["object"], size, azimuth, elevation)
+
+
+@dataclass(frozen=True)
+class RunOutputs:
+    """What an output of a ``warpsim run`` opens with besides its path and the simulation: the run's descriptor,
+    its TOML text and where the scene came from (empty when resumed: the recording has them), whether the run
+    continues a recording (``resume``) and the writer's lock of the recording, when the command took it."""
+
+    descriptor: dict
+    descriptor_text: str = ""
+    where: str = ""
+    resume: bool = False
+    lock: object = None
+
+
+@dataclass(frozen=True)
+class OutputKind:
+    """One kind of output ``warpsim run`` writes frame by frame.
+
+    Attributes:
+        flag: the command-line option (``--usd``); its value is the path. metavar, help: its ``--help``.
+        label: what the run's last lines call it (``USD stage``).
+        check: ``check(path) -> Path``, raising :class:`~warpsim.io.OutputPathError` for a path it cannot write
+            (asked before the run starts, so that a bad name costs nothing).
+        open: ``open(path, sim, run: RunOutputs) -> Output``, after the simulation is built.
+    """
+
+    flag: str
+    metavar: str
+    help: str
+    label: str
+    check: Callable[[str], Path]
+    open: Callable[[Path, object, RunOutputs], object]
+
+    @property
+    def dest(self) -> str:
+        """The attribute argparse keeps the value in (``--h5`` -> ``h5``)."""
+        return self.flag.removeprefix("--").replace("-", "_")
+
+
+def _check_recording(path) -> Path:
+    from .hdf5 import check_recording_path
+
+    return check_recording_path(path)
+
+
+def _check_stage(path) -> Path:
+    from . import check_stage_path
+
+    return check_stage_path(path)
+
+
+def _check_picture(path) -> Path:
+    from . import OutputPathError
+    from .render import check_picture_path, require_pillow
+
+    checked = check_picture_path(path)
+    if checked.suffix.lower() != ".png":
+        raise OutputPathError(f"{path}: a picture of the last frame is a .png")
+    try:
+        require_pillow()
+    except RuntimeError as err:  # the [render] extra is not installed: one line before the run, not after it
+        raise OutputPathError(str(err)) from None
+    return checked
+
+
+def _open_recording(path, sim, run: RunOutputs):
+    return open_recording(
+        path, sim, run.descriptor_text, run.where, descriptor=run.descriptor, resume=run.resume, lock=run.lock
+    )
+
+
+OUTPUTS: tuple[OutputKind, ...] = (
+    OutputKind(
+        "--h5",
+        "OUT.h5",
+        "stream a recording (positions, diagnostics, topology, descriptor) frame by frame; "
+        "an interrupted run keeps every completed frame",
+        "recording",
+        _check_recording,
+        _open_recording,
+    ),
+    OutputKind(
+        "--usd",
+        "OUT",
+        "write an animated USD stage (.usda text, .usdc binary, .usdz package), one time sample per frame; "
+        "written when the run ends, also on Ctrl-C",
+        "USD stage",
+        _check_stage,
+        lambda path, sim, run: open_stage(path, sim),
+    ),
+    OutputKind(
+        "--png",
+        "OUT.png",
+        "draw the run's last frame to a PNG when it ends, as warpsim render draws a recording's",
+        "picture",
+        _check_picture,
+        lambda path, sim, run: open_picture(path, sim),
+    ),
+)
+"""The outputs ``warpsim run`` offers, in the order they are opened (the recording first: it holds the lock)."""

@@ -42,6 +42,7 @@ class PictureOutput(FrameOutput):
             return self.path if self.last is not None else None
         self.closed = True
         time, q = self.last
+        q = self.scene.place(q)  # the worlds side by side and the drawn points (pilot, pole) added
         camera = self.scene.fit([q], self.camera)
         image = self.scene.draw(q, camera, f"{self.label}  t = {time:.2f} s")
         return _atomic_save(self.path, lambda p: image.save(p, format="PNG"))

@@ -114,3 +114,42 @@ def test_the_walk_sees_imports():
     assert "warpsim.physics.model" in graph["warpsim.physics.solver"]
     assert "warpsim.run.simulation" in graph["warpsim.viewer.core"]  # an import inside the module's text
     assert _layer("warpsim.cli.main") == ("cli", 7)
+
+
+def _docstrings(tree: ast.AST) -> set[int]:
+    """The ids of the docstring constants of ``tree``'s module, classes and functions (text, not code)."""
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
+            first = node.body[0]
+            if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant):
+                found.add(id(first.value))
+    return found
+
+
+def _kind_names(path: Path, kinds: set[str]) -> list[str]:
+    """Where the code of ``path`` names an object kind (a string constant equal to one, docstrings aside)."""
+    tree = ast.parse(path.read_text(), str(path))
+    docs = _docstrings(tree)
+    return [
+        f"{path.relative_to(PACKAGE.parent)}:{node.lineno}: {node.value!r}"
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in kinds
+        and id(node) not in docs
+    ]  # fmt: skip
+
+
+def test_no_module_outside_objects_names_an_object_kind():
+    """Each object's knowledge is in `objects/` (its module and its registry entry): the layers above reach an
+    object through `objects.registry.OBJECTS`, never by its name, so a new object touches no other package."""
+    from warpsim.objects.registry import OBJECTS
+
+    kinds = set(OBJECTS) | {kind.replace("-", "_") for kind in OBJECTS}
+    named = [
+        hit
+        for path in sorted(PACKAGE.rglob("*.py"))
+        if path.relative_to(PACKAGE).parts[0] != "objects"
+        for hit in _kind_names(path, kinds)
+    ]
+    assert not named, "object kinds named outside objects/:\n" + "\n".join(named)
+    assert _kind_names(PACKAGE / "objects" / "registry.py", kinds)  # the search finds names where they are

@@ -134,7 +134,7 @@ def test_default_camera_frames_the_kite_not_its_whole_line(kite_recording, tmp_p
 def test_flag_pole_and_glider_frame_are_drawn(tmp_path_factory, tmp_path):
     from warpsim.io.recording import Recording
     from warpsim.io.render import Camera, Scene
-    from warpsim.io.shapes import POLE, TUBE
+    from warpsim.objects.drawing import POLE, TUBE
 
     for scene_name, colour in (("flag", POLE), ("hang-glider", TUBE)):
         path = _recording(tmp_path_factory, scene_name, 0.3)

@@ -156,7 +156,7 @@ def pictures(out: Path) -> dict:
     """Screenshots of what the viewer draws besides cloth, with where the drawn parts project (pixels)."""
     from PIL import Image
 
-    from warpsim.io.shapes import BODY
+    from warpsim.objects.drawing import BODY
 
     result = {}
 

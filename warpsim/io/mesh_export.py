@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..objects.mesh_file import file_numbering, write_mesh
-from ..objects.registry import OBJECTS
+from ..objects.registry import MESH, OBJECTS, section
 from ..scene.build import build_model
 from ..scene.descriptor import to_toml, world_descriptor
 
@@ -58,11 +58,11 @@ def _export_own(descriptor: dict, record, tris: np.ndarray, out: Path) -> tuple[
     # the file holds the design's own coordinates, units and scale applied, and its groups: a part keeps its groups
     # and boxes, and one that named vertices names them by the new file's own numbering
     parts = []
-    for entry, chosen in zip(scene["mesh"]["parts"], record.selections, strict=True):
+    for entry, chosen in zip(scene[section(MESH)]["parts"], record.selections, strict=True):
         if "vertices" in entry:
             entry = {**entry, "vertices": [int(i) for i in numbering[chosen]]}
         parts.append(entry)
-    scene["mesh"].update(file=out.name, units="m", scale=1.0, parts=parts)
+    scene[section(MESH)].update(file=out.name, units="m", scale=1.0, parts=parts)
     scene_path = out.with_suffix(".toml")
     header = (
         f"# a design exported by warpsim export to {out.name}, as it was read\n# Run: warpsim run {scene_path.name}\n"
@@ -81,7 +81,7 @@ def export_design(descriptor: dict, out: str | Path) -> tuple[Path, Path, list[s
     tris = np.asarray(model.tri_indices_np, dtype=np.int64)
     if len(tris) == 0:
         raise ValueError(f"the {record.kind} has no triangles to export")
-    if record.kind == "mesh":
+    if record.kind == MESH:
         return _export_own(single, record, tris, out)
     cloth = np.unique(tris)
     local = {int(p): k for k, p in enumerate(cloth)}
@@ -217,11 +217,11 @@ def export_design(descriptor: dict, out: str | Path) -> tuple[Path, Path, list[s
 
     kind_section = record.kind.replace("-", "_")
     scene = {k: copy.deepcopy(v) for k, v in descriptor.items() if k not in ("worlds", "sweep", kind_section)}
-    scene["scene"]["object"] = "mesh"
-    names = set(OBJECTS["mesh"].controls) | {"wind", "time", "ramp"}
+    scene["scene"]["object"] = MESH
+    names = set(OBJECTS[MESH].controls) | {"wind", "time", "ramp"}
     scene["controls"] = [c for c in descriptor.get("controls", []) if set(c) <= names]
     compliances = compliance[cloth_sticks & (weight <= 1.0)]
-    scene["mesh"] = {
+    scene[section(MESH)] = {
         "file": out.name,
         "position": [float(cx), float(cy), 0.0],
         "velocity": [float(v) for v in np.asarray(model.particle_qd0, dtype=np.float64)[cloth].mean(axis=0)],

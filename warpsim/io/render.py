@@ -6,10 +6,10 @@ whose colour goes from haze at the horizon to blue overhead, over the terrain sh
 haze with distance (grid lines every 10 m or more, so that motion over it shows), with the objects' shadows cast
 straight down. Triangles are filled with their part's colour (the USD stage's) and shaded by a light from above,
 drawn back to front (painter's algorithm); ropes and lines as polylines at least 2 pixels wide (a kite's line shows
-at any distance), the tubes and bodies of :mod:`warpsim.io.shapes` (a glider's keel and control frame, the pilot,
+at any distance), the tubes and bodies of :mod:`warpsim.objects.drawing` (a glider's keel and control frame, the pilot,
 a flag's pole) as thick lines and discs. Virtual particles are not drawn. The camera follows the objects' centre
 (with ``wide``, of everything drawn, ropes and lines too); its distance is fixed over the frames drawn, so sizes
-compare between frames. The batch's worlds are drawn side by side (:func:`warpsim.io.shapes.world_offsets`).
+compare between frames. The batch's worlds are drawn side by side (:func:`world_offsets`).
 
 Files are written to a temporary name beside the target and renamed over it: complete or absent.
 """
@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from .._extras import install_hint
+from ..objects.drawing import shapes_for
+from ..objects.style import COLOURS, SPHERE_PARTS
 from . import OutputWriteError, check_output_path, create_temporary, reason
-from .shapes import shapes_for, world_offsets
-from .style import COLOURS, SPHERE_PARTS
 
 EXTENSIONS = (".png", ".gif")
 SKY_TOP, SKY_HORIZON = np.array([0.42, 0.62, 0.90]), np.array([0.86, 0.91, 0.96])
@@ -142,7 +142,7 @@ class Scene:
 
     def place(self, q: np.ndarray) -> np.ndarray:
         """Positions ``q`` ``[P, 3]`` [m] as drawn: each world moved to its place (the first ``q`` placed fixes
-        the places), then the drawn points of :mod:`warpsim.io.shapes` appended."""
+        the places), then the drawn points of :mod:`warpsim.objects.drawing` appended."""
         q = np.asarray(q)
         if self.model.world_count > 1:
             if self.offsets is None:
@@ -388,3 +388,21 @@ def render_recording(
                 p, format="GIF", save_all=True, append_images=images[1:], duration=duration, loop=0
             ),
         )
+
+
+def world_offsets(model, q: np.ndarray) -> np.ndarray:
+    """Where each world of a batch is drawn, ``[W, 3]`` [m] added to its particles: the worlds of a batch start in
+    the same place (they never touch each other), so pictures set them side by side, world 0 where it is and the
+    others in a row along +y (more than four: a grid, rows along -x), spaced by 1.5 times a world's size at ``q``
+    ``[P, 3]`` across the row and at least 0.3 times it along (a kite's line lies along) and 6 m, so that they do
+    not overlap."""
+    count = model.world_count
+    if count <= 1:
+        return np.zeros((max(count, 1), 3))
+    mine = model.particle_world_np == 0
+    extent = np.ptp(q[mine][:, :2], axis=0)
+    along_y = max(1.5 * float(extent[1]), 0.3 * float(extent[0]), 6.0)
+    along_x = max(1.5 * float(extent[0]), 6.0)
+    columns = count if count <= 4 else int(np.ceil(np.sqrt(count)))
+    k = np.arange(count)
+    return np.stack([-(k // columns) * along_x, (k % columns) * along_y, np.zeros(count)], axis=1)

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdUtils, Vt
 
+from ..objects.style import COLOURS, CURVE_WIDTH, SPHERE_PARTS
 from . import (
     OutputWriteError,
     cause,
@@ -39,7 +40,6 @@ from . import (
     with_disk_state,
 )
 from .protocol import FrameOutput
-from .style import COLOURS, CURVE_WIDTH, SPHERE_PARTS
 
 
 def _vec3f_array(points: np.ndarray) -> Vt.Vec3fArray:

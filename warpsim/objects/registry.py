@@ -77,8 +77,13 @@ class ObjectSpec:
                 raise ValueError(f"a key binding steers {binding.control!r}, which is not one of {self.controls}")
 
 
+DEFAULT_OBJECT = "flag"
+"""The object of a scene that names none (``scene.object``)."""
+MESH = "mesh"
+"""The kind built from a mesh file (:mod:`warpsim.objects.mesh`): what ``warpsim export`` writes a design as."""
+
 OBJECTS: dict[str, ObjectSpec] = {
-    "flag": ObjectSpec(
+    DEFAULT_OBJECT: ObjectSpec(
         config=flag.FlagConfig,
         build=flag.build_flag,
         scene_defaults={"wind": {"velocity": [4.0, 0.5, 0.0]}},
@@ -135,7 +140,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         measure_figures=figures.parachute_figures,
         hud=figures.parachute_hud,
     ),
-    "mesh": ObjectSpec(
+    MESH: ObjectSpec(
         config=mesh.MeshConfig,
         build=mesh.build_mesh,
         scene_defaults={

@@ -155,12 +155,13 @@ class SceneConfig(Checked):
     """``[scene]``: which object, for how long, how often a frame.
 
     Attributes:
-        object: the object kind (a name of :data:`warpsim.objects.registry.OBJECTS`).
+        object: the object kind (a name of :data:`warpsim.objects.registry.OBJECTS`; the scene layer names
+            :data:`~warpsim.objects.registry.DEFAULT_OBJECT` where a scene names none).
         seconds: simulated time a run lasts [s] (> 0).
         fps: output frames per simulated second [1/s].
     """
 
-    object: str = "flag"
+    object: str = ""
     seconds: float = number(10.0, POSITIVE)
     fps: float = number(30.0, Bounds(1e-6, 1e6))
 

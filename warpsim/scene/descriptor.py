@@ -72,7 +72,7 @@ MAX_WORLDS = 65536
 VARIABLE_SECTIONS = ("wind",)  # besides the object's own section
 
 
-def defaults(kind: str = "flag") -> dict[str, dict[str, Any]]:
+def defaults(kind: str = registry.DEFAULT_OBJECT) -> dict[str, dict[str, Any]]:
     """The full default descriptor for an object ``kind``, including the object's own scene defaults."""
     d = copy.deepcopy(BASE_DEFAULTS)
     d["scene"]["object"] = kind
@@ -371,7 +371,8 @@ def load_text(text: str, where: str) -> dict:
         raise DescriptorError(f"{where}: arrays or tables nested too deep") from None
     if _depth(raw) > MAX_DEPTH:
         raise DescriptorError(f"{where}: arrays or tables nested deeper than {MAX_DEPTH} levels")
-    kind = raw.get("scene", {}).get("object", "flag") if isinstance(raw.get("scene"), dict) else "flag"
+    scene = raw.get("scene")
+    kind = scene.get("object", registry.DEFAULT_OBJECT) if isinstance(scene, dict) else registry.DEFAULT_OBJECT
     if not isinstance(kind, str) or kind not in registry.OBJECTS:
         choices = tuple(registry.OBJECTS)
         raise DescriptorError(
@@ -425,7 +426,7 @@ def _files_beside(descriptor: dict, scene: Path) -> dict:
             else name
         )
 
-    for section in ("terrain", "mesh"):
+    for section in ("terrain", *(registry.section(kind) for kind in registry.OBJECTS)):  # the sections naming a file
         if descriptor.get(section, {}).get("file"):
             descriptor[section]["file"] = beside(descriptor[section]["file"])
         for table in ("worlds", "sweep"):  # a file per world or per case

@@ -76,7 +76,7 @@ def _section_schema(cls, values: dict[str, Any] | None = None) -> dict[str, Any]
 def scene_schema() -> dict[str, Any]:
     """The JSON Schema of a scene file (a dict ready for ``json.dumps``)."""
     properties: dict[str, Any] = {name: _section_schema(cls) for name, cls in SECTIONS.items()}
-    properties["scene"]["properties"]["object"] = {"enum": list(registry.OBJECTS), "default": "flag"}
+    properties["scene"]["properties"]["object"] = {"enum": list(registry.OBJECTS), "default": registry.DEFAULT_OBJECT}
     for kind, spec in registry.OBJECTS.items():
         properties[registry.section(kind)] = _section_schema(spec.config)
     variable = sorted({*VARIABLE_SECTIONS, *(registry.section(k) for k in registry.OBJECTS)})

@@ -26,7 +26,7 @@ class DrawList:
         curves: ``(particle chain [n], rgb)`` per rope or line.
         spheres: ``(point, radius [m], rgb)`` per ball (a parachutist's head, a pole's finial).
         tubes: ``(point a, point b, radius [m], rgb)`` per tube drawn from a to b (a glider's keel and control frame,
-            the pilot's body and arms, a flag's pole: :mod:`warpsim.io.shapes`).
+            the pilot's body and arms, a flag's pole: :mod:`warpsim.objects.drawing`).
         terrain_points: ``[v, 3]`` terrain vertices [m]. terrain_triangles: ``[t, 3]`` vertex indices.
         terrain_colours: ``[v, 3]`` rgb per terrain vertex.
         drawn: indices of the points drawn.

@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.style import COLOURS
 from ..objects.keys import WalkKeys
 from ..objects.registry import OBJECTS
+from ..objects.style import COLOURS
 from ..run.diagnostics import Frame
 from ..run.figures import Figures
 from ..run.simulation import BlowUpError, Simulation

@@ -242,7 +242,7 @@ class PygletBackend(Backend):
             self._tubes = _Buffer(gl, per * count, tube_mesh(count), gl.GL_TRIANGLES)
         self._sky_corners = np.array([[-1, -1, 0.999], [1, -1, 0.999], [1, 1, 0.999], [-1, 1, 0.999]], np.float32)
         self._sky = _Buffer(gl, 4, np.array([0, 1, 2, 0, 2, 3]), gl.GL_TRIANGLES)
-        from ..io.style import COLOURS
+        from ..objects.style import COLOURS
 
         self._ground_colour = tuple(float(c) * 0.95 for c in COLOURS["terrain"])
         small = self.size[0] < 1000

@@ -1,5 +1,5 @@
-"""How outputs draw each part: display colours (RGB, 0-1), sphere radii and curve widths [m]; shared by the USD
-stage and the picture renderer (which must not load USD to know them)."""
+"""How each part is drawn: display colours (RGB, 0-1), sphere radii and curve widths [m]; shared by the USD stage,
+the picture renderer and the viewer (which must not load USD to know them)."""
 
 COLOURS = {
     "terrain": (0.42, 0.50, 0.32),

@@ -168,21 +168,3 @@ def _parachute(shapes: Shapes, model, record) -> None:
     suit = COLOURS["person"]
     shapes.tubes += [(shoulders, hips, 0.16, suit), (hips, feet, 0.08, suit)]
     shapes.hidden_parts.add("person")
-
-
-def world_offsets(model, q: np.ndarray) -> np.ndarray:
-    """Where each world of a batch is drawn, ``[W, 3]`` [m] added to its particles: the worlds of a batch start in
-    the same place (they never touch each other), so pictures set them side by side, world 0 where it is and the
-    others in a row along +y (more than four: a grid, rows along -x), spaced by 1.5 times a world's size at ``q``
-    ``[P, 3]`` across the row and at least 0.3 times it along (a kite's line lies along) and 6 m, so that they do
-    not overlap."""
-    count = model.world_count
-    if count <= 1:
-        return np.zeros((max(count, 1), 3))
-    mine = model.particle_world_np == 0
-    extent = np.ptp(q[mine][:, :2], axis=0)
-    along_y = max(1.5 * float(extent[1]), 0.3 * float(extent[0]), 6.0)
-    along_x = max(1.5 * float(extent[0]), 6.0)
-    columns = count if count <= 4 else int(np.ceil(np.sqrt(count)))
-    k = np.arange(count)
-    return np.stack([-(k // columns) * along_x, (k % columns) * along_y, np.zeros(count)], axis=1)

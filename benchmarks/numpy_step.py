@@ -19,7 +19,7 @@ import numpy as np
 from warpsim.physics.atmosphere import isa
 from warpsim.physics.kernels.aero import STALL_SHARPNESS, AeroModel
 from warpsim.physics.kernels.collision import CollisionMode
-from warpsim.physics.kernels.constraints import chebyshev_weights
+from warpsim.physics.projection import chebyshev_weights
 from warpsim.run.simulation import Simulation
 
 F32 = np.float32

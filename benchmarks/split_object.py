@@ -18,7 +18,7 @@ import time
 
 import warp as wp
 
-from warpsim.physics.kernels.constraints import make_projector
+from warpsim.physics.projection import make_projector
 from warpsim.run.simulation import Simulation
 
 from .suite import flag

@@ -43,7 +43,7 @@ def project():
     ``iterations`` on ``state`` in place, with a :class:`warpsim.SolverConfig` made of ``settings`` (plain Jacobi,
     ``chebyshev=0``, unless given)."""
     from warpsim.physics.config import SolverConfig
-    from warpsim.physics.kernels.constraints import make_projector
+    from warpsim.physics.projection import make_projector
 
     def run(model, state, control, iterations, scheme=None, **settings):
         config = SolverConfig(**{"chebyshev": 0.0, **settings})

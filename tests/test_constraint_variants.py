@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import warpsim as ws
-from warpsim.physics.kernels.constraints import chebyshev_weights, jacobi_equivalent_iterations
+from warpsim.physics.projection import chebyshev_weights, jacobi_equivalent_iterations
 
 
 def _mesh(rng, device, double_first: str | None = None, nail_first: bool = False):

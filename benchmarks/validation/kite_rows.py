@@ -11,8 +11,8 @@ import numpy as np
 
 from benchmarks.numpy_step import NumpyVerlet
 from warpsim.objects.kite import anchor_elevation, anchor_pull
-from warpsim.physics.kernels.constraints import jacobi_equivalent_iterations
 from warpsim.physics.model import AIR_DENSITY, GRAVITY
+from warpsim.physics.projection import jacobi_equivalent_iterations
 from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
 
@@ -214,7 +214,7 @@ def kite_crosswind_offset(
 
 def solver_stiffness(dt: float, iterations: int, rho: float) -> float:
     """``sqrt(k) / dt`` [1/s], ``k`` the plain Jacobi iterations equivalent to ``iterations`` at Chebyshev ``rho``
-    (:func:`~warpsim.physics.kernels.constraints.jacobi_equivalent_iterations`): how far the sticks' corrections
+    (:func:`~warpsim.physics.projection.jacobi_equivalent_iterations`): how far the sticks' corrections
     reach across the cloth per second, in sticks. The kite's fine-step misses follow it (docs/objects.md)."""
     return math.sqrt(jacobi_equivalent_iterations(int(iterations), float(rho))) / float(dt)
 

@@ -34,7 +34,6 @@ from .kernels.aero import AeroModel, body_drag, triangle_air_force
 from .kernels.bending import bending_force
 from .kernels.canopy import canopy_air_force
 from .kernels.collision import collide_heightfield
-from .kernels.constraints import make_projector
 from .kernels.controls import (
     advance_gusts,
     advance_turbulence,
@@ -46,6 +45,7 @@ from .kernels.momentum import MomentumKeeper
 from .kernels.springs import integrate_euler_springs
 from .kernels.verlet import integrate_verlet
 from .model import Control, Model, State
+from .projection import make_projector
 
 LOAD_WORKERS = 2
 """Kernel modules compiled at once on a cold cache. Measured on a 2-core CPU (the glider's five modules, Warp
@@ -213,7 +213,7 @@ class SolverVerlet(_Solver):
 
     Uses ``iterations``, ``relaxation``, ``chebyshev``, ``mass_splitting``, ``keep_momentum`` and ``damping`` of its
     :class:`~warpsim.physics.config.SolverConfig` (arguments as for the shared base, see ``_Solver``), plus
-    ``constraint_scheme``: ``"fused"``, ``"scatter"`` or ``"gather"`` (:mod:`warpsim.physics.kernels.constraints`);
+    ``constraint_scheme``: ``"fused"``, ``"scatter"`` or ``"gather"`` (:mod:`warpsim.physics.projection`);
     None = fused on the CPU, gather on CUDA.
     """
 

@@ -17,7 +17,7 @@ from benchmarks.validation.glider_rows import fly as _fly
 from benchmarks.validation.glider_rows import glide as _glide
 from benchmarks.validation.glider_rows import turn_rate
 from benchmarks.validation.glider_rows import window as _window
-from benchmarks.validation.handling import bank_holder, fly_piloted
+from benchmarks.validation.piloting import bank_holder, fly_piloted
 from warpsim.physics.kernels.aero import sail_coefficients, sail_force
 from warpsim.run.simulation import Simulation
 from warpsim.scene.descriptor import resolve

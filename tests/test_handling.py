@@ -11,23 +11,18 @@ import numpy as np
 import pytest
 
 from benchmarks.validation import cases, glider_rows
-from benchmarks.validation.handling import (
-    FINE,
+from benchmarks.validation.handling import FINE, dive_band, dive_flight, glide_flight, phugoid_flight
+from benchmarks.validation.piloting import fly_piloted, scene_descriptor
+from benchmarks.validation.pitch import (
     delta_pitch_lag,
-    dive_band,
-    dive_flight,
-    fly_piloted,
-    glide_flight,
     inertial_phugoid,
     jones_recovery_height,
     lag_ratio,
     lagged_period,
     lift_slope_flight,
-    phugoid_flight,
     pitch_derivatives,
     pitch_inertia,
     point_mass_recovery,
-    scene_descriptor,
 )
 from warpsim.physics.model import AIR_DENSITY, GRAVITY
 
@@ -219,7 +214,7 @@ def test_glider_dive_and_phugoid_misses_are_one_pitch_damping_lag(fine):
 
 @pytest.mark.parametrize("fine", [False, True], ids=["dt0.01", "dt0.005"])
 def test_glider_pitch_lag_is_its_triangles_lifting_alone(fine):
-    """The glider's air law in a wind tunnel of rigid velocity fields (handling.pitch_derivatives, measured: static
+    """The glider's air law in a wind tunnel of rigid velocity fields (pitch.pitch_derivatives, measured: static
     margin 0.28 / 0.27 m, damping M_q^/M_alpha 1.86 / 1.92 m, pitch-rate lift L_q^/L_alpha -0.12 / -0.17 m, k 1.98 /
     2.09 m): the static margin is the one flown (trim shift with the pilot), k is strip theory's with every piece
     of chord lifting alone (1.52 m at 0.286 m) plus the wing's airspeed falling as it swings back above the centre of
@@ -238,7 +233,7 @@ def test_glider_pitch_lag_is_its_triangles_lifting_alone(fine):
 @pytest.mark.parametrize("fine", [False, True], ids=["dt0.01", "dt0.005"])
 def test_glider_phugoid_damping_is_drag_less_pitch_inertia(fine):
     """The glider's phugoid damping (measured 0.071 / 0.064) is the third-order phugoid's
-    (handling.inertial_phugoid: 0.074 / 0.068) from its own figures: trim speed, glide ratio, the lag c from its period
+    (pitch.inertial_phugoid: 0.074 / 0.068) from its own figures: trim speed, glide ratio, the lag c from its period
     (0.86 / 0.78), the static margin flown (0.29 / 0.27 m) and the pitch inertia of its particles (I/m 0.589 / 0.583
     m^2). Drag with the lag alone would give 0.113 / 0.115: the pilot below and the wing above take a third of it, so a
     lag near thin-aerofoil theory's (c 0.1) would leave the phugoid undamped at this static margin."""

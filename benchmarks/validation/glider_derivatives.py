@@ -20,7 +20,7 @@ import sys
 import numpy as np
 import warp as wp
 
-from benchmarks.validation.handling import body_frame
+from benchmarks.validation.piloting import body_frame
 from warpsim.physics.config import WindConfig
 from warpsim.physics.kernels.vortex import VortexScratch, vortex_air_force
 from warpsim.run.simulation import Simulation

@@ -133,6 +133,7 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
     iterations) and at ``fine`` (:data:`FINE` by default: dt 0.005 with 110 iterations), the band holding at both
     (``name`` heads each row)."""
     from benchmarks.validation import handling as h
+    from benchmarks.validation import pitch
 
     fine = FINE if fine is None else fine
     fine_label = f"{fine['dt']:g}/{fine['iterations']}"
@@ -301,18 +302,18 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
     dive = both(lambda f: f["dive_height"])
     b = bands[0]
     pd = figs[0]["pitch"]
-    lag_tunnel = h.lag_ratio(pd["k"], pd["slope"], b["wing_loading"], b["density"])
+    lag_tunnel = pitch.lag_ratio(pd["k"], pd["slope"], b["wing_loading"], b["density"])
     rigid = (
         "a rigid tailless delta of this planform at the glider's measured static margin "
         f"({figs[0]['static_margin']:.2f} m, from the trim's shift with the pilot; lift slope "
         f"{figs[0]['lift_slope']:.2f}/rad) loses lift in the pull-out in proportion to q/V (strip theory, "
-        "handling.delta_pitch_lag): its path turns 1 + c times slower, "
+        "pitch.delta_pitch_lag): its path turns 1 + c times slower, "
         f"c = {b['rigid_lag']:.2f} with Pistolesi's three-quarter-chord rule, {b['panel_lag']:.2f} with each strip's "
         f"angle of attack taken where its lift acts, {b['pieces_lag']:.2f} with every piece of chord lifting alone"
     )
     tunnel = (
         "the glider's own air law, in a wind tunnel of rigid velocity fields about its trimmed shape "
-        f"(handling.pitch_derivatives): static margin {pd['static_margin']:.2f} m, pitch damping M_q^/M_α "
+        f"(pitch.pitch_derivatives): static margin {pd['static_margin']:.2f} m, pitch damping M_q^/M_α "
         f"{pd['damping']:.2f} m, pitch-rate lift L_q^/L_α {pd['pitch_lift']:.2f} m, so k = {pd['k']:.2f} m and "
         f"c = {lag_tunnel:.2f}: its triangles each lift alone at their own angle of attack, and the pitch rate's "
         "lift that thin-aerofoil theory puts at the three-quarter chord is missing"
@@ -375,7 +376,7 @@ def flying_glider(scene: str = "hang-glider", name: str = "glider", fine: dict |
             "Lanchester's phugoid: period π √2 V / g at the trim speed V (constant angle of attack, no drag; e.g. "
             "Etkin & Reid, Dynamics of Flight, 4.4); issue 34: within 20 %. A wing whose C_L falls a k (dγ/dt) / V "
             "while its path turns has (1 + c) V dγ/dt = 2 g u / V, so sqrt(1 + c) times the period "
-            f"(handling.lagged_period); {rigid}: +{100 * (b['rigid_period'] - 1):.0f} to "
+            f"(pitch.lagged_period); {rigid}: +{100 * (b['rigid_period'] - 1):.0f} to "
             f"+{100 * (b['panel_period'] - 1):.0f} % (+{100 * (b['pieces_period'] - 1):.0f} % pieces alone)",
             fmt([p["period"] for p in ph], ".2f", " s"),
             "within ±20 % at both",

@@ -39,7 +39,7 @@ def fly(scene: str = "scenes/hang_glider_lattice.toml", out: Path = Path("docs")
     """Fly ``scene``'s glider through the turn and the reversal with keys; the figures, and the files in ``out``."""
     from PIL import Image
 
-    from benchmarks.validation.handling import body_angles
+    from benchmarks.validation.piloting import body_angles
     from warpsim.objects.hang_glider import bank
     from warpsim.run.simulation import Simulation
     from warpsim.scene.descriptor import resolve, to_toml

@@ -23,6 +23,7 @@ import sys
 import numpy as np
 
 from benchmarks.validation import handling as h
+from benchmarks.validation import piloting
 
 
 @contextlib.contextmanager
@@ -56,7 +57,7 @@ def released_phugoid(d: dict, solver: dict | None = None, start: float = 16.0, s
     airspeed's period from its troughs after 2 s over Lanchester's at the trim (the mean of the last 10 s), the
     damping ratio over its first three troughs, and the pilot's fore-and-aft swing (standard deviation after 20 s)
     [m]."""
-    history = h.fly_piloted(h.scene_descriptor(d, solver, {"speed": start}), seconds, every=0.1)
+    history = piloting.fly_piloted(piloting.scene_descriptor(d, solver, {"speed": start}), seconds, every=0.1)
     t = np.array([f["t"] for f in history])
     v = np.array([f["airspeed"] for f in history])
     trim = float(v[t > seconds - 10.0].mean())
@@ -80,7 +81,7 @@ def measure(glider: dict, kind: str = "rigid", solver: dict | None = None) -> di
     """Glide, trim speed, speed spread, phugoid period over Lanchester's, damping (and Lanchester's), dive recovery
     height and its band's top (:func:`.handling.dive_band`) of the default glider with ``glider`` keys."""
     with suspension(kind):
-        d = h.scene_descriptor("hang-glider", None, glider)
+        d = piloting.scene_descriptor("hang-glider", None, glider)
         g = h.glide_flight(d, solver)
         p = h.phugoid_flight(d, solver)
         dive = h.dive_flight(d, solver)

@@ -12,8 +12,9 @@ import math
 from warpsim.scene import descriptor
 
 from .common import Row
-from .handling import body_angles, fly_piloted, glide_flight, scene_descriptor
+from .handling import glide_flight
 from .kite_rows import kite_flight
+from .piloting import body_angles, fly_piloted, scene_descriptor
 from .wings import delta, helmbold, lift_slope, lifting_line, lifting_line_roll, loads, rectangle, tuck
 
 HELMBOLD = "Helmbold 1942 / USAF DATCOM 4.1.3.2 (thin section, 2 pi); 5-9 % above lifting-surface solutions at A 2-8"

@@ -32,7 +32,7 @@ TRIM_SPEED = 12.0
 @contextlib.contextmanager
 def imposed_twist(kappa: float, law: str):
     """Inside the block, the billow shift's struts also raise both trailing edges' washout at the tip by ``kappa``
-    [deg] times the ``law``'s factor; yields the watcher for :func:`handling.fly_piloted` that updates the factor
+    [deg] times the ``law``'s factor; yields the watcher for :func:`piloting.fly_piloted` that updates the factor
     from each decision's state."""
     factor = {"value": 0.0}
     original = glider_flight.billow_rest_lengths

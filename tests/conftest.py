@@ -13,6 +13,8 @@ if os.environ.get("CI"):
 
 wp.config.log_level = wp.LOG_WARNING
 
+pytest_plugins = ["sweep_support"]  # the sweep tests' fixtures (a local Dask cluster, the reference rows)
+
 
 def pytest_configure(config):
     """With worker processes (``-n auto``, pytest-xdist), the controller compiles every kernel module into Warp's

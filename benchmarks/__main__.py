@@ -22,7 +22,10 @@ import warp as wp
 
 wp.config.log_level = wp.LOG_WARNING  # before Warp initialises: no per-module load lines
 
-from .suite import CASES, Options, constraint_rate  # noqa: E402
+from . import programs, suite  # noqa: E402
+from .suite import Options, constraint_rate  # noqa: E402
+
+CASES = {**suite.CASES, **programs.CASES}
 
 DEFAULT_JSON = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results.json")
 """Where a whole run writes its results."""

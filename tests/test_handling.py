@@ -267,7 +267,7 @@ def test_glider_dive_recovery_and_phugoid_period_in_jones_and_lanchester_bands(f
 @pytest.mark.slow
 def test_washout_experiment_reproduces_the_validation_and_shortens_the_phugoid():
     """benchmarks/validation/washout_experiment.py (issue 34, not in the model): with no imposed twist it flies the
-    validation's own hands-off dive and phugoid (37.4 m, 7.40 s measured), so its table in docs/objects.md is
+    validation's own hands-off dive and phugoid (37.4 m, 7.40 s measured), so its table in docs/glider.md is
     comparable; a washout growing by 10 deg per unit of q/q0 shortens the phugoid (6.44 s) and the dive (29.3 m) and
     takes damping away (0.071 -> 0.043)."""
     from benchmarks.validation.washout_experiment import run

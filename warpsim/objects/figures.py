@@ -159,7 +159,7 @@ def flag_caveat(descriptor: dict) -> str:
     The Euler mass-spring comparison's flapping is not validated."""
     flag, solver = descriptor["flag"], descriptor["solver"]
     resolution, bending = int(flag["resolution"]), float(flag["bending_stiffness"])
-    where = "(docs/objects.md, 'The flag at fine resolution')"
+    where = "(docs/flag.md, 'The flag at fine resolution')"
     if bending <= 0.0:
         return (
             f"note: the flap's frequency and size are those of this mesh (resolution {resolution}), not a real "

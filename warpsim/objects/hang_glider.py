@@ -103,6 +103,9 @@ class HangGliderConfig(Checked):
             frame, as a crossbar or VG does); a taut sail billows less, so its triangles spread less in angle of
             attack. Stretch is reported against the sail as built
             (:meth:`~warpsim.physics.builder.ModelBuilder.pretension`).
+        sail_compliance: stretch [m/N] per newton of tension of each of the sail's cloth sticks (0 = rigid, the
+            paper's): an elastic sail billows and twists more as the load grows, and under weight shift the loaded
+            half of the sail takes a shape of its own (the frame, its ties and the struts stay rigid).
         oswald: ``sail`` air model: span efficiency of the induced drag
             (:func:`~warpsim.physics.kernels.aero.sail_coefficients`).
         profile_drag: ``sail`` air model: the sail's zero-lift drag coefficient.
@@ -148,6 +151,7 @@ class HangGliderConfig(Checked):
     keel_pocket: bool = True
     washout_struts: float = number(0.5, Bounds(0.0, 1.0))
     sail_tension: float = number(0.03, Bounds(0.0, 0.2))
+    sail_compliance: float = number(0.0, NON_NEGATIVE)
     oswald: float = number(0.8, Bounds(0.0, 1.0, low_open=True))
     profile_drag: float = number(0.025, NON_NEGATIVE)
     stall_angle: float = number(18.0, Bounds(0.0, 90.0, low_open=True, high_open=True))
@@ -321,6 +325,9 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
         builder.pretension(
             np.setdiff1d(sail_sticks, np.concatenate([frame.sticks, frame_ties]).astype(int)), cfg.sail_tension
         )
+    if cfg.sail_compliance > 0.0:  # the cloth alone: the frame, its ties and the struts stay rigid
+        cloth_sticks = np.setdiff1d(sail_sticks, np.concatenate([frame.sticks, frame_ties]).astype(int))
+        builder.set_compliance(cloth_sticks, cfg.sail_compliance)
     billow = _billow_shift_data(builder, cfg, strut_ties, nose, fwd, left, up, semi, washout_rad)
     frame_set = set(frame.points)
     cloth = [p for p in sail if p not in frame_set]

@@ -64,3 +64,43 @@ def test_the_manual_builds_without_warnings_and_renders_the_api(tmp_path):
     # rendered signatures, not the directive's text
     assert 'id="warpsim.Simulation"' in api and 'id="warpsim.SolverConfig"' in api
     assert ".. autoclass::" not in api and ".. py:class::" not in api
+
+
+def _python_blocks() -> dict[str, list[str]]:
+    """Every ```python block of the README and the manual, by file."""
+    pages = [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]
+    return {p.name: re.findall(r"```python\n(.*?)```", p.read_text(encoding="utf-8"), re.S) for p in pages}
+
+
+def test_the_docs_import_only_from_warpsim_itself():
+    """The README's and the manual's examples use the public names (`import warpsim`, `from warpsim import ...`),
+    never a module behind them: those may move (docs/architecture.md), the names stay."""
+    blocks = _python_blocks()
+    assert sum(len(b) for b in blocks.values()) >= 3
+    inner = [
+        f"{name}: {line.strip()}"
+        for name, found in blocks.items()
+        for block in found
+        for line in block.splitlines()
+        if re.match(r"\s*(from|import)\s+warpsim\.", line)
+    ]
+    assert not inner, inner
+
+
+def test_the_readmes_example_flies_the_kite_and_reads_its_figures_as_the_command_prints_them(capsys):
+    """The README's Python block, run as written: the kite, its anchor walked 10 m downwind, flies 20 s more and
+    its line's angle over the last 10 s (`Simulation.fly`'s rows, the columns of `--table`) is a kite's (40-70°,
+    the validation's band); the figures of `sim.fly` are the lines `warpsim run` prints for the same flight."""
+    (block,) = _python_blocks()["README.md"]
+    exec(compile(block, "README.md", "exec"), {})
+    angle = float(capsys.readouterr().out.split()[-1])
+    assert 40.0 < angle < 70.0, angle
+
+    from warpsim.cli import main
+
+    assert main(["run", "kite", "--seconds", "4"]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    flight = warpsim.Simulation(warpsim.defaults("kite")).fly(4.0)
+    figures = flight.figures.lines()
+    assert figures and all(line in printed for line in figures), (figures, printed)
+    assert flight.rows()[0]["line_angle_mean"] > 0.0 and flight.summary.simulated_time == 4.0

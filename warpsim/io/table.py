@@ -39,24 +39,11 @@ def check_table_path(path) -> Path:
     return out
 
 
-def world_rows(figures, descriptor: dict) -> list[dict]:
-    """One dict per world of ``figures`` (:class:`warpsim.run.figures.FlightFigures`, after the run) of the
-    scene ``descriptor`` (its ``[worlds]`` values name each world's varied settings); see the module notes."""
-    window = figures.window
-    varied = {}
-    for section, values in descriptor.get("worlds", {}).items():
-        if section != "count":
-            for key, per_world in values.items():
-                varied[f"{section}.{key}"] = per_world
-    objects = {record.world: record.name for record in figures.sim.model.objects}
-    rows = []
-    for k in range(window.frames.size):
-        row = {"world": k, "object": objects.get(k, "")}
-        row.update({key: values[k] for key, values in varied.items()})
-        row.update({"window_start": figures.start, "window_stop": figures.stop})
-        row.update(window.row(k))
-        rows.append(row)
-    return rows
+def world_rows(figures, descriptor: dict | None = None) -> list[dict]:
+    """One dict per world of ``figures`` (:class:`warpsim.run.figures.FlightFigures`, after the run): its
+    :meth:`~warpsim.run.figures.FlightFigures.rows` (``descriptor``: unused, the run's own names the worlds'
+    varied settings); see the module notes."""
+    return figures.rows()
 
 
 def write_world_table(path, figures, descriptor: dict) -> Path:

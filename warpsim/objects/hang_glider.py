@@ -54,8 +54,8 @@ class HangGliderConfig(Checked):
         hang_depth: pilot below the keel [m].
         pilot_station: pilot's neutral position along the keel, fraction of the chord from the nose.
         frame_height: distance of the upper/lower virtual particles from the sail plane [m].
-        pitch_travel: pilot travel forward/back at |pitch| = 1 [m].
-        roll_travel: pilot travel sideways at |roll| = 1 [m] (a pilot moves about half a metre each way on the bar).
+        pitch_travel: pilot travel forward/back at ``|pitch| = 1`` [m].
+        roll_travel: pilot travel sideways at ``|roll| = 1`` [m] (a pilot moves about half a metre each way on the bar).
         altitude: start height of the nose above the terrain [m].
         position: start (x, y) of the nose [m].
         heading: flight direction, degrees from +x towards +y.

@@ -59,13 +59,14 @@ class Frame:
             :meth:`warpsim.run.simulation.Simulation.set_controls` takes; empty when none was set).
 
     Read on first use:
-        positions: host ``[P, 3]`` positions [m].
-        velocities: host ``[P, 3]`` velocities ``(x - x_prev)/dt`` [m/s].
-        wind: host ``[W, 3]`` wind of each world at the reference height [m/s].
-        stretches: host ``[S]`` ``|l - r|/r`` of every stick (dimensionless, float64 from the host copy; NaN where
-            a position is not finite).
-        worst_stick: index of the stick of largest stretch (-1 when there are no sticks).
-        kinetic_energy: total kinetic energy [J] of the free particles.
+
+    - ``positions``: host ``[P, 3]`` positions [m].
+    - ``velocities``: host ``[P, 3]`` velocities ``(x - x_prev)/dt`` [m/s].
+    - ``wind``: host ``[W, 3]`` wind of each world at the reference height [m/s].
+    - ``stretches``: host ``[S]`` ``|l - r|/r`` of every stick (dimensionless, float64 from the host copy; NaN
+      where a position is not finite).
+    - ``worst_stick``: index of the stick of largest stretch (-1 when there are no sticks).
+    - ``kinetic_energy``: total kinetic energy [J] of the free particles.
     """
 
     def __init__(

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -197,6 +198,26 @@ class FlightFigures:
         values = np.array([[f[name] for f in found] for name in self.names], dtype=np.float64)
         self.window.add(values, self.live, True, self.contacts.touching(frame), frame.time)
 
+    def rows(self) -> list[dict]:
+        """One dict per world, after the run: ``world``, ``object``, the settings varied between the worlds
+        (``wind.speed``...), the window and the sweep's columns (``altitude_mean``, ``line_angle_mean``,
+        ``worst_stretch``...: :data:`FIGURES`' names with ``_mean``, ``_min``, ``_max`` and the oscillations'
+        ``_frequency``, in their units); what ``warpsim run --table`` writes."""
+        varied = {}
+        for section, values in self.sim.descriptor.get("worlds", {}).items():
+            if section != "count":
+                for key, per_world in values.items():
+                    varied[f"{section}.{key}"] = per_world
+        objects = {record.world: record.name for record in self.sim.model.objects}
+        rows = []
+        for k in range(self.window.frames.size):
+            row = {"world": k, "object": objects.get(k, "")}
+            row.update({key: values[k] for key, values in varied.items()})
+            row.update({"window_start": self.start, "window_stop": self.stop})
+            row.update(self.window.row(k))
+            rows.append(row)
+        return rows
+
     def lines(self) -> list[str]:
         """The figures as summary lines: per object with one world; over the worlds (mean, lowest, highest of the
         worlds' window means) with several. Empty when no frame fell in the window."""
@@ -295,3 +316,25 @@ def _figure(value: float) -> str:
     digits = 2 if abs(value) < 1e-2 else min(2, max(0, 2 - math.floor(math.log10(abs(value)))))
     text = f"{value:.{digits}f}"
     return text[1:] if text.startswith("-") and float(text) == 0.0 else text
+
+
+@dataclass(frozen=True)
+class Flight:
+    """A run and its closing figures (:meth:`warpsim.run.simulation.Simulation.fly`): what ``warpsim run``
+    prints, as numbers and as text.
+
+    Attributes:
+        summary: the run's :class:`~warpsim.run.summary.RunSummary` (simulated and wall time, steps, worst stretch).
+        figures: the :class:`FlightFigures` over the run's second half.
+    """
+
+    summary: object
+    figures: FlightFigures
+
+    def rows(self) -> list[dict]:
+        """Each world's figures (:meth:`FlightFigures.rows`)."""
+        return self.figures.rows()
+
+    def lines(self) -> list[str]:
+        """The lines ``warpsim run`` prints at the end: the summary, then the figures."""
+        return [self.summary.text(), *self.figures.lines()]

@@ -38,11 +38,12 @@ from .checkpoint import (
     wake_states,
 )
 from .diagnostics import Frame, FrameSource, GroundContacts, find_blowup, world_blowups
+from .figures import Flight, FlightFigures
 from .groups import GroupThreads, WorldGroup, split_worlds
 from .inputs import Inputs, control_names
 from .summary import BlowUpError, RunSummary, _Pace, available_cores
 
-__all__ = ["BlowUpError", "Frame", "RunSummary", "Simulation", "available_cores"]
+__all__ = ["BlowUpError", "Flight", "Frame", "RunSummary", "Simulation", "available_cores"]
 
 
 FRAME_GRAPH_BYTES_PER_STEP = 16 * 1024
@@ -507,6 +508,24 @@ class Simulation:
             frames.close()
         wp.synchronize_device(self.model.device)
         return self._summary(self.steps_taken - start, worst, pace, interrupted=interrupted)
+
+    def fly(self, seconds: float | None = None, **run) -> Flight:
+        """Run for ``seconds`` of simulated time (default: the scene's ``scene.seconds``) as ``warpsim run`` does
+        and return its :class:`~warpsim.run.figures.Flight`: the summary and each object's closing figures over
+        the run's second half (the sweeps' window), the numbers and the lines the command prints. ``run``: the
+        other arguments of :meth:`run`; an ``on_frame`` of yours sees each frame after the figures do. Raises
+        :class:`BlowUpError` as :meth:`run` does."""
+        seconds = self.settings.scene.seconds if seconds is None else float(seconds)
+        start = self.state.time
+        figures = FlightFigures(self, start + 0.5 * seconds, start + seconds)
+        theirs = run.pop("on_frame", None)
+
+        def on_frame(frame: Frame) -> None:
+            figures(frame)
+            if theirs is not None:
+                theirs(frame)
+
+        return Flight(self.run(seconds, on_frame=on_frame, **run), figures)
 
     def _summary(self, steps: int, worst: float, pace: _Pace, **flags) -> RunSummary:
         """The :class:`RunSummary` of ``steps`` steps whose worst stretch was ``worst``."""

@@ -381,6 +381,12 @@ def load_text(text: str, where: str) -> dict:
     return merge(where, defaults(kind), raw)
 
 
+def load_scene(scene: str) -> dict:
+    """The checked descriptor of ``scene``: a built-in object (``"kite"``), a scene name (``"kite_gusty"``, from
+    ``./scenes`` or the shipped ones) or a ``.toml`` path. Raises :class:`DescriptorError` with one line."""
+    return resolve(scene)[0]
+
+
 def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, str, str]:
     """Find a scene by built-in name or path; returns ``(descriptor, source text, where)``.
 

@@ -233,15 +233,20 @@ def test_the_flags_note_says_what_its_flapping_is_not():
     """The run's note under the flap figure, per what the flag is built with (objects.figures.flag_caveat)."""
     from warpsim.objects.figures import SHEET_ITERATIONS, flag_caveat
     from warpsim.scene import descriptor
+    from warpsim.scene.scene import Scene
+
+    def caveat(d):
+        scene = Scene(d)
+        return flag_caveat(scene.object_config(), scene.settings)
 
     def note(iterations=None, method="verlet", mass_splitting=True, **flag):
         d = descriptor.merge("t", descriptor.resolve("flag")[0], {"flag": {"design": "paper", **flag}})
         d["solver"].update(method=method, mass_splitting=mass_splitting)
         d["solver"]["iterations"] = iterations or SHEET_ITERATIONS * d["flag"]["resolution"]
-        return flag_caveat(d)
+        return caveat(d)
 
     assert "those of this mesh (resolution 5)" in note()  # the paper's cloth
-    default = flag_caveat(descriptor.resolve("flag")[0])  # the default flag, the sheet: converged
+    default = caveat(descriptor.resolve("flag")[0])  # the default flag, the sheet: converged
     assert "this flag's, a woven cloth (100 N/m in shear) with a card's bending, converged" in default
     sheet = {"bending_stiffness": 0.1, "cloth_compliance": 1e-3}
     assert "rigid sticks" in note(bending_stiffness=0.1, resolution=17)

@@ -9,6 +9,7 @@ the package itself (``warpsim/__init__.py``, ``__main__``). See docs/architectur
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent.parent / "warpsim"
@@ -153,3 +154,48 @@ def test_no_module_outside_objects_names_an_object_kind():
     ]
     assert not named, "object kinds named outside objects/:\n" + "\n".join(named)
     assert _kind_names(PACKAGE / "objects" / "registry.py", kinds)  # the search finds names where they are
+
+
+DESCRIPTOR_NAMES = re.compile(r"descriptor|^(d|base|scene|tables)$")
+"""What a descriptor is called where it travels (``descriptor``, ``sim.descriptor``, ``world_descriptor(...)``,
+``d``): the receivers whose section reads count (a colour table's ``"terrain"``, a control's ``"wind"`` do not)."""
+
+
+def _section_reads(path: Path, sections: set[str]) -> list[str]:
+    """Where the code of ``path`` reads a descriptor's section by name: ``descriptor["solver"]``,
+    ``d.get("worlds", ...)``."""
+    tree = ast.parse(path.read_text(), str(path))
+    hits = []
+    for node in ast.walk(tree):
+        key, receiver = None, None
+        if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant):
+            key, receiver = node.slice.value, node.value
+        elif (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Attribute)
+            and node.func.attr in ("get", "setdefault", "pop")
+            and node.args
+            and isinstance(node.args[0], ast.Constant)
+        ):
+            key, receiver = node.args[0].value, node.func.value
+        if isinstance(key, str) and key in sections and DESCRIPTOR_NAMES.search(ast.unparse(receiver)):
+            hits.append(f"{path.relative_to(PACKAGE.parent)}:{node.lineno}: {ast.unparse(node)[:80]}")
+    return hits
+
+
+def test_no_module_outside_scene_indexes_a_descriptor():
+    """A scene travels above `scene/` as a `warpsim.scene.scene.Scene` (typed settings, the object, its config, the
+    worlds, the controls); only `scene/` reads a descriptor's sections by name, so its layout can change in one
+    package."""
+    from warpsim.objects.registry import OBJECTS, section
+    from warpsim.physics.config import SECTIONS
+
+    sections = {*SECTIONS, *(section(kind) for kind in OBJECTS), "worlds", "controls", "sweep"}
+    reads = [
+        hit
+        for path in sorted(PACKAGE.rglob("*.py"))
+        if path.relative_to(PACKAGE).parts[0] != "scene"
+        for hit in _section_reads(path, sections)
+    ]
+    assert not reads, "descriptor sections read outside scene/:\n" + "\n".join(reads)
+    assert _section_reads(PACKAGE / "scene" / "build.py", sections)  # the search finds reads where they are

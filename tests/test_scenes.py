@@ -73,3 +73,32 @@ def test_delta_objects_are_built_mirror_symmetric(name):
     index = {tuple(e): i for i, e in enumerate(np.sort(ends, axis=1))}
     mirror_rest = rest[[index[tuple(e)] for e in np.sort(image[ends], axis=1)]]
     np.testing.assert_allclose(rest, mirror_rest, rtol=1e-6)
+
+
+def test_a_scene_is_one_typed_read_only_value_that_simulation_takes():
+    """`warpsim.Scene`: the object, its config, the step, the worlds and their varied values, typed; what it hands
+    out are copies (the scene cannot be changed through them); a change is a new, checked scene; a simulation of
+    it flies as one of its descriptor, bit for bit."""
+    import numpy as np
+    import pytest
+
+    import warpsim
+    from warpsim.scene.descriptor import DescriptorError
+
+    scene = warpsim.Scene.load("kite")
+    assert (scene.kind, scene.section, scene.dt, scene.world_count) == ("kite", "kite", 0.005, 1)
+    assert scene.object_config().tow_point == 0.47 and scene.settings.wind.velocity[0] == 6.0
+    tables = scene.descriptor()
+    tables["kite"]["tow_point"] = 0.1
+    assert scene.object_config().tow_point == 0.47  # a copy
+    batch = scene.with_values({"worlds": {"count": 2, "kite": {"tow_point": [0.3, 0.4]}}}, "two kites")
+    assert batch.world_count == 2 and batch.varied == {"kite.tow_point": [0.3, 0.4]}
+    assert batch.object_config(1).tow_point == 0.4 and batch.world(1).object_config().tow_point == 0.4
+    assert scene.world_count == 1  # the first is unchanged
+    with pytest.raises(DescriptorError, match="tow_pont"):
+        scene.with_values({"kite": {"tow_pont": 0.3}})
+    a, b = warpsim.Simulation(scene), warpsim.Simulation(scene.descriptor())
+    a.step(200)
+    b.step(200)
+    np.testing.assert_array_equal(a.state.positions(), b.state.positions())
+    assert a.scene.kind == "kite" and a.descriptor == b.descriptor

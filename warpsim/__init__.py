@@ -37,6 +37,7 @@ _EXPORTS = {
     "ParachuteConfig": "objects.parachute",
     "Recording": "io.recording",
     "RunSummary": "run.simulation",
+    "Scene": "scene.scene",
     "Simulation": "run.simulation",
     "SolverConfig": "physics.config",
     "SolverEuler": "physics.solver",

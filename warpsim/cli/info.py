@@ -9,12 +9,13 @@ def command(args) -> int:
     """Print counts, masses and settings of a scene."""
     import numpy as np
 
-    from ..scene.build import build_model
     from ..scene.descriptor import to_toml
+    from ..scene.scene import Scene
 
     descriptor, _, where = load_scene(args)
-    model = build_model(descriptor, "cpu", where)
-    kind = descriptor["scene"]["object"]
+    scene = Scene(descriptor, where)
+    model = scene.build_model("cpu")
+    kind = scene.kind
     print(f"scene: {where} (object: {kind})")
     print(
         f"  particles {model.particle_count}, sticks {model.stick_count}, triangles {model.tri_count}, "

@@ -186,6 +186,7 @@ def _resolve_run(args) -> _RunInputs:
     """The scene of the command line, or the one a ``--resume`` recording holds with its checkpoint."""
     from ..io.hdf5 import RecordingError
     from ..io.recording import Recording
+    from ..scene.scene import Scene
 
     if args.replay:
         try:
@@ -201,7 +202,7 @@ def _resolve_run(args) -> _RunInputs:
         return _RunInputs(descriptor, f"{args.replay} (replayed)", seconds, controls=controls, terrain=terrain)
     if not args.resume:
         descriptor, _, where = load_scene(args)
-        return _RunInputs(descriptor, where, descriptor["scene"]["seconds"])
+        return _RunInputs(descriptor, where, Scene(descriptor, where).seconds)
     try:
         with Recording(args.resume, owner=True) as recording:
             checkpoint, frame = recording.checkpoint(), recording.checkpoint_frame
@@ -209,7 +210,7 @@ def _resolve_run(args) -> _RunInputs:
             descriptor, terrain = recording.descriptor(where), recording.terrain()
     except RecordingError as err:
         raise UsageError(f"--resume {err}") from None
-    seconds = args.seconds if args.seconds is not None else descriptor["scene"]["seconds"]
+    seconds = args.seconds if args.seconds is not None else Scene(descriptor, where).seconds
     return _RunInputs(descriptor, where, seconds, checkpoint, frame, terrain=terrain)
 
 
@@ -240,7 +241,7 @@ def _start(run: _RunInputs, device: str, args):
         m = sim.model
         print(
             f"{run.where}: {m.particle_count} particles, {m.stick_count} sticks, {m.tri_count} triangles; "
-            f"dt {sim.dt:g} s, {run.descriptor['solver']['method']}, device {device}"
+            f"dt {sim.dt:g} s, {sim.settings.solver.method}, device {device}"
             + (f", {sim.threads} threads" if sim.threads > 1 else "")
             + (f"; from t = {sim.state.time:.3f} s, frame {run.frame}" if run.checkpoint is not None else "")
         )
@@ -329,6 +330,7 @@ class _Outputs:
 def _report(args, run: _RunInputs, summary, blowup, failures, paths: dict, figures=None, table=None) -> int:
     """Print the summary, the flight figures, the outputs and any error line; return the exit code."""
     from ..io.outputs import OUTPUTS
+    from ..scene.scene import Scene
 
     if not args.quiet and sys.stderr.isatty():
         sys.stderr.write("\r" + " " * 70 + "\r")
@@ -348,7 +350,7 @@ def _report(args, run: _RunInputs, summary, blowup, failures, paths: dict, figur
         hint = (
             "try a smaller --dt (explicit Euler springs need dt well below sqrt(mass / solver.spring_stiffness)), "
             "or solver.method=verlet"
-            if run.descriptor["solver"]["method"] == "euler"
+            if Scene(run.descriptor, run.where).settings.solver.method == "euler"
             else "try a smaller --dt or more --iterations"
         )
         sys.stderr.write(f"warpsim run: error: {one_line(str(blowup))}\n  ({hint}; see docs/outputs.md: Blow-ups)\n")

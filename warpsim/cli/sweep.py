@@ -58,7 +58,9 @@ def command(args) -> int:
     if not args.scheduler:
         sweeps.require("cryptography")
     descriptor, _, where = load_scene(args, worlds_from_vary=False)  # here --vary makes the sweep's axes
-    kind = descriptor["scene"]["object"]
+    from ..scene.scene import Scene
+
+    kind = Scene(descriptor, where).kind
     if args.list_metrics:
         for name in sweeps.metrics_of(kind):
             unit, _, meaning = sweeps.METRICS[name]

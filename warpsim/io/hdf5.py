@@ -202,11 +202,11 @@ class H5Recorder(FrameOutput):
         import warp as wp
 
         from .._version import __version__
-        from ..physics.config import SceneConfig, from_section
+        from ..scene.scene import Scene
 
-        model, descriptor = self.model, self.descriptor
-        dt = float(descriptor["solver"]["dt"])
-        steps_per_frame = from_section(SceneConfig, descriptor["scene"]).steps_per_frame(dt)
+        model, spec = self.model, Scene.of(self.descriptor)  # (``scene``: where the scene came from)
+        dt = spec.dt
+        steps_per_frame = spec.settings.scene.steps_per_frame(dt)
         n, objects = model.particle_count, len(model.objects)
         cp = self.checkpoint()  # shapes and types of what later checkpoints write
         self.file = f = open_for_writing(self.path, create=True)
@@ -218,7 +218,7 @@ class H5Recorder(FrameOutput):
                 "descriptor": descriptor_text,
                 "descriptor_sha256": descriptor_digest(descriptor_text),
                 "scene": scene,
-                "solver": json.dumps(descriptor["solver"]),
+                "solver": json.dumps(spec.table("solver")),
                 "warpsim_version": __version__,
                 "warp_version": wp.config.version,
                 "dt": dt,
@@ -296,18 +296,18 @@ class H5Recorder(FrameOutput):
             raise ValueError(f"frame {k} does not follow the recording's last frame {self.frames - 1}")
         metrics = object_metrics(self.model, frame)
         with signals_held(), self._guard():
-            d = self._datasets
+            sets = self._datasets
             if k == self.frames:
                 for name in _FRAME_DATASETS:
-                    d[name].resize(k + 1, axis=0)
-            d["time"][k] = frame.time
-            d["controls"][k] = pack_controls(self._control_names, frame.controls)[1]
-            d["positions"][k] = frame.positions
-            d["diagnostics/worst_stretch"][k] = frame.worst_stretch
-            d["diagnostics/kinetic_energy"][k] = frame.kinetic_energy
-            d["diagnostics/centre"][k] = metrics.centre
-            d["diagnostics/altitude"][k] = metrics.altitude
-            d["diagnostics/airspeed"][k] = metrics.airspeed
+                    sets[name].resize(k + 1, axis=0)
+            sets["time"][k] = frame.time
+            sets["controls"][k] = pack_controls(self._control_names, frame.controls)[1]
+            sets["positions"][k] = frame.positions
+            sets["diagnostics/worst_stretch"][k] = frame.worst_stretch
+            sets["diagnostics/kinetic_energy"][k] = frame.kinetic_energy
+            sets["diagnostics/centre"][k] = metrics.centre
+            sets["diagnostics/altitude"][k] = metrics.altitude
+            sets["diagnostics/airspeed"][k] = metrics.airspeed
             self.frames = k + 1
             self._unsaved = (k, frame.steps, float(frame.time))
             now = time.monotonic()

@@ -20,15 +20,15 @@ setting.
 
 from __future__ import annotations
 
-import copy
 from pathlib import Path
 
 import numpy as np
 
 from ..objects.mesh_file import file_numbering, write_mesh
-from ..objects.registry import MESH, OBJECTS, section
+from ..objects.registry import MESH, section
 from ..scene.build import build_model
 from ..scene.descriptor import to_toml, world_descriptor
+from ..scene.scene import Scene
 
 HEAVY_SHARE = 0.05
 """A particle off the cloth heavier than this share of its object's mass is exported as a point mass."""
@@ -54,15 +54,16 @@ def _export_own(descriptor: dict, record, tris: np.ndarray, out: Path) -> tuple[
     groups = groups or {"cloth": np.arange(len(tris))}
     write_mesh(out, record.design, local[tris], groups)
     numbering = file_numbering(out.suffix, local[tris], groups, len(record.design))
-    scene = {k: copy.deepcopy(v) for k, v in descriptor.items() if k not in ("worlds", "sweep")}
+    own = Scene.of(descriptor)
+    mesh = own.table(section(MESH))
     # the file holds the design's own coordinates, units and scale applied, and its groups: a part keeps its groups
     # and boxes, and one that named vertices names them by the new file's own numbering
     parts = []
-    for entry, chosen in zip(scene[section(MESH)]["parts"], record.selections, strict=True):
+    for entry, chosen in zip(mesh["parts"], record.selections, strict=True):
         if "vertices" in entry:
             entry = {**entry, "vertices": [int(i) for i in numbering[chosen]]}
         parts.append(entry)
-    scene[section(MESH)].update(file=out.name, units="m", scale=1.0, parts=parts)
+    scene = own.as_mesh_design({**mesh, "file": out.name, "units": "m", "scale": 1.0, "parts": parts})
     scene_path = out.with_suffix(".toml")
     header = (
         f"# a design exported by warpsim export to {out.name}, as it was read\n# Run: warpsim run {scene_path.name}\n"
@@ -215,21 +216,18 @@ def export_design(descriptor: dict, out: str | Path) -> tuple[Path, Path, list[s
     if np.abs(by_area - mass[cloth]).max() > 0.01 * mass[cloth].max():
         left_out.append("its particles' own masses (the export's cloth has them by area, its frame's folded in)")
 
-    kind_section = record.kind.replace("-", "_")
-    scene = {k: copy.deepcopy(v) for k, v in descriptor.items() if k not in ("worlds", "sweep", kind_section)}
-    scene["scene"]["object"] = MESH
-    names = set(OBJECTS[MESH].controls) | {"wind", "time", "ramp"}
-    scene["controls"] = [c for c in descriptor.get("controls", []) if set(c) <= names]
     compliances = compliance[cloth_sticks & (weight <= 1.0)]
-    scene[section(MESH)] = {
-        "file": out.name,
-        "position": [float(cx), float(cy), 0.0],
-        "velocity": [float(v) for v in np.asarray(model.particle_qd0, dtype=np.float64)[cloth].mean(axis=0)],
-        "mass_per_area": cloth_mass / area,
-        "cloth_compliance": float(np.median(compliances)) if len(compliances) else 0.0,
-        "aspect_ratio": _aspect_ratio(design, area),
-        "parts": parts,
-    }
+    scene = Scene.of(descriptor).as_mesh_design(
+        {
+            "file": out.name,
+            "position": [float(cx), float(cy), 0.0],
+            "velocity": [float(v) for v in np.asarray(model.particle_qd0, dtype=np.float64)[cloth].mean(axis=0)],
+            "mass_per_area": cloth_mass / area,
+            "cloth_compliance": float(np.median(compliances)) if len(compliances) else 0.0,
+            "aspect_ratio": _aspect_ratio(design, area),
+            "parts": parts,
+        }
+    )
     scene_path = out.with_suffix(".toml")
     header = [
         f"# {record.kind} exported by warpsim export to {out.name}: its cloth and its parts as a design of its own.",

@@ -55,7 +55,7 @@ def open_picture(path: str | Path, sim, size: tuple[int, int] = (960, 540), azim
     when it closes (``size`` [pixels], view ``azimuth`` and ``elevation`` [deg], as ``warpsim render``)."""
     from .picture import PictureOutput
 
-    return PictureOutput(path, sim.model, sim.descriptor["scene"]["object"], size, azimuth, elevation)
+    return PictureOutput(path, sim.model, sim.scene.kind, size, azimuth, elevation)
 
 
 @dataclass(frozen=True)

@@ -230,13 +230,14 @@ class Recording:
         from it: one world per recorded object (a crafted descriptor of 4,096 worlds was built for minutes before
         its particle count was compared). ``where`` names it in errors (default: the file's descriptor)."""
         from ..scene.descriptor import load_text
+        from ..scene.scene import Scene
 
         descriptor = load_text(self.descriptor_text, where or f"{self.path}: descriptor")
         objects = len(self.file["topology"].attrs.get("objects", []))
-        if descriptor["worlds"]["count"] != objects:
+        worlds = Scene(descriptor).world_count
+        if worlds != objects:
             raise RecordingError(
-                f"{self.path}: its descriptor asks for {descriptor['worlds']['count']:,} worlds, its frames hold "
-                f"{objects:,} objects"
+                f"{self.path}: its descriptor asks for {worlds:,} worlds, its frames hold {objects:,} objects"
             )
         return descriptor
 

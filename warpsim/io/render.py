@@ -353,6 +353,7 @@ def render_recording(
     frame the ropes and lines too (:class:`Scene`).
     Returns the path written.
     """
+    from ..scene import scene as scenes  # (this module's Scene is what a picture draws)
     from .hdf5 import RecordingError
     from .recording import Recording
 
@@ -364,7 +365,7 @@ def render_recording(
             raise RecordingError(f"{recording_path}: the recording has no frames")
         descriptor = recording.descriptor()
         scene = Scene(recording.build_model(), wide)
-        name = descriptor["scene"]["object"]
+        name = scenes.Scene.of(descriptor).kind
         if output.suffix.lower() == ".png":
             k = count - 1 if frame is None else frame
             if not -count <= k < count:

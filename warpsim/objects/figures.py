@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics.atmosphere import scene_density
+from ..physics.atmosphere import air_density
 from ..physics.config import GRAVITY
 from ..physics.model import Model, ObjectRecord
 from .hang_glider import bank
@@ -141,7 +141,7 @@ SHEET_ITERATIONS = 7
 as many flap the same at resolutions 9, 17 and 33; benchmarks/validation/flag_rows.py SHEET_FLAG)."""
 
 
-def flag_caveat(descriptor: dict) -> str:
+def flag_caveat(flag, settings) -> str:
     """What the flag's flapping figures are not (the mesh's, the iterations'), and which cloth's they are.
 
     Without a bending stiffness they are the mesh's: the paper's air law is local and its cloth folds freely, so
@@ -157,8 +157,8 @@ def flag_caveat(descriptor: dict) -> str:
     in-plane stiffness is beyond these meshes (the validation's rows 'sheet flag frequency, thread stiffness' and
     'every stick alike').
     The Euler mass-spring comparison's flapping is not validated."""
-    flag, solver = descriptor["flag"], descriptor["solver"]
-    resolution, bending = int(flag["resolution"]), float(flag["bending_stiffness"])
+    solver = settings.solver  # flag: its FlagConfig; settings: the scene's (solver, wind, air) of its world
+    resolution, bending = int(flag.resolution), float(flag.bending_stiffness)
     where = "(docs/flag.md, 'The flag at fine resolution')"
     if bending <= 0.0:
         return (
@@ -166,40 +166,40 @@ def flag_caveat(descriptor: dict) -> str:
             f"flag's: the local air law and the bending-free cloth pick no wavelength, so a finer mesh flaps "
             f'otherwise; the default flag (flag.design = "sheet") converges {where}'
         )
-    if solver["method"] != "verlet":
+    if solver.method != "verlet":
         return f"note: the Euler mass-spring comparison's flapping is not validated {where}"
-    if float(flag["cloth_compliance"]) <= 0.0 or not solver["mass_splitting"]:
+    if float(flag.cloth_compliance) <= 0.0 or not solver.mass_splitting:
         return (
             "note: with rigid sticks (flag.cloth_compliance = 0) the flapping follows the iteration count on a fine "
             "mesh; set flag.cloth_compliance (e.g. 1e-3) and solver.mass_splitting = true for one that converges "
             f"{where}"
         )
-    speed = float(np.linalg.norm(descriptor["wind"]["velocity"]))
-    spacing = float(flag["width"]) / (resolution - 1)
-    density = scene_density(descriptor["air"], 0.0)  # a flag flies near the ground
+    speed = float(np.linalg.norm(settings.wind.velocity))
+    spacing = float(flag.width) / (resolution - 1)
+    density = air_density(settings.air, 0.0)  # a flag flies near the ground
     length = (bending / (density * max(speed, 1e-3) ** 2)) ** (1.0 / 3.0)
     if resolution < 17 or spacing > length:
-        finest = max(17, int(np.ceil(float(flag["width"]) / length)) + 1)
-        alike = ", 8 % with every stick alike" if float(flag["shear_compliance"]) <= 0.0 else ""
+        finest = max(17, int(np.ceil(float(flag.width) / length)) + 1)
+        alike = ", 8 % with every stick alike" if float(flag.shear_compliance) <= 0.0 else ""
         return (
             f"note: at resolution {resolution} (spacing {spacing:.2g} m against a bending length of {length:.2g} m) "
             f"the flapping is still the mesh's in part (the validation's sheet flag flaps 2 % slower at resolution 9 "
             f"than at 33{alike}); resolution {finest} or more should converge {where}"
         )
-    if int(solver["iterations"]) < SHEET_ITERATIONS * resolution:
+    if int(solver.iterations) < SHEET_ITERATIONS * resolution:
         return (
-            f"note: {solver['iterations']} iterations, fewer than the {SHEET_ITERATIONS} per particle along the flag "
+            f"note: {solver.iterations} iterations, fewer than the {SHEET_ITERATIONS} per particle along the flag "
             f"({SHEET_ITERATIONS * resolution}) at which the validation's sheet flag flaps as with twice as many "
             f"{where}"
         )
-    if float(flag["shear_compliance"]) > 0.0:
+    if float(flag.shear_compliance) > 0.0:
         return (
-            f"note: the flapping is this flag's, a woven cloth ({1.0 / float(flag['shear_compliance']):,.0f} N/m in "
+            f"note: the flapping is this flag's, a woven cloth ({1.0 / float(flag.shear_compliance):,.0f} N/m in "
             "shear) with a card's bending, converged in its mesh, step, iterations and threads (the validation's, at "
             "100 N/m); the worst stick stretch is its diagonals as the cloth shears, as meant. A fabric's waves are "
             f"finer than this mesh, and a sheet stiff in shear (paper) locks on it {where}"
         )
-    stiffness = 1.5 / float(flag["cloth_compliance"])
+    stiffness = 1.5 / float(flag.cloth_compliance)
     return (
         f"note: the flapping is this cloth's, every stick alike, about {stiffness:,.0f} N/m in its plane (1.5 / "
         "flag.cloth_compliance: a pull stretches the diagonals too): a "

@@ -38,8 +38,10 @@ class ObjectSpec:
         oscillations: those of its figures that swing about a mean, whose frequency over a window is measured too
             (``NAME_frequency`` [Hz], :class:`warpsim.run.figures.FigureWindow`), each with the least half-range
             (in the figure's unit) that counts as a swing.
-        caveat: ``caveat(descriptor) -> str | None``: what the run's closing figures are not, said under them
-            (e.g. a figure set by the mesh rather than by the object's physics); None when there is nothing to say.
+        caveat: ``caveat(config, settings) -> str | None`` (the object's config and the scene's typed settings,
+            :class:`~warpsim.scene.build.Settings`, of one world): what the run's closing figures are not, said
+            under them (e.g. a figure set by the mesh rather than by the object's physics); None when there is
+            nothing to say.
         wind_limit: the strongest wind [m/s] the object is made to fly in: the viewer's + key stops there (or at
             the scene's own wind, when that is stronger).
         keys: the viewer's key bindings of its controls (:class:`~.keys.AxisKeys`, :class:`~.keys.WalkKeys`): what

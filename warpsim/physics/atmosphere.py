@@ -72,6 +72,14 @@ def check_altitude(altitude: float, what: str) -> None:
         )
 
 
+def air_density(air, height: float) -> float:
+    """The density [kg/m^3] of an :class:`~warpsim.physics.config.AirConfig`'s air at ``height`` [m] above the
+    scene's z = 0: its fixed ``density``, else the standard atmosphere's there (as :func:`scene_density`)."""
+    return scene_density(
+        {"density": air.density, "elevation": air.elevation, "temperature_offset": air.temperature_offset}, height
+    )
+
+
 def scene_density(air: dict, height: float) -> float:
     """The density [kg/m^3] of a scene's air (its ``[air]`` section, a dict with ``density``, ``elevation`` and
     ``temperature_offset``) at ``height`` [m] above the scene's z = 0: the fixed density it gives, else the standard

@@ -13,7 +13,6 @@ import numpy as np
 from ..objects import registry
 from ..objects.figures import FigureView
 from ..physics.model import Model
-from ..scene.descriptor import world_descriptor
 from .diagnostics import Frame, GroundContacts, object_metrics
 
 COMMON_FIGURES = {
@@ -173,7 +172,7 @@ class FlightFigures:
 
     def __init__(self, sim, start: float, stop: float, rate: float | None = None):
         self.sim, self.start, self.stop = sim, float(start), float(stop)
-        self.kind = sim.descriptor["scene"]["object"]
+        self.kind = sim.scene.kind
         self.names = list(figure_names(self.kind))
         interval = sim.steps_per_frame * sim.dt
         self.every = 1 if rate is None else max(1, int(round(1.0 / (rate * interval))))
@@ -203,11 +202,7 @@ class FlightFigures:
         (``wind.speed``...), the window and the sweep's columns (``altitude_mean``, ``line_angle_mean``,
         ``worst_stretch``...: :data:`FIGURES`' names with ``_mean``, ``_min``, ``_max`` and the oscillations'
         ``_frequency``, in their units); what ``warpsim run --table`` writes."""
-        varied = {}
-        for section, values in self.sim.descriptor.get("worlds", {}).items():
-            if section != "count":
-                for key, per_world in values.items():
-                    varied[f"{section}.{key}"] = per_world
+        varied = self.sim.scene.varied
         objects = {record.world: record.name for record in self.sim.model.objects}
         rows = []
         for k in range(self.window.frames.size):
@@ -258,7 +253,8 @@ class FlightFigures:
         notes: list[str] = []
         if caveat is not None:  # each world's own, once (a sweep of --vary may give its worlds different cloth)
             for k in range(count):
-                note = caveat(world_descriptor(self.sim.descriptor, k))
+                world = self.sim.scene.world(k)
+                note = caveat(world.object_config(), world.settings)
                 if note and note not in notes:
                     notes.append(note)
         some = "some worlds: " if count > 1 and len(notes) > 1 else ""
@@ -267,7 +263,7 @@ class FlightFigures:
     def _air_lines(self) -> list[str]:
         """What the figures depend on beyond the scene's defaults: the standard atmosphere's density at the end, the
         turbulence."""
-        air, wind, lines = self.sim.settings.air, self.sim.descriptor["wind"], []
+        air, wind, lines = self.sim.settings.air, self.sim.settings.wind, []
         if air.density == 0.0:
             rho = self.sim.control.air_density.numpy()
             text = f"{rho.mean():.4g} kg/m^3" if len(rho) == 1 else f"{rho.min():.4g} to {rho.max():.4g} kg/m^3"
@@ -279,8 +275,8 @@ class FlightFigures:
             )
         if self.sim.control.turbulence.field is not None:
             lines.append(
-                f"  turbulence: von Karman, intensity {wind['turbulence_intensity']:g}, length scale "
-                f"{wind['turbulence_length']:g} m"
+                f"  turbulence: von Karman, intensity {wind.turbulence_intensity:g}, length scale "
+                f"{wind.turbulence_length:g} m"
             )
         return lines
 

@@ -20,7 +20,6 @@ import numpy as np
 from ..physics.kernels import frame as frame_kernels
 from ..physics.model import Control, State
 from ..physics.solver import make_solver
-from ..scene.build import build_model
 from .diagnostics import GroundContacts
 
 
@@ -49,7 +48,7 @@ def split_worlds(sim, threads: int, where: str) -> list[WorldGroup]:
     bounds = [sim.world_count * k // count for k in range(count + 1)]
     p = s = t = n = 0  # where the group's particles, sticks, triangles and nails start in the whole model
     for first, end in itertools.pairwise(bounds):
-        model = build_model(sim.descriptor, whole.device, where, terrain=whole.terrain, worlds=range(first, end))
+        model = sim.scene.build_model(whole.device, where, terrain=whole.terrain, worlds=range(first, end))
         if not (
             np.array_equal(model.stick_particles_np + p, whole.stick_particles_np[s : s + model.stick_count])
             and np.array_equal(model.tri_indices_np + p, whole.tri_indices_np[t : t + model.tri_count])

@@ -23,12 +23,11 @@ import numpy as np
 import warp as wp
 
 from ..physics import atmosphere
-from ..physics.config import WindConfig, from_section
 from ..physics.kernels import frame as frame_kernels
 from ..physics.solver import SOLVERS, load_modules, make_solver
-from ..scene.build import build_model, settings
 from ..scene.controls import ControlError, ControlSchedule
-from ..scene.descriptor import DescriptorError, world_descriptor
+from ..scene.descriptor import DescriptorError
+from ..scene.scene import Scene
 from .checkpoint import (
     Checkpoint,
     canopy_sides,
@@ -82,7 +81,7 @@ class Simulation:
     Args:
         descriptor: validated descriptor (see :mod:`warpsim.scene.descriptor`).
         device: Warp device (``cpu`` default, ``cuda`` when present).
-        use_graph: replay the step as a captured graph (default True).
+        scene: the :class:`~warpsim.scene.scene.Scene`, or a validated descriptor (see :mod:`warpsim.scene.descriptor`).
         where: origin of the descriptor for error messages.
         terrain: heights to use instead of the descriptor's ``[terrain]`` (a recording's stored terrain).
         threads: how many threads step the worlds, each a group of consecutive worlds (default 1; at most one
@@ -92,7 +91,7 @@ class Simulation:
 
     def __init__(
         self,
-        descriptor: dict,
+        scene: Scene | dict,
         device: str | None = "cpu",
         use_graph: bool = True,
         where: str = "scene",
@@ -100,11 +99,11 @@ class Simulation:
         threads: int = 1,
     ):
         started = time.perf_counter()
-        self.descriptor = descriptor
-        self.settings = cfg = settings(descriptor)
+        self.scene = Scene.of(scene, where)
+        self.settings = cfg = self.scene.settings
         # every kernel module the run launches, compiled together on a cold cache before anything else uses one
         load_modules((*SOLVERS[cfg.solver.method].modules, frame_kernels), device)
-        self.model = build_model(descriptor, device, where, terrain)
+        self.model = self.scene.build_model(device, where, terrain)
         self.dt = cfg.solver.dt
         try:
             self.solver = make_solver(
@@ -120,9 +119,9 @@ class Simulation:
         self.solver.update_air(self.state, self.control)
         self.steps_taken = 0
         self.world_count = self.model.world_count
-        winds = [from_section(WindConfig, world_descriptor(descriptor, k)["wind"]) for k in range(self.world_count)]
+        winds = [self.scene.wind_of(k) for k in range(self.world_count)]
         try:
-            schedule = ControlSchedule(descriptor.get("controls", []), control_names(self.model), where)
+            schedule = ControlSchedule(self.scene.controls, control_names(self.model), where)
         except ControlError as err:
             raise DescriptorError(str(err)) from None
         try:
@@ -157,6 +156,12 @@ class Simulation:
                 group.graphs = (self._capture_frame(group, 0), self._capture_frame(group, 1))
         wp.synchronize_device(self.model.device)
         self.startup_time = time.perf_counter() - started  # [s] model build, kernel load/compilation
+
+    @property
+    def descriptor(self) -> dict:
+        """A copy of the scene's plain descriptor (:meth:`warpsim.scene.scene.Scene.descriptor`): what is written
+        (TOML, a recording) or merged; read the scene's settings from :attr:`scene`."""
+        return self.scene.descriptor()
 
     @property
     def groups(self) -> tuple[WorldGroup, ...]:

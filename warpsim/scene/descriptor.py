@@ -274,6 +274,18 @@ def world_descriptor(descriptor: dict, world: int) -> dict:
     return out
 
 
+def one_of_batch(descriptor: dict, world: int) -> dict:
+    """The descriptor of a batch of one: world ``world`` (0-based) of ``descriptor``, its ``[worlds]`` values kept
+    as one-value lists (a sweep's case run alone, as its chunk ran it)."""
+    worlds: dict = {"count": 1}
+    for section, values in descriptor.get("worlds", {}).items():
+        if section != "count":
+            worlds[section] = {key: [per[world]] for key, per in values.items()}
+    out = copy.deepcopy(descriptor)
+    out["worlds"] = worlds
+    return out
+
+
 def _check_controls(where: str, entries, kind: str) -> list[dict]:
     """Validate ``[[controls]]`` entries for an object ``kind``; returns them as plain tables."""
     if not isinstance(entries, list):

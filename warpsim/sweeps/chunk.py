@@ -49,8 +49,8 @@ def run_chunk(task: ChunkTask) -> list[dict]:
         return [row for k in range(len(task.cases)) for row in run_chunk(task.single(k))]
     model = sim.model
     count = model.world_count
-    figures = list(figure_names(sim.descriptor["scene"]["object"]))
-    acc = FigureWindow(count, figures, oscillations_of(sim.descriptor["scene"]["object"]))
+    figures = list(figure_names(sim.scene.kind))
+    acc = FigureWindow(count, figures, oscillations_of(sim.scene.kind))
     contacts = GroundContacts(model)
     measure_figures = Figures(model)
     live = np.ones(count, dtype=bool)

@@ -3,7 +3,6 @@ product, first axis slowest), each case's key, and the chunks of cases that run 
 
 from __future__ import annotations
 
-import copy
 import itertools
 import json
 import math
@@ -13,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..scene.descriptor import VARIABLE_SECTIONS, DescriptorError, check_axis, merge, to_toml
+from ..scene.descriptor import VARIABLE_SECTIONS, DescriptorError, check_axis, merge, one_of_batch, to_toml
+from ..scene.scene import Scene
 from ..scene.values import parse_vary
 from .metrics import SweepError, metrics_of
 
@@ -44,7 +44,7 @@ def parse_axes(descriptor: dict, items: Sequence[str] | dict, where: str = "--va
     ``KEY=START:STOP:COUNT`` or ``KEY=V1,V2,...``, or a dict ``{"section.key": values or "START:STOP:COUNT"}``),
     which replace a ``[sweep]`` axis of the same key. Raises :class:`~warpsim.scene.descriptor.DescriptorError`."""
     axes: dict[str, Axis] = {}
-    for section, keys in descriptor.get("sweep", {}).items():
+    for section, keys in Scene.of(descriptor).sweep.items():
         for key, values in keys.items():
             axes[f"{section}.{key}"] = Axis(section, key, tuple(values))
     pairs: list[tuple[str, str, object, str]] = []
@@ -108,13 +108,9 @@ class ChunkTask:
 
     def single(self, k: int) -> ChunkTask:
         """The task of this chunk's ``k``-th case alone."""
-        worlds = {"count": 1}
-        for section, values in self.descriptor["worlds"].items():
-            if section != "count":
-                worlds[section] = {key: [per[k]] for key, per in values.items()}
-        descriptor = copy.deepcopy(self.descriptor)
-        descriptor["worlds"] = worlds
-        return replace(self, descriptor=descriptor, cases=[self.cases[k]], columns=[self.columns[k]], h5=None)
+        return replace(
+            self, descriptor=one_of_batch(self.descriptor, k), cases=[self.cases[k]], columns=[self.columns[k]], h5=None
+        )
 
 
 class SweepPlan:
@@ -136,15 +132,17 @@ class SweepPlan:
         window: tuple[float, float] | None = None,
         metrics: Sequence[str] | None = None,
     ):
-        if descriptor.get("worlds", {}).get("count", 1) != 1:
+        scene = Scene.of(descriptor)
+        if scene.world_count != 1:
             raise SweepError("a sweep makes its own worlds: remove [worlds] from the scene (use --vary instead)")
-        self.base = {k: copy.deepcopy(v) for k, v in descriptor.items() if k not in ("sweep",)}
-        self.kind = descriptor["scene"]["object"]
+        self.kind = scene.kind
         self.axes = list(axes)
-        self.seconds = float(seconds if seconds is not None else descriptor["scene"]["seconds"])
+        self.seconds = float(seconds if seconds is not None else scene.seconds)
         if not (self.seconds > 0 and math.isfinite(self.seconds)):
             raise SweepError(f"--seconds must be a positive number, got {self.seconds}")
-        self.base["scene"]["seconds"] = self.seconds  # the same definition whether --seconds or the scene says it
+        # the same definition whether --seconds or the scene says it; a sweep's [sweep] table is not the cases'
+        base = scene.with_values({"scene": {"seconds": self.seconds}}, "sweep").descriptor()
+        self.base = {section: table for section, table in base.items() if section != "sweep"}
         self.window = (self.seconds / 2, self.seconds) if window is None else (float(window[0]), float(window[1]))
         start, stop = self.window
         if not (0.0 <= start <= stop <= self.seconds):
@@ -241,12 +239,12 @@ def _terrain_digest(descriptor: dict) -> str | None:
     edited must not keep rows flown over the old ones (the path alone stays the same)."""
     import hashlib
 
-    terrain = descriptor.get("terrain", {})
-    if terrain.get("kind") != "file" or not terrain.get("file"):
+    terrain = Scene.of(descriptor).settings.terrain
+    if terrain.kind != "file" or not terrain.file:
         return None
     digest = hashlib.sha256()
     try:
-        with open(terrain["file"], "rb") as f:
+        with open(terrain.file, "rb") as f:
             for block in iter(lambda: f.read(1 << 20), b""):
                 digest.update(block)
     except OSError:

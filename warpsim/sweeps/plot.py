@@ -253,14 +253,14 @@ def recording_series(path, metrics) -> tuple[np.ndarray, dict[str, np.ndarray], 
     from ..io.h5format import RecordingError
     from ..io.recording import Recording
     from ..run.figures import Figures
-    from ..scene.descriptor import world_descriptor
+    from ..scene.scene import Scene
 
     with Recording(path) as recording:
         count = recording.frame_count
         if count == 0:
             raise RecordingError(f"{path}: the recording has no frames")
-        descriptor = recording.descriptor()
-        kind = descriptor["scene"]["object"]
+        scene = Scene(recording.descriptor())
+        kind = scene.kind
         known = recording_metrics(kind)
         for name in metrics:
             if name not in known:
@@ -279,7 +279,7 @@ def recording_series(path, metrics) -> tuple[np.ndarray, dict[str, np.ndarray], 
         wanted = [name for name in metrics if name not in RECORDED]
         if wanted:
             winds = np.array(
-                [world_descriptor(descriptor, w)["wind"]["velocity"] for w in range(model.world_count)], dtype=float
+                [scene.wind_of(w).velocity for w in range(model.world_count)], dtype=float
             )
             figures = Figures(model)
             q = recording.positions()

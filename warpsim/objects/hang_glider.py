@@ -89,12 +89,9 @@ class HangGliderConfig(Checked):
         frame_drag_area: ``sail`` and ``vortex`` air models, ``strap``: drag area [m^2] of the control frame, wires
             and kingpost.
         dihedral: the wings rise from the keel by this angle [deg]; negative is anhedral. Sweep already rolls a
-            wing away from a sideslip, and flex wings are rigged with anhedral to bring that near neutral. Under the
-            ``sail`` law, with 0 the flex wing slowly steepens a turn, with 2 it rolls back towards level within 20
-            s, with 3 or more it answers weight shift the wrong way without ``billow_shift``; 1.25 with the billow
-            shift holds a 30 degree turn nearly neutrally (below 1.25 the hands-off glide moves more than 4 % with
-            the time step). On the lattice (``lattice``) -1.5 with a 1 degree billow shift: the anhedral buys roll rate
-            (30 degrees in 2.2 s, where 0 takes 2.8 s) and the billow shift holds the turn after centring.
+            wing away from a sideslip, and flex wings are rigged with anhedral to bring that near neutral: too much
+            dihedral rolls the wing back to level against the pilot, too little steepens every turn. The flying
+            design's 1.25 (``sail`` law) and the lattice design's -1.5 and what other values do: docs/glider.md.
         keel_pocket: hold the cloth on both sides of the keel tube to it (a sail's keel pocket), so the sail
             cannot fold along the keel between keel particles.
         washout_struts: share of each half of the trailing edge, from the tip, held rigid at its washout by
@@ -115,8 +112,8 @@ class HangGliderConfig(Checked):
             the other half (the struts' ties follow; needs ``washout_struts``). On a real flex wing the keel floats
             and swings under the pilot's weight against the leading edges and crossbar, so the half the pilot moves
             towards gets more cloth, billows and twists more, and lifts less: that wing drops (issue 34). It also
-            yaws the nose away from the turn (adverse yaw): on the lattice 0, 0.5 and 1 degree reverse a 30 degree
-            turn in 6.7, 4.1 and 3.5 s and slip 18, 20 and 22 degrees in the roll-in.
+            yaws the nose away from the turn (adverse yaw); what it does to the roll, the reversal and the slip:
+            docs/glider.md.
     """
 
     design: str = choice("flying", ("flying", "lattice", "paper"))

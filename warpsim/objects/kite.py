@@ -52,50 +52,22 @@ class KiteConfig(Checked):
         spar_mass_fraction: share of ``mass`` carried by the two virtual particles (the spars they stand for);
             the rest is spread evenly over the sail and keel particles.
         frame_mass_fraction: share of ``mass`` carried by the spine's and the leading edges' own particles, spread
-            evenly over them (0 by default: the cloth carries it). A real delta's spars weigh most of it (3/4 oz
-            ripstop of ~47 g/m^2 makes ~38 g of this 0.81 m^2 sail), and spars along the spine and leading edges put
-            the centre of mass near half the root chord instead of the sail's area centroid at two thirds:
-            0.6 moves it from 0.65 to 0.59 of the spine from the nose. Measured with 0.6 and rigid cloth
-            (``sail_compliance = 0``; docs/objects.md, the kite's limits): the kite flies in 3 m/s at 2.5 ms/110 and
-            1.25 ms/220 (13.5 / 13.7 deg, where the rigid default stalls at 1.25 ms) and centred in 6 m/s at
-            0.625 ms/220, but crashes at the defaults' 5 ms with 55 or 110 iterations, drifts 5.1 m in 10 m/s at
-            2.5 ms/110 and goes 11.8 m to one side in 6 m/s at 0.625 ms/440; with cloth at 1e-4 m/N it flies in
-            3 m/s at every rung (13.5-13.6 deg) but drifts 15 m in 10 m/s at 2.5 ms/110. So it is not the default.
+            evenly over them (0 by default: the cloth carries it). Real spars weigh most of a delta's mass and put its
+            centre of mass near half the root chord; 0.6 does, but does not fly at the default step (docs/objects.md,
+            the kite's limits).
         frame_weight: weight of the spar and keel sticks in the constraint average (1 = the paper).
         sail_compliance: stretch [m/N] per newton of tension of each of the sail's cloth sticks (weight 1; a sleeve
             stick of weight 4 is 4 times as stiff), so that the iterations converge to cloth of that stiffness at
             every step (:meth:`~warpsim.physics.builder.ModelBuilder.set_compliance`); 0 makes them rigid (the
-            paper's, and the ``paper`` design's), and then the finer the step and the more the iterations, the
-            nearer the cloth comes to rigid. Default 5e-5 m/N (20 kN/m per stick): nylon ripstop's secant to
-            break, not a low-load measurement. Parachute ripstop (MIL-C-7020H Type I, 1.1 oz/yd^2) holds
-            42 lbf/in (7.4 kN/m; R. Nakka's table of parachute fabrics, nakka-rocketry.net/paralst.html) and
-            breaks at 20-40 % elongation (parachute specifications call for 20-25 %, US Navy rigger's manual
-            NAVEDTRA 14218, ch. 10; nylon 29-40 %, Knacke, *Parachute Recovery Systems Design Manual*, 6.6.1):
-            18-37 kN/m of sheet, about 2.7e-5 to 6.3e-5 m/N per stick (a stick's stiffness is 0.87 of the sheet's
-            in an equilateral lattice, 1.0 along the grid lines of this sail's right-angled one; 5e-5 is 32-37 %
-            elongation at break). Woven cloth is softer still at a kite's few N/m (crimp) and on the
-            bias, which an even lattice cannot show. Measured (docs/objects.md, the kite's limits): the defaults'
-            figures do not move from 1e-6 to 3e-4, and the cloth stretches 0.01-0.02 % on average in flight. The
-            light-wind trim does, with the frame's stiffness: in 3 m/s at 0.625 ms/220 it flies at 15.9-16.7 deg
-            for cloth of 2e-5 to 6e-5 with the default frame (1e-4), 1.3-2.1 deg under the sail's 18 deg stall,
-            but with a frame of 1e-5, 3e-5 stalls (26.6 deg) and 2e-5 stalls at 1.25 ms/220 already (24.1 deg).
+            paper's, and the ``paper`` design's). The default, 5e-5 m/N (20 kN/m per stick), is nylon ripstop's secant
+            to break (the fabric's sources and what the kite's figures do with it: docs/objects.md).
         frame_compliance: stretch [m/N] per newton of tension of each of the frame's sticks (the spars' ties to the
             virtual particles, the braces and the sail's edges between frame particles) and the keel's (its cloth and
             reinforced edges), at weight 1 (they weigh ``frame_weight``, the spine's ties ``spine_weight``, so they
-            are 4 to 8 times as stiff); 0 makes them rigid (the paper's, and the ``paper`` design's). A rigid frame is
-            the limit the iterations approach as the steps are refined, so with rigid ties every finer rung flew a
-            stiffer kite: in 3 m/s its trim rose to the sail's stall at 0.625 ms/220 (23.9 deg, 8.6 m to one side),
-            and the 6 m/s kite with a 0.5 deg crosswind settled 1.6-1.9 m to one side at 0.625 ms/220 and
-            0.3125 ms/110. No real frame is rigid: a kite's spars are fibreglass or carbon rods, stiff along their
-            length (a 6 mm carbon tube, EA about 1.5 MN, stretches ~5e-8 m/N over one of these sticks) and soft in
-            bending (its tip, 0.9 m from a support, gives ~20 N/m, 3 EI / L^3 with EI about 5 N m^2), and the
-            frame's ties stand for both, so no single measured value applies. Measured (docs/objects.md, the kite's
-            limits): 1e-5 and 1e-4 fly every validation case at every rung with the defaults' figures unchanged,
-            and 5e-6 and 3e-4 the cases tried (3 m/s at 0.625 ms/220; 3e-4 also 10 m/s at 2.5 and 1.25 ms); 2e-6
-            stalls in 3 m/s at 0.625 ms/220 (22.1 deg), as rigid ties do; 1e-3 is too soft (10 m/s at 2.5 ms/110:
-            17.6 m to one side). The default 1e-4 keeps the light-wind kite flying over the cloth's whole cited
-            range (3 m/s at 0.625 ms/220: 16.7, 16.4, 16.2, 16.1, 15.9 deg for cloth of 2e-5 to 6e-5 m/N), where
-            1e-5 stalls it with cloth of 2e-5 to 4e-5.
+            are 4 to 8 times as stiff); 0 makes them rigid (the paper's, and the ``paper`` design's). Rigid ties are
+            the limit the iterations approach as the steps are refined, so a ladder of steps would fly ever stiffer
+            kites; no real frame is rigid, and no single measured value applies to ties that stand for a rod's
+            stretch and its bending (the default 1e-4 and the range that flies: docs/objects.md).
         straight_spars: tie every leading-edge particle to the one two rows back, so the leading edges stay
             straight rods (not in the paper; without them they bow and stretch ~1.7 % in steady flight).
         rope_length: tow point to anchor [m].
@@ -113,27 +85,21 @@ class KiteConfig(Checked):
             cloth sticks near the tow point by ~9 % in steady flight under the ``sail`` air model.
         keel_tension: the keel's cloth sticks (all but its top edge, the spine's own particles) are this much
             shorter than the keel as built, so it sets taut between the spine and the tow point, as a keel is cut
-            to (not in the paper). The sail's pull compresses the spine by ~1 % and the keel's chordwise cloth
-            with it; a slack keel of sticks without bending stiffness then buckles sideways, 0.05-0.1 s after the
-            launch (seeded by float rounding, growing tenfold every ~10 ms), and stays bulged to one side, a
-            rudder that holds the kite 8-20 m to the side of the wind window (measured in 10 m/s at dt 2.5 ms,
-            110 and 220 iterations). 0.02 keeps it taut at every wind from 3 to 10 m/s.
+            to (not in the paper): a slack keel of sticks without bending stiffness buckles sideways under the spine's
+            compression and holds the kite to one side like a rudder (docs/objects.md).
         spine_sleeve: weight in the constraint average of the sail's cloth sticks that meet the spine (the sail
-            is sewn to the spine through a reinforced sleeve; 1 = plain cloth, the paper). The keel hangs the
-            line's pull on the spine's particles; with plain cloth sticks round them the cloth there stretches
-            ~8 % at dt 5 ms and 55 iterations in 10 m/s, and the kite, launched in that wind, swings out to one
-            side of the window (measured; 2 is not enough, 3 and 4 are).
+            is sewn to the spine through a reinforced sleeve; 1 = plain cloth, the paper): the keel hangs the line's
+            pull on the spine's particles, and plain cloth round them stretches and swings the kite out of the
+            window (docs/objects.md).
         spine_weight: weight of the spine's ties to the virtual particles (the spine spar, which carries the
             line's pull from the keel), set apart from ``frame_weight``: changing ``frame_weight`` leaves these
-            ties at ``spine_weight`` (the paper design's 4 is its frame weight). With the sleeve at 4 and the
-            spine's ties at 4 the tie to the spine's back end stretches 1.36 % in 6 m/s; at 8, 0.94 %.
+            ties at ``spine_weight`` (the paper design's 4 is its frame weight).
         profile_drag: ``sail`` air model: the sail's zero-lift drag coefficient
             (:func:`~warpsim.physics.kernels.aero.sail_coefficients`).
         stall_angle: ``sail`` air model: angle of attack [deg] where a triangle's flow separates.
         billow: the sail's cloth sticks are this much longer than the sail as built (a delta's sail is cut
             with billow, so it sets cambered between its spars; not in the paper). 0 by default: with
-            ``chord_loading`` a 3 % billow lets the kite settle to one side of the wind window (14 m, banked
-            27 deg in 6 m/s, measured).
+            ``chord_loading`` a billowed sail lets the kite settle to one side of the wind window.
         chord_loading: load the sail's triangles chordwise as thin-aerofoil theory loads each chordwise strip
             (:func:`~warpsim.objects.delta.chordwise_loading`), so its centre of pressure lies near half the root
             chord from the nose at small angles of attack and moves back to the area centroid (2/3) as the flow
@@ -143,10 +109,9 @@ class KiteConfig(Checked):
             (``sail`` air model only): its drag behind the tow point keeps the kite's nose into the wind, which
             holds it in the middle of the wind window (0: no tail).
         delta_lift: ``sail`` air model: give the sail the lift slope of its delta planform, the Helmbold-DATCOM
-            slope at its half-chord sweep (:func:`~warpsim.physics.kernels.aero.sail_coefficients`; 3.64 /rad for the
-            default 1.8 x 0.9 m sail), divided per triangle by the cosine of the leading edge's sweep, which the
-            attached flow's sweep theory takes off again. Without it the sail lifts ~0.7 of that (sweep theory on
-            top of the unswept slope), C_L 0.51 at 10.9 deg in 6 m/s against the planform's 0.69.
+            slope at its half-chord sweep (:func:`~warpsim.physics.kernels.aero.sail_coefficients`), divided per
+            triangle by the cosine of the leading edge's sweep, which the attached flow's sweep theory takes off
+            again; without it the sail lifts about 0.7 of its planform's slope.
     """
 
     design: str = choice("flying", ("flying", "paper"))

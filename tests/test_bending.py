@@ -230,8 +230,8 @@ def test_a_step_past_the_bending_limit_is_refused_in_one_line():
 
 
 def test_the_flags_note_says_what_its_flapping_is_not():
-    """The run's note under the flap figure, per what the flag is built with (objects.figures.flag_caveat)."""
-    from warpsim.objects.figures import SHEET_ITERATIONS, flag_caveat
+    """The run's note under the flap figure, per what the flag is built with (objects.flag.flag_caveat)."""
+    from warpsim.objects.flag import SHEET_ITERATIONS, flag_caveat
     from warpsim.scene import descriptor
     from warpsim.scene.scene import Scene
 

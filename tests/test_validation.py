@@ -161,8 +161,7 @@ def test_flight_figures_converge(figure):
 
 def test_the_validations_sheet_flag_is_the_default_flag():
     """The 'sheet flag' rows fly the default flag's cloth and solver, at their own resolution, step and iterations."""
-    from warpsim.objects.figures import SHEET_ITERATIONS
-    from warpsim.objects.flag import PRESETS
+    from warpsim.objects.flag import PRESETS, SHEET_ITERATIONS
 
     sheet = PRESETS["sheet"]
     assert flag_rows.SHEET_FLAG is sheet

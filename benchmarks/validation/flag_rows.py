@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 
-from warpsim.objects.figures import SHEET_ITERATIONS
 from warpsim.objects.flag import PRESETS as FLAG_PRESETS
+from warpsim.objects.flag import SHEET_ITERATIONS
 from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
 
@@ -279,7 +279,7 @@ ALIKE_ITERATIONS = 14
 
 def sheet_overrides(resolution: int, iterations: int | None = None, **flag) -> dict:
     """The descriptor overrides of the sheet flag (``design = "sheet"``) at ``resolution``, with ``flag`` keys on
-    top: ``iterations``, or ``SHEET_ITERATIONS`` per particle along it (``warpsim.objects.figures``, which its run's
+    top: ``iterations``, or ``SHEET_ITERATIONS`` per particle along it (``warpsim.objects.flag``, which its run's
     note checks; twice as many flap the same)."""
     return {"flag": flag, "solver": {"iterations": iterations or SHEET_ITERATIONS * resolution}}
 

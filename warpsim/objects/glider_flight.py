@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..physics.model import ObjectRecord
+from ..physics.model import Model, ObjectRecord
+from .figures import FigureView, Measure
 
 
 def control_rest_lengths(record: ObjectRecord, pitch: float, roll: float) -> np.ndarray:
@@ -80,3 +81,31 @@ def flight_state(record: ObjectRecord, q: np.ndarray, q_prev: np.ndarray, dt: fl
         "pilot_up": float(pilot @ up),
         "altitude": float(q[sail][:, 2].mean()),
     }
+
+
+# ---------------------------------------------------------------------------------------------- figures
+GLIDER_FIGURES = {
+    "glide": (
+        "-",
+        "glide ratio: horizontal airspeed / sink of the mass centre (NaN unless it sinks faster than 0.05 m/s)",
+    ),
+    "bank": ("deg", "bank of the sail, tip to tip against the horizontal, + = right tip lower"),
+}
+
+
+def glider_figures(model: Model, record: ObjectRecord) -> Measure:
+    """The hang glider's :data:`GLIDER_FIGURES` of a frame."""
+
+    def measure(view: FigureView) -> dict[str, float]:
+        sink = float(-view.velocity[2])
+        horizontal = float(np.linalg.norm((view.velocity - view.wind)[:2]))
+        return {"glide": horizontal / sink if sink > 0.05 else float("nan"), "bank": bank(record, view.positions)}
+
+    return measure
+
+
+def glider_hud(f: dict[str, float]) -> str:
+    """The hang glider's heads-up text: sink rate, glide ratio and bank with its side."""
+    glide = f"{f['glide']:4.1f}" if np.isfinite(f["glide"]) else " -- "
+    side = "right" if f["bank"] > 0.5 else "left" if f["bank"] < -0.5 else ""
+    return f"sink {f['sink']:5.2f} m/s  glide {glide}  bank {abs(f['bank']):3.0f} deg {side}"

@@ -20,11 +20,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.builder import ModelBuilder
-from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
+from ..physics.config import GRAVITY, NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
 from ..physics.kernels.aero import sail_coefficients
-from ..physics.model import ObjectRecord
+from ..physics.model import Model, ObjectRecord
 from ..physics.terrain import Heightfield
 from .delta import add_rigid_frame, add_spar_braces, body_axes, chordwise_loading, delta_sail_aero
+from .figures import FigureView, Measure
 
 PAPER_COUNTS = {"particles": 152, "sticks": 458, "triangles": 221}
 
@@ -455,3 +456,28 @@ def line_state(record: KiteRecord, q: np.ndarray) -> dict:
         "distance": float(np.linalg.norm(d)),
         "tow": q[record.tow].copy(),
     }
+
+
+# ---------------------------------------------------------------------------------------------- figures
+KITE_FIGURES = {
+    "line_angle": ("deg", "elevation of the line above the horizontal, from the anchor to the tow point"),
+    "line_pull": ("N", "the line's pull at the anchor, from the rope's sag (objects.kite.anchor_pull)"),
+}
+
+
+def kite_figures(model: Model, record: ObjectRecord) -> Measure:
+    """The kite's :data:`KITE_FIGURES` of a frame, measured from the particles (the pull from the rope's sag:
+    NaN while the rope does not sag, :func:`~warpsim.objects.kite.anchor_pull`)."""
+
+    def measure(view: FigureView) -> dict[str, float]:
+        return {
+            "line_angle": line_elevation(record, view.positions),
+            "line_pull": anchor_pull(record, view.positions, model.particle_free_mass, GRAVITY),
+        }
+
+    return measure
+
+
+def kite_hud(f: dict[str, float]) -> str:
+    """The kite's heads-up text: the line's elevation and its pull at the anchor."""
+    return f"line {f['line_angle']:4.1f} deg  pull ~{f['line_pull']:5.1f} N"

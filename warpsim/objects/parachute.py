@@ -27,8 +27,9 @@ import numpy as np
 from ..physics.builder import ModelBuilder
 from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
 from ..physics.kernels.canopy import TABLE_ROWS, TABLE_STEP_DEG
-from ..physics.model import ObjectRecord
+from ..physics.model import Model, ObjectRecord
 from ..physics.terrain import Heightfield
+from .figures import FigureView, Measure
 
 
 @dataclass(kw_only=True)
@@ -291,3 +292,24 @@ def descent_and_swing(sim, seconds: float, settle: float = 10.0) -> tuple[float,
     swings = np.array(swings)
     descent = (heights[0] - heights[-1]) / (times[-1] - times[0])
     return float(descent), float(swings.max()), float(np.sqrt((swings**2).mean()))
+
+
+# ---------------------------------------------------------------------------------------------- figures
+PARACHUTE_FIGURES = {
+    "radius": ("m", "mean horizontal distance of the canopy's rim from its centre"),
+    "swing": ("deg", "angle of the line from the person to the canopy's centre from the vertical"),
+}
+
+
+def parachute_figures(model: Model, record: ObjectRecord) -> Measure:
+    """The parachute's :data:`PARACHUTE_FIGURES` of a frame."""
+
+    def measure(view: FigureView) -> dict[str, float]:
+        return {"radius": projected_radius(record, view.positions), "swing": swing_angle(record, view.positions)}
+
+    return measure
+
+
+def parachute_hud(f: dict[str, float]) -> str:
+    """The parachute's heads-up text: rate of descent, canopy radius and swing."""
+    return f"descent {f['sink']:5.2f} m/s  radius {f['radius']:4.2f} m  swing {f['swing']:3.0f} deg"

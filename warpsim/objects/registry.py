@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from . import figures, flag, hang_glider, kite, mesh, parachute
+from . import flag, glider_flight, hang_glider, kite, mesh, parachute
 from .keys import line_walk_keys, weight_shift_keys
 
 
@@ -91,11 +91,11 @@ OBJECTS: dict[str, ObjectSpec] = {
         scene_defaults={"wind": {"velocity": [4.0, 0.5, 0.0]}},
         summary="stiff woven sheet nailed along a pole, in wind (design = paper: the cloth of the paper's slide 15)",
         presets=flag.PRESETS,
-        figures=figures.FLAG_FIGURES,
-        measure_figures=figures.flag_figures,
-        hud=figures.flag_hud,
+        figures=flag.FLAG_FIGURES,
+        measure_figures=flag.flag_figures,
+        hud=flag.flag_hud,
         oscillations={"flap": 0.01},  # a flap under 1 cm is jitter
-        caveat=figures.flag_caveat,
+        caveat=flag.flag_caveat,
     ),
     "hang-glider": ObjectSpec(
         config=hang_glider.HangGliderConfig,
@@ -111,9 +111,9 @@ OBJECTS: dict[str, ObjectSpec] = {
         controls=("pitch", "roll"),
         apply_controls=hang_glider.apply_controls,
         presets=hang_glider.PRESETS,
-        figures=figures.GLIDER_FIGURES,
-        measure_figures=figures.glider_figures,
-        hud=figures.glider_hud,
+        figures=glider_flight.GLIDER_FIGURES,
+        measure_figures=glider_flight.glider_figures,
+        hud=glider_flight.glider_hud,
         keys=weight_shift_keys("hang glider"),
         wind_limit=15.0,  # above this no hang glider is flown (its trim speed is 11-12 m/s)
     ),
@@ -127,9 +127,9 @@ OBJECTS: dict[str, ObjectSpec] = {
         controls=("anchor",),
         apply_controls=kite.apply_controls,
         presets=kite.PRESETS,
-        figures=figures.KITE_FIGURES,
-        measure_figures=figures.kite_figures,
-        hud=figures.kite_hud,
+        figures=kite.KITE_FIGURES,
+        measure_figures=kite.kite_figures,
+        hud=kite.kite_hud,
         keys=(line_walk_keys("kite", "sail"),),
         wind_limit=12.0,  # a delta kite's upper wind range (Beaufort 5-6)
     ),
@@ -138,9 +138,9 @@ OBJECTS: dict[str, ObjectSpec] = {
         build=parachute.build_parachute,
         scene_defaults={"wind": {"velocity": [0.0, 0.0, 0.0]}},
         summary="round canopy of rings, lines, heavy person; hoop = true keeps it open (paper Section 8)",
-        figures=figures.PARACHUTE_FIGURES,
-        measure_figures=figures.parachute_figures,
-        hud=figures.parachute_hud,
+        figures=parachute.PARACHUTE_FIGURES,
+        measure_figures=parachute.parachute_figures,
+        hud=parachute.parachute_hud,
     ),
     MESH: ObjectSpec(
         config=mesh.MeshConfig,

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from warpsim.run import diagnostics
-from warpsim.run.simulation import Simulation
+from warpsim.run.simulation import BlowUpError, Simulation
 from warpsim.scene.descriptor import defaults
 
 
@@ -190,6 +190,6 @@ def test_the_frame_iterator_gives_run_s_frames_and_checks_each_world_alone():
     whole = _kites(2)
     whole.run(3 * whole.steps_per_frame * whole.dt)
     good = whole.state.positions()
-    with pytest.raises(Exception, match="non-finite"):
+    with pytest.raises(BlowUpError, match="non-finite"):
         list(whole.frames(1.0, before=lambda index: (whole.state.particle_q.assign(np.full_like(good, np.nan)))))
     np.testing.assert_array_equal(whole.state.positions(), good)  # back to the last good frame

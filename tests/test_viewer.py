@@ -403,3 +403,25 @@ def test_restart_while_recording_starts_a_new_take(tmp_path):
 
 
 # ---------------------------------------------------------------------------------------------- command line
+
+
+def test_an_interrupt_inside_a_frame_leaves_the_viewer_able_to_step_on():
+    """Ctrl-C (or any error) inside a frame's stepping ends the frame iterator the viewer steps by; the next step
+    starts a new one from the state as it is, frame by frame as before."""
+    viewer, backend = _viewer("hang-glider")
+    assert viewer.advance()
+    held, calls = backend.held, {"n": 0}
+
+    def interrupted():
+        calls["n"] += 1
+        if calls["n"] == 1:
+            raise KeyboardInterrupt
+        return held()
+
+    backend.held = interrupted
+    with pytest.raises(KeyboardInterrupt):
+        viewer.advance()
+    before = viewer.sim.steps_taken
+    assert viewer.advance() and viewer.advance()
+    assert viewer.sim.steps_taken == before + 2 * viewer.sim.steps_per_frame
+    assert viewer.frame.steps == viewer.sim.steps_taken and viewer.frame.finite

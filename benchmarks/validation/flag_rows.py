@@ -142,7 +142,7 @@ def flag() -> list[Row]:
         "wind's speed feels no force, and nothing in the law sets a wavelength. At dt 0.01 the flapping is the time "
         "step's (row below); converged in dt the coarse flags flap faster as the mesh is refined (f L/U 0.96 and "
         "1.36 at resolutions 5 and 9), resolution 17 ripples at 3.6 Hz and resolution 33 wanders without a steady "
-        "flap. Lighthill's elongated-body air (tried, not kept; docs/objects.md) does not set a wavelength either: "
+        "flap. Lighthill's elongated-body air (tried, not kept; docs/flag.md) does not set a wavelength either: "
         "without a bending stiffness the mesh resolves, its fastest-growing wave is the mesh's shortest. A "
         "wavelength tied to the flag's length needs a short-wave limit the mesh resolves (implicit bending, an added "
         "mass falling at short waves, or an unsteady vortex lattice with a free wake), not more iterations. "

@@ -152,6 +152,7 @@ def _check_run_options(args) -> dict[str, Path | None]:
 def _claim_recording(outputs, args, h5_path: Path | None):
     """Take the writer's lock of the ``--h5`` or ``--resume`` recording before anything else happens (another
     run writing it is a usage error); released when ``outputs`` closes. Returns the lock or None."""
+    from ..io.h5format import signals_held
     from ..io.hdf5 import RecordingError, check_recording_path, claim
 
     if not (h5_path or args.resume):
@@ -160,11 +161,14 @@ def _claim_recording(outputs, args, h5_path: Path | None):
         checked_output(check_recording_path, args.resume, "--resume")
     flag, path = ("--h5", h5_path) if h5_path else ("--resume", args.resume)
     interruptible()  # from here on Ctrl-C must close what is opened
-    try:
-        lock = claim(path, create=bool(h5_path))  # held to the end: nobody else writes it meanwhile
-    except RecordingError as err:
-        raise UsageError(f"{flag} {err}") from None
-    outputs.callback(lock.release, remove_created=True)  # a no-op once the recorder has released it
+    # SIGINT and SIGTERM held from the file's creation until its removal is arranged: one landing in between left
+    # an empty file that every reader called 'not an HDF5 file' (a loaded suite run hit it); held, it lands just after
+    with signals_held():
+        try:
+            lock = claim(path, create=bool(h5_path))  # held to the end: nobody else writes it meanwhile
+        except RecordingError as err:
+            raise UsageError(f"{flag} {err}") from None
+        outputs.callback(lock.release, remove_created=True)  # a no-op once the recorder has released it
     return lock
 
 
@@ -339,6 +343,7 @@ def _report(args, run: _RunInputs, summary, blowup, failures, paths: dict, figur
         for line in figures.lines() if figures is not None else ():
             print(line)
         written = [(k.label, args.resume if k.flag == "--h5" and args.resume else paths[k.flag]) for k in OUTPUTS]
+        written = [(label, path) for label, path in written if path and Path(path).exists()]  # a picture of no frame
         for label, path in [*written, ("table", table)]:
             if path and not any(str(path) in str(err) for err in failures):
                 print(f"  {label}: {path}")

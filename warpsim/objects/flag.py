@@ -30,7 +30,7 @@ class FlagConfig(Checked):
         design: ``sheet`` (the default: a bending stiffness of 0.1 N m, a card's or a thin plastic sheet's, and a
             woven cloth in its plane, stiff along its threads and soft in shear, masses by area, at resolution 17
             with elastic sticks whose iterations converge: its flapping is the flag's, the same at resolutions 17 and
-            33 and with the threads made 64 times softer, and in the band measured for flags; docs/objects.md) or
+            33 and with the threads made 64 times softer, and in the band measured for flags; docs/flag.md) or
             ``paper`` (the paper's cloth: rigid sticks, no bending, even masses, resolution 5, whose flapping is its
             mesh's and its time step's). In a scene or with ``--set`` it is a preset (:data:`PRESETS`): it sets
             the keys below but ``width``, ``height``, ``mass_per_area``, ``pole_height`` and ``position``, and
@@ -50,11 +50,11 @@ class FlagConfig(Checked):
             (the paper's) gives every particle the same, so that the grid's edges carry twice the cloth their area
             holds and its corners four times, a heavier border the coarser the mesh (a sheet flag with every stick
             alike flapped within 9 % of itself at resolutions 9, 17 and 33 by area, 10 % with even masses;
-            docs/objects.md).
+            docs/flag.md).
         bending_stiffness: the cloth's bending stiffness ``B`` [N m] (per metre of width: ``E t^3 / 12`` for a
             sheet of Young's modulus ``E`` and thickness ``t``; Poisson's ratio 0), as hinges along the grid's rows
             and columns and a twist in every cell (:func:`add_plate_hinges`, :mod:`warpsim.physics.kernels.bending`).
-            0 (the paper's) is a cloth that folds freely; its flapping is then set by the mesh (docs/objects.md).
+            0 (the paper's) is a cloth that folds freely; its flapping is then set by the mesh (docs/flag.md).
             A flag's fabric has ~1e-5 to 1e-3, which sets waves of centimetres, finer than these meshes; a stiffer
             sheet (0.1, the sheet's: a card or a thin plastic sheet) sets its waves at the flag's length, and its
             flapping converges as the mesh is refined (with a woven cloth, whatever its threads' stiffness:
@@ -75,7 +75,7 @@ class FlagConfig(Checked):
             threads and shears under small forces (its threads turn at their crossings): with diagonals of 100 N/m
             the sheet flag flaps within 3.5 % whatever its threads' stiffness (1,000 to 64,000 N/m), where the grid
             of like sticks flaps slower the stiffer it is made (its crossed cells are over-constrained, and the
-            trend is what their locking would do; docs/objects.md).
+            trend is what their locking would do; docs/flag.md).
         pole_height: height of the flag's top edge above the terrain at the pole's foot [m].
         position: (x, y) of the pole [m].
         lattice: the cloth is a lifting surface of the vortex law too (its free edge, downstream of the pole, the
@@ -236,7 +236,7 @@ def flag_caveat(flag, settings) -> str:
 
     Without a bending stiffness they are the mesh's: the paper's air law is local and its cloth folds freely, so
     nothing but the mesh picks a wavelength (converged in the time step, resolution 5 flaps at f L/U 0.96 and
-    resolution 9 at 1.36; docs/objects.md, "The flag at fine resolution"). With one, the validation's sheet flag
+    resolution 9 at 1.36; docs/flag.md, "The flag at fine resolution"). With one, the validation's sheet flag
     (B 0.1 N m, a woven cloth, masses by area) flaps within 0.1 % at resolutions 17 and 33 and 2 % slower at 9:
     its figures are the flag's on a mesh finer than resolution 17 and than the bending length
     ``(B / (rho U^2))^(1/3)``, with elastic sticks and at least :data:`SHEET_ITERATIONS` iterations per particle

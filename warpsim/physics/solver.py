@@ -24,6 +24,7 @@ from .kernels import (
     collision,
     constraints,
     controls,
+    influence,
     momentum,
     springs,
     verlet,
@@ -217,7 +218,7 @@ class SolverVerlet(_Solver):
     None = fused on the CPU, gather on CUDA.
     """
 
-    modules = (aero, bending, canopy, collision, constraints, controls, momentum, verlet, vortex, wake)
+    modules = (aero, bending, canopy, collision, constraints, controls, influence, momentum, verlet, vortex, wake)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, *, constraint_scheme=None, **kwargs):
         super().__init__(model, config, **kwargs)
@@ -248,7 +249,7 @@ class SolverEuler(_Solver):
     ``spring_stiffness`` [N/m] and ``spring_damping`` [N s/m] from its :class:`~warpsim.physics.config.SolverConfig`;
     arguments as for :class:`SolverVerlet`, without a constraint scheme)."""
 
-    modules = (aero, bending, canopy, collision, controls, springs, vortex, wake)
+    modules = (aero, bending, canopy, collision, controls, influence, springs, vortex, wake)
 
     def __init__(self, model: Model, config: SolverConfig | None = None, **kwargs):
         super().__init__(model, config, **kwargs)

@@ -79,9 +79,9 @@ class Simulation:
     """A scene ready to run: model, state, control, solver and inputs built from a validated descriptor.
 
     Args:
-        descriptor: validated descriptor (see :mod:`warpsim.scene.descriptor`).
-        device: Warp device (``cpu`` default, ``cuda`` when present).
         scene: the :class:`~warpsim.scene.scene.Scene`, or a validated descriptor (see :mod:`warpsim.scene.descriptor`).
+        device: Warp device (``cpu`` default, ``cuda`` when present).
+        use_graph: replay each step (and each frame) as a captured graph (default True).
         where: origin of the descriptor for error messages.
         terrain: heights to use instead of the descriptor's ``[terrain]`` (a recording's stored terrain).
         threads: how many threads step the worlds, each a group of consecutive worlds (default 1; at most one
@@ -396,7 +396,8 @@ class Simulation:
         window closed, every case of a sweep blown up) leaves the state at the last frame it was given.
 
         Checked: a bad frame is not yielded; the state goes back to the last good frame and :class:`BlowUpError`
-        (its ``summary`` None) ends the iterator, as :meth:`advance` does. With ``each_world`` the worlds are
+        ends the iterator, as :meth:`advance` does (its ``summary`` None; a state already bad when the iterator
+        starts raises it from :meth:`start_frames`, with an empty summary). With ``each_world`` the worlds are
         checked one by one instead (a sweep's cases, which go on when one of them blows up): every frame is
         yielded, its :attr:`~warpsim.run.diagnostics.Frame.blowups` naming the worlds that are bad in it (a world
         once bad steps on unchecked; nothing goes back).

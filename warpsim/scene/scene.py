@@ -95,11 +95,11 @@ class Scene:
 
     def object_config(self, world: int = 0):
         """The object's config dataclass in world ``world`` (with that world's ``[worlds]`` values)."""
-        return from_section(registry.OBJECTS[self.kind].config, self._world_tables(world)[self.section])
+        return from_section(registry.OBJECTS[self.kind].config, copy.deepcopy(self._world_tables(world)[self.section]))
 
     def wind_of(self, world: int) -> WindConfig:
         """The ``[wind]`` of world ``world`` (its ``[worlds]`` values in place)."""
-        return from_section(WindConfig, self._world_tables(world)["wind"])
+        return from_section(WindConfig, copy.deepcopy(self._world_tables(world)["wind"]))
 
     def build_model(self, device: str | None = "cpu", where: str | None = None, terrain=None, worlds=None):
         """The :class:`~warpsim.physics.model.Model` of this scene's worlds (all, or those of the range ``worlds``):
@@ -107,7 +107,8 @@ class Scene:
         return build_model(self._tables, device, self.where if where is None else where, terrain, worlds=worlds)
 
     def _world_tables(self, world: int) -> dict:
-        """The tables of world ``world``: its ``[worlds]`` values in place (a batch of one may have them too)."""
+        """The tables of world ``world``: its ``[worlds]`` values in place (a batch of one may have them too);
+        without any, the scene's own tables, so that a caller copies what it hands out."""
         varied = any(section != "count" for section in self._tables.get("worlds", {}))
         return world_descriptor(self._tables, world) if varied else self._tables
 

@@ -372,12 +372,14 @@ class Viewer:
         """Step one frame with the keyboard's controls, record it; False (and paused) after a blow-up."""
         started = time.perf_counter()
         try:
-            if self._frames is None:  # after a blow-up: on from the good frame it went back to
+            if self._frames is None:  # after a blow-up or an error: on from the state as it is
                 self._frames = self.sim.frames(before=self._controls_at_frame_start)
                 next(self._frames)
             self.frame = next(self._frames)
-        except BlowUpError as err:
+        except BaseException as err:  # the iterator has ended with it: the next frame comes from a new one
             self._frames = None
+            if not isinstance(err, BlowUpError):
+                raise
             self.frame = self.sim.frame(err.last_good_frame)
             self.blew_up = True
             self._fail(f"{err}; press R to restart")

@@ -9,6 +9,7 @@ def command(args) -> int:
     """Print counts, masses and settings of a scene."""
     import numpy as np
 
+    from ..objects import registry
     from ..scene.descriptor import to_toml
     from ..scene.scene import Scene
 
@@ -34,7 +35,7 @@ def command(args) -> int:
             note = f" ({', '.join(notes)})" if notes else ""
             print(f"    part {part:<10} {len(ids):5d} particles, {finite.sum():9.3f} kg{note}")
             earlier.update(int(i) for i in ids)
-        paper = record.paper_counts
+        paper = registry.OBJECTS[record.kind].paper_counts
         if paper:
             print(
                 f"  the paper's model: particles {paper['particles']}, sticks {paper['sticks']}, "

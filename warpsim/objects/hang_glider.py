@@ -358,7 +358,6 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
                 "control": np.array(control),
                 **strap_groups,
             },
-            paper_counts=PAPER_COUNTS,
             nose=rows[0][0],
             keel=np.array(keel),
             tips=(rows[n][0], rows[n][n]),

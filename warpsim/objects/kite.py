@@ -381,7 +381,6 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
                 "keel": keel_sticks,
                 "rope": rope_sticks,
             },
-            paper_counts=PAPER_COUNTS,
             curves={"rope": [[int(i) for i in rope]]},
             nose=rows[0][0],
             tow=tow_particle,

@@ -42,6 +42,8 @@ class ObjectSpec:
             :class:`~warpsim.scene.build.Settings`, of one world): what the run's closing figures are not, said
             under them (e.g. a figure set by the mesh rather than by the object's physics); None when there is
             nothing to say.
+        paper_counts: the paper's particle, stick and triangle counts of this object, where it gives them
+            (``warpsim info`` prints them beside the model's).
         wind_limit: the strongest wind [m/s] the object is made to fly in: the viewer's + key stops there (or at
             the scene's own wind, when that is stronger).
         keys: the viewer's key bindings of its controls (:class:`~.keys.AxisKeys`, :class:`~.keys.WalkKeys`): what
@@ -63,6 +65,7 @@ class ObjectSpec:
     oscillations: dict[str, float] = field(default_factory=dict)
     caveat: Callable | None = None
     wind_limit: float = 20.0
+    paper_counts: dict | None = None
     keys: tuple = ()
 
     def __post_init__(self) -> None:
@@ -100,6 +103,7 @@ OBJECTS: dict[str, ObjectSpec] = {
     "hang-glider": ObjectSpec(
         config=hang_glider.HangGliderConfig,
         build=hang_glider.build_hang_glider,
+        paper_counts=hang_glider.PAPER_COUNTS,
         # mass splitting: the plain per-particle average does not conserve angular momentum between the
         # heavy pilot and the light frame, and that spurious torque, not the air, would decide the pitch
         scene_defaults={
@@ -120,6 +124,7 @@ OBJECTS: dict[str, ObjectSpec] = {
     "kite": ObjectSpec(
         config=kite.KiteConfig,
         build=kite.build_kite,
+        paper_counts=kite.PAPER_COUNTS,
         # mass splitting: the paper's plain average does not conserve momentum between the light rope and
         # the kite, so the sticks themselves lean the rope off the kite's force balance (benchmarks/validation)
         scene_defaults={"wind": {"velocity": [6.0, 0.0, 0.0]}, "solver": {"mass_splitting": True}},

@@ -37,7 +37,6 @@ class ObjectRecord:
         tri_parts: part name -> triangle indices.
         stick_groups: group name -> stick indices (e.g. ``"frame"``, ``"control"``).
         curves: part name -> chains of particle indices drawn as curves by outputs (ropes, lines).
-        paper_counts: the paper's particle, stick and triangle counts of this object, when it gives them.
     """
 
     name: str
@@ -48,7 +47,6 @@ class ObjectRecord:
     tri_parts: dict[str, np.ndarray] = field(default_factory=dict)
     stick_groups: dict[str, np.ndarray] = field(default_factory=dict)
     curves: dict[str, list[list[int]]] = field(default_factory=dict)
-    paper_counts: dict[str, int] | None = None
 
     def controlled_sticks(self) -> np.ndarray:
         """The sticks whose rest lengths this object's controls set [int32 indices]: the solver ramps them

@@ -114,7 +114,10 @@ def _check_picture(path) -> Path:
 
     checked = check_picture_path(path)
     if checked.suffix.lower() != ".png":
-        raise OutputPathError(f"{path}: a picture of the last frame is a .png")
+        raise OutputPathError(
+            f"{path}: a picture of the last frame is a .png (an animation: record with --h5 REC.h5, then "
+            "warpsim render REC.h5 OUT.gif)"
+        )
     try:
         require_pillow()
     except RuntimeError as err:  # the [render] extra is not installed: one line before the run, not after it

@@ -266,73 +266,16 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
         nose, tip_l, tip_r, n, 1.0, vel, shape=twist
     )  # masses are set per part below
     sail = np.arange(p0, p0 + sail_count)
-    if cfg.chord_loading:
-        chordwise_loading(builder, tris, nose, fwd, left, cfg.chord, semi)
-    delta_sail_aero(
-        builder,
-        tris,
-        rows,
-        nose,
-        left,
-        cfg.span,
-        0.5 * cfg.span * cfg.chord,
-        cfg.oswald,
-        cfg.profile_drag,
-        cfg.stall_angle,
-    )
+    _sail_air(builder, cfg, tris, rows, nose, fwd, left)
 
     centre = (nose + tip_l + tip_r) / 3.0
     frame = add_rigid_frame(
         builder, rows, sail_sticks, centre, cfg.frame_height * up, (1, 0, -1), virtual_mass, cfg.frame_weight, vel
     )
     virtual, keel = frame.virtual, frame.keel
-    frame_ties = []
-    strut_ties: list[tuple[int, int, int]] = []  # (stick, strut particle, anchor): the twist shift moves them
-    existing = {frozenset(ends): st for st, ends in enumerate(builder.stick_particles)}
-
-    def tie(p: int, a: int) -> None:
-        """Hold particle ``p`` to ``a`` as part of the frame: a new frame stick, or, where a stick already
-        joins them (a cloth stick, a frame tie), that stick made a frame stick (frame weight, not tensioned)
-        rather than a second stick with another rest length beside it."""
-        st = existing.get(frozenset((p, a)))
-        if st is None:
-            st = existing[frozenset((p, a))] = builder.add_stick(p, a, weight=cfg.frame_weight)
-        else:
-            builder.stick_weight[st] = max(builder.stick_weight[st], cfg.frame_weight)
-        frame_ties.append(st)
-
-    if cfg.washout_struts > 0.0:
-        # washout struts (tip rods, "sprogs"): the trailing edge's outer parts held rigid at their twist, so a
-        # tensioned sail keeps its washout; each is tied to the virtual particles, its tip and the keel's end
-        reach = int(np.floor(cfg.washout_struts * n / 2.0))
-        tail = keel[-1]  # the keel's end: on the trailing edge when the divisions are even, a row ahead if odd
-        for j in range(1, reach + 1):
-            for p, tip in ((rows[n][j], rows[n][0]), (rows[n][n - j], rows[n][n])):
-                for a in (*frame.virtual, tip, tail):
-                    tie(p, a)
-                    strut_ties.append((frame_ties[-1], p, a))
-    if cfg.keel_pocket:
-        # the sail's pocket along the keel: the cloth particles either side of the keel tube between two keel
-        # particles (odd rows) held to it, so the sail cannot fold along the keel
-        for i in range(1, n, 2):
-            for p in (rows[i][(i - 1) // 2], rows[i][(i + 1) // 2]):
-                for a in (*frame.virtual, rows[i - 1][(i - 1) // 2], rows[i + 1][(i + 1) // 2]):
-                    tie(p, a)
-    if cfg.sail_tension > 0.0:
-        builder.pretension(
-            np.setdiff1d(sail_sticks, np.concatenate([frame.sticks, frame_ties]).astype(int)), cfg.sail_tension
-        )
-    if cfg.sail_compliance > 0.0:  # the cloth alone: the frame, its ties and the struts stay rigid
-        cloth_sticks = np.setdiff1d(sail_sticks, np.concatenate([frame.sticks, frame_ties]).astype(int))
-        builder.set_compliance(cloth_sticks, cfg.sail_compliance)
+    frame_ties, strut_ties = _sail_ties(builder, cfg, rows, sail_sticks, frame)
     billow = _billow_shift_data(builder, cfg, strut_ties, nose, fwd, left, up, semi, washout_rad)
-    frame_set = set(frame.points)
-    cloth = [p for p in sail if p not in frame_set]
-    frame_mass = cfg.frame_mass_fraction * cfg.glider_mass
-    for p in frame.points:
-        builder.particle_mass[p] = frame_mass / len(frame.points)
-    for p in cloth:
-        builder.particle_mass[p] = (cfg.glider_mass - frame_mass - 3.0 * virtual_mass) / len(cloth)
+    _sail_masses(builder, cfg, sail, frame, virtual_mass)
 
     if cfg.suspension == "strap":
         pilot, control, attach, neutral, hang, strap_ties, extra = _hang_strap(
@@ -373,6 +316,86 @@ def build_hang_glider(builder: ModelBuilder, cfg: HangGliderConfig, terrain: Hei
             **billow,
         )
     )
+
+
+def _sail_air(builder: ModelBuilder, cfg: HangGliderConfig, tris, rows, nose, fwd, left) -> None:
+    """The sail's air set-up: its chordwise loading (``chord_loading``) and its delta planform's coefficients for
+    the ``sail`` law (:func:`~warpsim.objects.delta.delta_sail_aero`)."""
+    semi = 0.5 * cfg.span
+    if cfg.chord_loading:
+        chordwise_loading(builder, tris, nose, fwd, left, cfg.chord, semi)
+    delta_sail_aero(
+        builder,
+        tris,
+        rows,
+        nose,
+        left,
+        cfg.span,
+        0.5 * cfg.span * cfg.chord,
+        cfg.oswald,
+        cfg.profile_drag,
+        cfg.stall_angle,
+    )
+
+
+def _sail_ties(builder: ModelBuilder, cfg: HangGliderConfig, rows, sail_sticks, frame) -> tuple[list[int], list]:
+    """The sail held on its frame: the washout struts' and the keel pocket's ties (frame sticks), the cloth's
+    pretension and its compliance. Returns the frame's ties (stick indices) and the struts' ``(stick, strut particle,
+    anchor)``, which the billow shift moves."""
+    n = int(cfg.divisions)
+    keel = frame.keel
+    frame_ties: list[int] = []
+    strut_ties: list[tuple[int, int, int]] = []  # (stick, strut particle, anchor): the twist shift moves them
+    existing = {frozenset(ends): st for st, ends in enumerate(builder.stick_particles)}
+
+    def tie(p: int, a: int) -> None:
+        """Hold particle ``p`` to ``a`` as part of the frame: a new frame stick, or, where a stick already
+        joins them (a cloth stick, a frame tie), that stick made a frame stick (frame weight, not tensioned)
+        rather than a second stick with another rest length beside it."""
+        st = existing.get(frozenset((p, a)))
+        if st is None:
+            st = existing[frozenset((p, a))] = builder.add_stick(p, a, weight=cfg.frame_weight)
+        else:
+            builder.stick_weight[st] = max(builder.stick_weight[st], cfg.frame_weight)
+        frame_ties.append(st)
+
+    if cfg.washout_struts > 0.0:
+        # washout struts (tip rods, "sprogs"): the trailing edge's outer parts held rigid at their twist, so a
+        # tensioned sail keeps its washout; each is tied to the virtual particles, its tip and the keel's end
+        reach = int(np.floor(cfg.washout_struts * n / 2.0))
+        tail = keel[-1]  # the keel's end: on the trailing edge when the divisions are even, a row ahead if odd
+        for j in range(1, reach + 1):
+            for p, tip in ((rows[n][j], rows[n][0]), (rows[n][n - j], rows[n][n])):
+                for a in (*frame.virtual, tip, tail):
+                    tie(p, a)
+                    strut_ties.append((frame_ties[-1], p, a))
+    if cfg.keel_pocket:
+        # the sail's pocket along the keel: the cloth particles either side of the keel tube between two keel
+        # particles (odd rows) held to it, so the sail cannot fold along the keel
+        for i in range(1, n, 2):
+            for p in (rows[i][(i - 1) // 2], rows[i][(i + 1) // 2]):
+                for a in (*frame.virtual, rows[i - 1][(i - 1) // 2], rows[i + 1][(i + 1) // 2]):
+                    tie(p, a)
+    if cfg.sail_tension > 0.0:
+        builder.pretension(
+            np.setdiff1d(sail_sticks, np.concatenate([frame.sticks, frame_ties]).astype(int)), cfg.sail_tension
+        )
+    if cfg.sail_compliance > 0.0:  # the cloth alone: the frame, its ties and the struts stay rigid
+        cloth_sticks = np.setdiff1d(sail_sticks, np.concatenate([frame.sticks, frame_ties]).astype(int))
+        builder.set_compliance(cloth_sticks, cfg.sail_compliance)
+    return frame_ties, strut_ties
+
+
+def _sail_masses(builder: ModelBuilder, cfg: HangGliderConfig, sail, frame, virtual_mass: float) -> None:
+    """The glider's mass on its particles: ``frame_mass_fraction`` of it on the frame's particles, the rest but the
+    virtual particles' on the cloth, evenly [kg]."""
+    frame_set = set(frame.points)
+    cloth = [p for p in sail if p not in frame_set]
+    frame_mass = cfg.frame_mass_fraction * cfg.glider_mass
+    for p in frame.points:
+        builder.particle_mass[p] = frame_mass / len(frame.points)
+    for p in cloth:
+        builder.particle_mass[p] = (cfg.glider_mass - frame_mass - 3.0 * virtual_mass) / len(cloth)
 
 
 def _billow_shift_data(builder: ModelBuilder, cfg: HangGliderConfig, strut_ties, nose, fwd, left, up, semi, washout):

@@ -265,45 +265,9 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     rows, sail_sticks, sail_tris = builder.add_subdivided_triangle(
         nose, tip_l, tip_r, n, per_particle * sail_count, shape=dihedral
     )
-    if cfg.chord_loading:
-        chordwise_loading(builder, sail_tris, nose, fwd, left, cfg.spine, 0.5 * cfg.span)
-    delta_sail_aero(
-        builder,
-        sail_tris,
-        rows,
-        nose,
-        left,
-        cfg.span,
-        0.5 * cfg.span * cfg.spine,
-        0.8,
-        cfg.profile_drag,
-        cfg.stall_angle,
-    )
-    if cfg.delta_lift:
-        # the planform's lift slope (Helmbold-DATCOM with its half-chord sweep), per triangle divided by the cosine
-        # of the leading edge's sweep, which the attached flow's sweep theory takes off again (sail_force)
-        half_chord_sweep = np.degrees(np.arctan(cfg.spine / cfg.span))
-        edge_cos = 0.5 * cfg.span / np.hypot(0.5 * cfg.span, cfg.spine)
-        slope, induced, drag0, stall = sail_coefficients(
-            2.0 * cfg.span / cfg.spine, half_chord_sweep, 0.8, cfg.profile_drag, cfg.stall_angle
-        )
-        builder.set_triangle_sail(sail_tris, (slope / edge_cos, induced, drag0, stall))
-    keel_top = [rows[r][r // 2] for r in range(2, 3 + 2 * kd, 2)]
-    top_front, top_back = builder.positions([keel_top[0], keel_top[-1]])
-    k0 = builder.particle_count
-    keel_rows, keel_sticks, keel_tris = builder.add_subdivided_triangle(
-        tow, top_front, top_back, kd, per_particle * keel_count, last_row=keel_top
-    )
-    for s in keel_sticks:
-        builder.stick_weight[s] = cfg.frame_weight  # the keel is the kite's reinforced part
-    if cfg.keel_tension > 0.0:
-        # the keel cut taut: every keel stick but its top edge (the spine's particles, which the frame holds)
-        on_top, ends = set(keel_top), builder.stick_particles
-        cloth = [int(s) for s in keel_sticks if not (ends[s][0] in on_top and ends[s][1] in on_top)]
-        builder.pretension(cloth, cfg.keel_tension)
+    _kite_sail_air(builder, cfg, sail_tris, rows, nose, fwd, left)
+    keel_top, keel_rows, keel_sticks, keel_tris, keel = _kite_keel(builder, cfg, rows, tow, per_particle, keel_count)
     tow_particle = keel_rows[0][0]
-    keel = np.arange(k0, builder.particle_count)
-
     centre = (nose + tip_l + tip_r) / 3.0
     spars = add_rigid_frame(
         builder,
@@ -317,21 +281,7 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
     )
     if cfg.straight_spars:
         spars.sticks.extend(add_spar_braces(builder, rows, cfg.frame_weight))
-    if cfg.frame_mass_fraction > 0.0:
-        # the spars' own mass, spread evenly over the spine's and the leading edges' particles
-        frame = sorted({*spars.keel, *(rows[r][0] for r in range(n + 1)), *(rows[r][r] for r in range(n + 1))})
-        for i in frame:
-            builder.particle_mass[i] += cfg.mass * cfg.frame_mass_fraction / len(frame)
-    spine, virtual, ends = set(spars.keel), set(spars.virtual), builder.stick_particles
-    for s in spars.sticks:  # the spine spar's ties to the virtual particles
-        a, b = ends[s]
-        if (a in spine and b in virtual) or (b in spine and a in virtual):
-            builder.stick_weight[s] = cfg.spine_weight
-    if cfg.spine_sleeve != 1.0:
-        # the sail sewn to the spine through a reinforced sleeve: its cloth sticks from the spine count more
-        for s in sail_sticks:
-            if (ends[s][0] in spine) != (ends[s][1] in spine):
-                builder.stick_weight[s] = cfg.spine_sleeve
+    _kite_frame_weights(builder, cfg, rows, sail_sticks, spars)
     if cfg.keel_edges:
         # the keel's reinforced edges: the tow point tied straight to the keel's ends on the spine and to the
         # spars' virtual particles, so the line's pull reaches the frame in one stick, not down a chain of keel
@@ -391,6 +341,78 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
             sag_chain=np.array(rope[::-1][: len(rope) - max(int(cfg.rope_doubled), 0)], dtype=np.int64),
         )
     )
+
+
+def _kite_sail_air(builder: ModelBuilder, cfg: KiteConfig, sail_tris, rows, nose, fwd, left) -> None:
+    """The sail's air set-up: its chordwise loading (``chord_loading``), its delta planform's coefficients for the
+    ``sail`` law, and with ``delta_lift`` the planform's own lift slope."""
+    if cfg.chord_loading:
+        chordwise_loading(builder, sail_tris, nose, fwd, left, cfg.spine, 0.5 * cfg.span)
+    delta_sail_aero(
+        builder,
+        sail_tris,
+        rows,
+        nose,
+        left,
+        cfg.span,
+        0.5 * cfg.span * cfg.spine,
+        0.8,
+        cfg.profile_drag,
+        cfg.stall_angle,
+    )
+    if cfg.delta_lift:
+        # the planform's lift slope (Helmbold-DATCOM with its half-chord sweep), per triangle divided by the cosine
+        # of the leading edge's sweep, which the attached flow's sweep theory takes off again (sail_force)
+        half_chord_sweep = np.degrees(np.arctan(cfg.spine / cfg.span))
+        edge_cos = 0.5 * cfg.span / np.hypot(0.5 * cfg.span, cfg.spine)
+        slope, induced, drag0, stall = sail_coefficients(
+            2.0 * cfg.span / cfg.spine, half_chord_sweep, 0.8, cfg.profile_drag, cfg.stall_angle
+        )
+        builder.set_triangle_sail(sail_tris, (slope / edge_cos, induced, drag0, stall))
+
+
+def _kite_keel(builder: ModelBuilder, cfg: KiteConfig, rows, tow, per_particle: float, keel_count: int):
+    """The keel: a triangle of cloth from the tow point up to the spine's particles (its top edge), its sticks of
+    frame weight and, with ``keel_tension``, cut taut. Returns its top edge's particles, rows, sticks, triangles and
+    particles."""
+    kd = int(cfg.keel_divisions)
+    keel_top = [rows[r][r // 2] for r in range(2, 3 + 2 * kd, 2)]
+    top_front, top_back = builder.positions([keel_top[0], keel_top[-1]])
+    k0 = builder.particle_count
+    keel_rows, keel_sticks, keel_tris = builder.add_subdivided_triangle(
+        tow, top_front, top_back, kd, per_particle * keel_count, last_row=keel_top
+    )
+    for s in keel_sticks:
+        builder.stick_weight[s] = cfg.frame_weight  # the keel is the kite's reinforced part
+    if cfg.keel_tension > 0.0:
+        # the keel cut taut: every keel stick but its top edge (the spine's particles, which the frame holds)
+        on_top, ends = set(keel_top), builder.stick_particles
+        cloth = [int(s) for s in keel_sticks if not (ends[s][0] in on_top and ends[s][1] in on_top)]
+        builder.pretension(cloth, cfg.keel_tension)
+    keel = np.arange(k0, builder.particle_count)
+
+    return keel_top, keel_rows, keel_sticks, keel_tris, keel
+
+
+def _kite_frame_weights(builder: ModelBuilder, cfg: KiteConfig, rows, sail_sticks, spars) -> None:
+    """The spars' own mass on the spine and leading edges (``frame_mass_fraction``), the spine's ties at
+    ``spine_weight`` and the sail's sleeve round the spine at ``spine_sleeve``."""
+    n = int(cfg.divisions)
+    if cfg.frame_mass_fraction > 0.0:
+        # the spars' own mass, spread evenly over the spine's and the leading edges' particles
+        frame = sorted({*spars.keel, *(rows[r][0] for r in range(n + 1)), *(rows[r][r] for r in range(n + 1))})
+        for i in frame:
+            builder.particle_mass[i] += cfg.mass * cfg.frame_mass_fraction / len(frame)
+    spine, virtual, ends = set(spars.keel), set(spars.virtual), builder.stick_particles
+    for s in spars.sticks:  # the spine spar's ties to the virtual particles
+        a, b = ends[s]
+        if (a in spine and b in virtual) or (b in spine and a in virtual):
+            builder.stick_weight[s] = cfg.spine_weight
+    if cfg.spine_sleeve != 1.0:
+        # the sail sewn to the spine through a reinforced sleeve: its cloth sticks from the spine count more
+        for s in sail_sticks:
+            if (ends[s][0] in spine) != (ends[s][1] in spine):
+                builder.stick_weight[s] = cfg.spine_sleeve
 
 
 def apply_controls(record: KiteRecord, targets: dict, values: dict) -> None:

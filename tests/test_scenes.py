@@ -102,3 +102,15 @@ def test_a_scene_is_one_typed_read_only_value_that_simulation_takes():
     b.step(200)
     np.testing.assert_array_equal(a.state.positions(), b.state.positions())
     assert a.scene.kind == "kite" and a.descriptor == b.descriptor
+
+
+def test_a_misspelt_wind_key_names_wind_speed_too():
+    """`wind.speed` is a key of `[worlds]` and `[sweep]` only (it scales `wind.velocity`), so a misspelt `[wind]`
+    key's one-line error names it beside the section's fields (a newcomer's trial looked for it there)."""
+    import pytest
+
+    from warpsim.scene.descriptor import DescriptorError, defaults, merge
+
+    with pytest.raises(DescriptorError, match=r"did you mean .*velocity.*wind\.speed \[m/s\]") as err:
+        merge("--set", defaults("kite"), {"wind": {"velocty": [3.0, 0.0, 0.0]}})
+    assert "\n" not in str(err.value)

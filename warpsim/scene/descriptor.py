@@ -177,9 +177,11 @@ def merge(where: str, base: dict, override: dict) -> dict:
                 speed = (section, key) == ("wind", "speed")  # a key of sweeps and [worlds] only: it scales velocity
                 example = value if isinstance(value, (int, float)) and not isinstance(value, bool) else 8
                 hint = f"; wind.speed varies only between worlds or sweep cases: set wind.velocity=[{example},0,0]"
+                if section == "wind" and not speed:  # the one key of sweeps and [worlds] that is not a field
+                    hint = " (and wind.speed [m/s], the magnitude of wind.velocity, between worlds or sweep cases)"
                 raise DescriptorError(
                     f"{where}: unknown key {section}.{key}{suggest(key, out[section])}; "
-                    f"[{section}] keys are {', '.join(out[section])}" + (hint if speed else "")
+                    f"[{section}] keys are {', '.join(out[section])}" + (hint if section == "wind" else "")
                 )
             checked = _check_value(where, section, key, out[section][key], value)
             if (section, key) == ("scene", "object") and checked != out[section][key]:

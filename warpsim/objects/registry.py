@@ -92,7 +92,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         config=flag.FlagConfig,
         build=flag.build_flag,
         scene_defaults={"wind": {"velocity": [4.0, 0.5, 0.0]}},
-        summary="stiff woven sheet nailed along a pole, in wind (design = paper: the cloth of the paper's slide 15)",
+        summary="stiff woven sheet nailed along a pole, in wind (the paper's cloth, slide 15: --set flag.design=paper)",
         presets=flag.PRESETS,
         figures=flag.FLAG_FIGURES,
         measure_figures=flag.flag_figures,
@@ -111,7 +111,8 @@ OBJECTS: dict[str, ObjectSpec] = {
             "terrain": {"kind": "procedural"},
             "solver": {"mass_splitting": True},
         },
-        summary="flex wing with a strap-hung pilot on a control bar (design = paper: Section 6); steer with pitch/roll",
+        summary="flex wing with a strap-hung pilot on a control bar (the paper's, Section 6: "
+        "--set hang_glider.design=paper); steer with pitch/roll",
         controls=("pitch", "roll"),
         apply_controls=hang_glider.apply_controls,
         presets=hang_glider.PRESETS,

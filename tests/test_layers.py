@@ -140,18 +140,19 @@ def _kind_names(path: Path, kinds: set[str]) -> list[str]:
     ]  # fmt: skip
 
 
+def _outside(package: str, find) -> list[str]:
+    """``find(path)``'s hits over every module of the package outside its sub-package ``package``."""
+    return [hit for path in sorted(PACKAGE.rglob("*.py")) if path.relative_to(PACKAGE).parts[0] != package
+            for hit in find(path)]  # fmt: skip
+
+
 def test_no_module_outside_objects_names_an_object_kind():
     """Each object's knowledge is in `objects/` (its module and its registry entry): the layers above reach an
     object through `objects.registry.OBJECTS`, never by its name, so a new object touches no other package."""
     from warpsim.objects.registry import OBJECTS
 
     kinds = set(OBJECTS) | {kind.replace("-", "_") for kind in OBJECTS}
-    named = [
-        hit
-        for path in sorted(PACKAGE.rglob("*.py"))
-        if path.relative_to(PACKAGE).parts[0] != "objects"
-        for hit in _kind_names(path, kinds)
-    ]
+    named = _outside("objects", lambda path: _kind_names(path, kinds))
     assert not named, "object kinds named outside objects/:\n" + "\n".join(named)
     assert _kind_names(PACKAGE / "objects" / "registry.py", kinds)  # the search finds names where they are
 
@@ -191,11 +192,6 @@ def test_no_module_outside_scene_indexes_a_descriptor():
     from warpsim.physics.config import SECTIONS
 
     sections = {*SECTIONS, *(section(kind) for kind in OBJECTS), "worlds", "controls", "sweep"}
-    reads = [
-        hit
-        for path in sorted(PACKAGE.rglob("*.py"))
-        if path.relative_to(PACKAGE).parts[0] != "scene"
-        for hit in _section_reads(path, sections)
-    ]
+    reads = _outside("scene", lambda path: _section_reads(path, sections))
     assert not reads, "descriptor sections read outside scene/:\n" + "\n".join(reads)
     assert _section_reads(PACKAGE / "scene" / "build.py", sections)  # the search finds reads where they are

@@ -93,7 +93,7 @@ def command(args) -> int:
         writer.close()
     if table is not None:
         try:
-            write_world_table(table, figures, sim.descriptor)
+            write_world_table(table, figures)
         except OutputWriteError as err:
             writer.failures.append(err)
     return _report(args, run, summary, blowup, writer.failures, paths, figures, table)
@@ -174,16 +174,25 @@ def _claim_recording(outputs, args, h5_path: Path | None):
 
 @dataclass
 class _RunInputs:
-    """What ``warpsim run`` runs: the descriptor, where it came from, how long, and the checkpoint it continues
-    (with that checkpoint's frame) when resuming."""
+    """What ``warpsim run`` runs: the scene (a :class:`~warpsim.scene.scene.Scene`, named where it came from), how
+    long (None: the scene's own time), and the checkpoint it continues (with that checkpoint's frame) when
+    resuming."""
 
-    descriptor: dict
-    where: str
-    seconds: float
+    scene: object
+    seconds: float | None
     checkpoint: object = None
     frame: int = -1
     controls: list | None = None  # --replay: the recorded controls of each frame
     terrain: object = None  # --resume/--replay: the recording's own terrain (a Heightfield; None: the descriptor's)
+
+    def __post_init__(self):
+        if self.seconds is None:
+            self.seconds = self.scene.seconds
+
+    @property
+    def where(self) -> str:
+        """Where the scene came from (named in errors and in the run's first line)."""
+        return self.scene.where
 
 
 def _resolve_run(args) -> _RunInputs:
@@ -203,10 +212,10 @@ def _resolve_run(args) -> _RunInputs:
         except RecordingError as err:
             raise UsageError(f"--replay {err}") from None
         seconds = args.seconds if args.seconds is not None else length
-        return _RunInputs(descriptor, f"{args.replay} (replayed)", seconds, controls=controls, terrain=terrain)
+        return _RunInputs(Scene(descriptor, f"{args.replay} (replayed)"), seconds, controls=controls, terrain=terrain)
     if not args.resume:
         descriptor, _, where = load_scene(args)
-        return _RunInputs(descriptor, where, Scene(descriptor, where).seconds)
+        return _RunInputs(Scene(descriptor, where), None)
     try:
         with Recording(args.resume, owner=True) as recording:
             checkpoint, frame = recording.checkpoint(), recording.checkpoint_frame
@@ -214,8 +223,7 @@ def _resolve_run(args) -> _RunInputs:
             descriptor, terrain = recording.descriptor(where), recording.terrain()
     except RecordingError as err:
         raise UsageError(f"--resume {err}") from None
-    seconds = args.seconds if args.seconds is not None else Scene(descriptor, where).seconds
-    return _RunInputs(descriptor, where, seconds, checkpoint, frame, terrain=terrain)
+    return _RunInputs(Scene(descriptor, where), args.seconds, checkpoint, frame, terrain=terrain)
 
 
 def _start(run: _RunInputs, device: str, args):
@@ -224,7 +232,7 @@ def _start(run: _RunInputs, device: str, args):
     from ..run.simulation import Simulation, available_cores
 
     sim = Simulation(
-        run.descriptor,
+        run.scene,
         device=device,
         where=run.where,
         terrain=run.terrain,
@@ -282,15 +290,14 @@ class _Outputs:
 
     def __init__(self, stack, sim, run: _RunInputs, args, paths: dict, lock, stop):
         from ..io.outputs import OUTPUTS, RunOutputs
-        from ..scene.descriptor import to_toml
 
         self.stop, self.failures = stop, []
         self.outputs: list = []
         self._failed: set[int] = set()
         stack.callback(self.close)
         opened = RunOutputs(
-            run.descriptor,
-            "" if args.resume else to_toml(run.descriptor),
+            run.scene.descriptor(),
+            "" if args.resume else run.scene.toml(),
             "" if args.resume else run.where,
             resume=bool(args.resume),
             lock=lock,
@@ -334,7 +341,6 @@ class _Outputs:
 def _report(args, run: _RunInputs, summary, blowup, failures, paths: dict, figures=None, table=None) -> int:
     """Print the summary, the flight figures, the outputs and any error line; return the exit code."""
     from ..io.outputs import OUTPUTS
-    from ..scene.scene import Scene
 
     if not args.quiet and sys.stderr.isatty():
         sys.stderr.write("\r" + " " * 70 + "\r")
@@ -355,7 +361,7 @@ def _report(args, run: _RunInputs, summary, blowup, failures, paths: dict, figur
         hint = (
             "try a smaller --dt (explicit Euler springs need dt well below sqrt(mass / solver.spring_stiffness)), "
             "or solver.method=verlet"
-            if Scene(run.descriptor, run.where).settings.solver.method == "euler"
+            if run.scene.settings.solver.method == "euler"
             else "try a smaller --dt or more --iterations"
         )
         sys.stderr.write(f"warpsim run: error: {one_line(str(blowup))}\n  ({hint}; see docs/outputs.md: Blow-ups)\n")

@@ -39,18 +39,12 @@ def check_table_path(path) -> Path:
     return out
 
 
-def world_rows(figures, descriptor: dict | None = None) -> list[dict]:
-    """One dict per world of ``figures`` (:class:`warpsim.run.figures.FlightFigures`, after the run): its
-    :meth:`~warpsim.run.figures.FlightFigures.rows` (``descriptor``: unused, the run's own names the worlds'
-    varied settings); see the module notes."""
-    return figures.rows()
-
-
-def write_world_table(path, figures, descriptor: dict) -> Path:
-    """Write :func:`world_rows` to ``path`` (.parquet/.pq or .csv); returns the path. A list-valued setting (a
-    wind vector) is a list in Parquet and its JSON text in CSV."""
+def write_world_table(path, figures) -> Path:
+    """Write ``figures``' rows (:meth:`warpsim.run.figures.FlightFigures.rows`, after the run) to ``path``
+    (.parquet/.pq or .csv); returns the path. A list-valued setting (a wind vector) is a list in Parquet and its
+    JSON text in CSV."""
     path = Path(path)
-    rows = world_rows(figures, descriptor)
+    rows = figures.rows()
     if path.suffix.lower() == ".csv":
         text = io.StringIO()
         writer = csv.DictWriter(text, fieldnames=list(rows[0]) if rows else ["world"], lineterminator="\n")

@@ -403,9 +403,13 @@ class Simulation:
         once bad steps on unchecked; nothing goes back).
         """
         end = None if seconds is None else self.steps_taken + int(round(seconds / self.dt))
-        if each_world:
-            frame = self.frame(-(-self.steps_taken // self.steps_per_frame))
+
+        def worlds_checked(frame: Frame) -> Frame:
             frame.blowups = world_blowups(self.model, frame, self.settings.solver.max_stretch)
+            return frame
+
+        if each_world:
+            frame = worlds_checked(self.frame(-(-self.steps_taken // self.steps_per_frame)))
         else:
             frame = self.start_frames()
         yield frame
@@ -413,8 +417,7 @@ class Simulation:
         while end is None or self.steps_taken < end:
             limit = None if end is None else end - self.steps_taken
             if each_world:
-                frame = self._to_frame_end(limit, before)
-                frame.blowups = world_blowups(self.model, frame, self.settings.solver.max_stretch)
+                frame = worlds_checked(self._to_frame_end(limit, before))
             else:
                 frame = self.advance(limit, before)
             yield frame
@@ -488,6 +491,7 @@ class Simulation:
         """
         pace = _Pace(self.dt, realtime, on_progress, seconds)
         start = self.steps_taken
+        end = start + int(round(seconds / self.dt))  # as frames() counts
         worst, interrupted = 0.0, False
         frames = self.frames(seconds, before)
         try:
@@ -502,7 +506,7 @@ class Simulation:
                     pace.after_frame(self.state.time, self.steps_taken - start)
                 del frame
                 if stop is not None and stop():
-                    interrupted = self.steps_taken < start + int(round(seconds / self.dt))
+                    interrupted = self.steps_taken < end
                     break
         except BlowUpError as err:
             if err.summary is None:  # a frame stepped here (not the state the run started from) was bad

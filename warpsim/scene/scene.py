@@ -9,7 +9,6 @@ write or merge them (TOML, a recording, a sweep's chunk). Nothing outside ``scen
 from __future__ import annotations
 
 import copy
-import json
 from dataclasses import dataclass, field
 
 from ..objects import registry
@@ -145,7 +144,3 @@ class Scene:
     def toml(self) -> str:
         """The scene as TOML text (read back by :func:`~warpsim.scene.descriptor.load_text`)."""
         return to_toml(self._tables)
-
-    def json(self) -> str:
-        """The descriptor as JSON text (what a recording stores)."""
-        return json.dumps(self._tables)

@@ -154,7 +154,7 @@ class SweepPlan:
         if count > MAX_CASES:
             raise SweepError(f"{count:,} cases is more than a sweep takes ({MAX_CASES:,}); sweep fewer values")
         self.cases = list(itertools.product(*(a.values for a in self.axes)))
-        self._terrain = _terrain_digest(self.base)  # read once: a terrain file may be hundreds of MB
+        self._terrain = _terrain_digest(scene.settings.terrain)  # read once: a terrain file may be hundreds of MB
         variable = (_object_section(self.kind), *VARIABLE_SECTIONS)
         # an object's design also sets shared sections (air, solver): like them, it splits the chunks
         self._per_world = [a.section in variable and a.key != "design" for a in self.axes]
@@ -234,12 +234,12 @@ class SweepPlan:
         return tasks
 
 
-def _terrain_digest(descriptor: dict) -> str | None:
-    """sha256 of the terrain file a descriptor names (None without one): a sweep resumed after the heights were
-    edited must not keep rows flown over the old ones (the path alone stays the same)."""
+def _terrain_digest(terrain) -> str | None:
+    """sha256 of the file a scene's terrain (a :class:`~warpsim.physics.config.TerrainConfig`) names (None without
+    one): a sweep resumed after the heights were edited must not keep rows flown over the old ones (the path alone
+    stays the same)."""
     import hashlib
 
-    terrain = Scene.of(descriptor).settings.terrain
     if terrain.kind != "file" or not terrain.file:
         return None
     digest = hashlib.sha256()

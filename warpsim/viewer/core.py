@@ -376,14 +376,15 @@ class Viewer:
                 self._frames = self.sim.frames(before=self._controls_at_frame_start)
                 next(self._frames)
             self.frame = next(self._frames)
-        except BaseException as err:  # the iterator has ended with it: the next frame comes from a new one
-            self._frames = None
-            if not isinstance(err, BlowUpError):
-                raise
+        except BlowUpError as err:
+            self._frames = None  # the iterator has ended with it: the next frame comes from a new one
             self.frame = self.sim.frame(err.last_good_frame)
             self.blew_up = True
             self._fail(f"{err}; press R to restart")
             return False
+        except BaseException:  # Ctrl-C, an error of the keys: the same, and it goes on up
+            self._frames = None
+            raise
         finally:
             self.step_time += time.perf_counter() - started
         self._write(self.frame)

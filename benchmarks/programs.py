@@ -17,6 +17,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from warpsim import Scene
 from warpsim.run.simulation import Simulation
 
 from .suite import Options, flag, scene
@@ -119,7 +120,7 @@ def case_sweep(opts: Options) -> dict:
     from warpsim import sweeps
 
     d = scene("kite")
-    plan = sweeps.SweepPlan(d, sweeps.parse_axes(d, list(SWEEP_AXES)), SWEEP_SECONDS)
+    plan = sweeps.SweepPlan(Scene(d), sweeps.parse_axes(Scene(d), list(SWEEP_AXES)), SWEEP_SECONDS)
     tasks = plan.chunks(SWEEP_CHUNK, device=opts.device)
     sweeps.run_chunk(tasks[0])  # kernels loaded, caches warm
     best = {"in process": math.inf, 1: math.inf, 2: math.inf}

@@ -47,7 +47,7 @@ def shoot(name: str) -> Path:
     from warpsim.io.render import save_png
     from warpsim.physics import _warp
     from warpsim.run.simulation import Simulation
-    from warpsim.scene.descriptor import merge, resolve, to_toml
+    from warpsim.scene.descriptor import merge, resolve
     from warpsim.scene.dirs import scene_dirs
     from warpsim.viewer.core import Viewer
     from warpsim.viewer.gl import PygletBackend
@@ -58,7 +58,7 @@ def shoot(name: str) -> Path:
     if extra:
         descriptor = merge("screenshot", descriptor, extra)
     backend = PygletBackend(SIZE, keep_pictures=True)
-    viewer = Viewer(Simulation(descriptor), backend, f"warpsim: {where}", None, to_toml(descriptor), where)
+    viewer = Viewer(Simulation(descriptor), backend, f"warpsim: {where}", None, where)
     viewer.camera = camera
     if angles is not None:
         viewer.orbit["azimuth"], viewer.orbit["elevation"], zoom = angles

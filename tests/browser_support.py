@@ -51,7 +51,7 @@ def _browser_viewer(scene: str, seconds=None, record=None, host="127.0.0.1", **o
 
     sim, text, where = _sim(scene, **overrides)
     backend = BrowserBackend(host, 0)
-    viewer = Viewer(sim, backend, f"warpsim: {where}", record, text, where, seconds=seconds, say=lambda line: None)
+    viewer = Viewer(sim, backend, f"warpsim: {where}", record, where, seconds=seconds, say=lambda line: None)
     return viewer, backend
 
 

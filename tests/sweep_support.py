@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from warpsim import sweeps
+from warpsim import Scene, sweeps
 from warpsim.scene import descriptor as desc_mod
 
 SECONDS = 12.0  # each case; the window is its second half
@@ -22,7 +22,7 @@ def _scene() -> dict:
 
 def _plan(seconds: float = SECONDS) -> sweeps.SweepPlan:
     d = _scene()
-    return sweeps.SweepPlan(d, sweeps.parse_axes(d, AXES), seconds)
+    return sweeps.SweepPlan(Scene(d), sweeps.parse_axes(Scene(d), AXES), seconds)
 
 
 @pytest.fixture(scope="module")

@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 
+from warpsim import Scene
 from warpsim.cli import main
 from warpsim.scene import descriptor
 
@@ -146,7 +147,7 @@ def test_run_figures_are_the_sweep_metrics_and_spread_over_worlds(capsys):
     assert line.startswith("  3 worlds")
     angles = re.search(r"line angle ([0-9.]+) deg \(([0-9.]+) to ([0-9.]+)\)", line).groups()
     base = descriptor.resolve("kite")[0]
-    plan = sweeps.SweepPlan(base, sweeps.parse_axes(base, ["wind.speed=4:8:3"]), seconds=10.0)
+    plan = sweeps.SweepPlan(Scene(base), sweeps.parse_axes(Scene(base), ["wind.speed=4:8:3"]), seconds=10.0)
     rows = sweeps.run_chunk(plan.chunks(3, set(), "cpu", None)[0])
     means = [row["line_angle_mean"] for row in rows]
     assert [float(a) for a in angles] == pytest.approx([np.mean(means), min(means), max(means)], abs=0.051)

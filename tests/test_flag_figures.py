@@ -9,6 +9,7 @@ import re
 import numpy as np
 import pytest
 
+from warpsim import Scene
 from warpsim.cli import main
 from warpsim.run.figures import FlightFigures, swing_frequency
 from warpsim.run.simulation import Simulation
@@ -103,7 +104,7 @@ def test_flag_sweep_rows_are_the_same_whatever_the_chunk():
     from warpsim.scene import descriptor
 
     base = merge("test", descriptor.resolve("flag")[0], PAPER)
-    plan = sweeps.SweepPlan(base, sweeps.parse_axes(base, ["wind.speed=0.5,3,6"]), seconds=12.0)
+    plan = sweeps.SweepPlan(Scene(base), sweeps.parse_axes(Scene(base), ["wind.speed=0.5,3,6"]), seconds=12.0)
     alone = [sweeps.run_chunk(task)[0] for task in plan.chunks(1, set(), "cpu", None)]
     together = sweeps.run_chunk(plan.chunks(3, set(), "cpu", None)[0])
     names = ("flap_mean", "flap_min", "flap_max", "flap_frequency")

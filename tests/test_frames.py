@@ -191,5 +191,5 @@ def test_the_frame_iterator_gives_run_s_frames_and_checks_each_world_alone():
     whole.run(3 * whole.steps_per_frame * whole.dt)
     good = whole.state.positions()
     with pytest.raises(BlowUpError, match="non-finite"):
-        list(whole.frames(1.0, before=lambda index: (whole.state.particle_q.assign(np.full_like(good, np.nan)))))
+        list(whole.frames(1.0, before=lambda index: whole.state.particle_q.assign(np.full_like(good, np.nan))))
     np.testing.assert_array_equal(whole.state.positions(), good)  # back to the last good frame

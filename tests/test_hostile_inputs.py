@@ -105,7 +105,7 @@ def test_a_huge_scene_or_stored_descriptor_is_one_line(tmp_path, capsys):
     from warpsim.scene.descriptor import MAX_TEXT
 
     big = tmp_path / "big.toml"
-    rows = "".join(f'[[controls]]\ntime = {k}.0\nwind = [4.0, 0.0, 0.0]\n' for k in range(MAX_TEXT // 40))
+    rows = "".join(f"[[controls]]\ntime = {k}.0\nwind = [4.0, 0.0, 0.0]\n" for k in range(MAX_TEXT // 40))
     big.write_text('[scene]\nobject = "kite"\n' + rows)
     assert big.stat().st_size > MAX_TEXT
     for argv in (["info", str(big)], ["run", str(big), "--seconds", "0.01"]):

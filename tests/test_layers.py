@@ -195,3 +195,33 @@ def test_no_module_outside_scene_indexes_a_descriptor():
     reads = _outside("scene", lambda path: _section_reads(path, sections))
     assert not reads, "descriptor sections read outside scene/:\n" + "\n".join(reads)
     assert _section_reads(PACKAGE / "scene" / "build.py", sections)  # the search finds reads where they are
+
+
+def _descriptor_parameters(path: Path) -> list[str]:
+    """Where the code of ``path`` takes a descriptor: a function's parameter or a class's field called
+    ``descriptor`` (or ``*_descriptor``), or one annotated as a plain ``dict`` of a scene (``scene: dict``)."""
+    tree = ast.parse(path.read_text(), str(path))
+    hits = []
+    for node in ast.walk(tree):
+        names = []
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            a = node.args
+            names = [(arg.arg, arg.annotation) for arg in (*a.posonlyargs, *a.args, *a.kwonlyargs)]
+        elif isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
+            names = [(node.target.id, node.annotation)]
+        for name, annotation in names:
+            plain = annotation is not None and "dict" in ast.unparse(annotation) and name in ("scene", "tables")
+            if name == "descriptor" or name.endswith("_descriptor") or plain:
+                hits.append(f"{path.relative_to(PACKAGE.parent)}:{node.lineno}: {name}")
+    return hits
+
+
+def test_no_module_outside_scene_takes_a_descriptor():
+    """Above `scene/`, what travels is a `Scene`: no function takes a descriptor dict and no record keeps one (the
+    recorder, the outputs, the sweep's plan and its tasks, the exporter all take a Scene). `Simulation` still takes
+    a descriptor as a convenience of the façade: it turns it into a Scene first thing."""
+    takes = _outside("scene", _descriptor_parameters)
+    allowed = {"warpsim/run/simulation.py"}  # Simulation(scene: Scene | dict), documented
+    wrong = [hit for hit in takes if hit.split(":")[0] not in allowed]
+    assert not wrong, "descriptors taken outside scene/:\n" + "\n".join(wrong)
+    assert _descriptor_parameters(PACKAGE / "scene" / "descriptor.py")  # the search finds them where they are

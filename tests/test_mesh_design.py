@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from warpsim import Scene
 from warpsim.cli import EXIT_USAGE, main
 from warpsim.objects import mesh as mesh_design
 from warpsim.objects.mesh_file import MeshError, mesh_edges, read_mesh, write_mesh
@@ -309,7 +310,7 @@ def test_a_mesh_design_exported_and_read_back_flies_the_same(tmp_path):
     d = descriptor.resolve("diamond_kite", [SCENES])[0]
     from warpsim.io.mesh_export import export_design
 
-    _, scene, _ = export_design(d, tmp_path / "again.obj")
+    _, scene, _ = export_design(Scene(d), tmp_path / "again.obj")
     back = descriptor.resolve(str(scene))[0]
     for desc in (d, back):
         desc["scene"]["seconds"] = 10.0
@@ -393,7 +394,7 @@ def test_more_bad_parts_get_one_line(tmp_path, capsys):
     v, t = _square(4)
     write_mesh(tmp_path / "sq.obj", v, t, {"sail": np.arange(len(t))})
     cases = [
-        ('[[mesh.parts]]\nkind = [1]\nvertices = [0]\n', "is not one of"),
+        ("[[mesh.parts]]\nkind = [1]\nvertices = [0]\n", "is not one of"),
         ('[[mesh.parts]]\nkind = "nail"\nvertices = [99999999999999999999]\n', "vertex indices"),
         ('[[mesh.parts]]\nkind = "line"\nvertices = [0]\nanchor = [0.0, 0.0]\nmass_per_length = 0.0\n', "> 0"),
         ('[[mesh.parts]]\nkind = "line"\nvertices = [0]\nanchor = [0.0, 0.0]\nlength = 1e9\n', "at most"),

@@ -17,7 +17,7 @@ from warpsim.io.hdf5 import H5Recorder
 from warpsim.io.recording import Recording
 from warpsim.io.usd import UsdWriter, validate
 from warpsim.run.simulation import Simulation
-from warpsim.scene.descriptor import defaults, to_toml
+from warpsim.scene.descriptor import defaults
 
 
 def _record(kind, tmp_path, seconds=0.5, suffix=".usda", **overrides):
@@ -29,7 +29,7 @@ def _record(kind, tmp_path, seconds=0.5, suffix=".usda", **overrides):
     usd_path, h5_path = tmp_path / f"{kind}{suffix}", tmp_path / f"{kind}.h5"
     frames = []
     writer = UsdWriter(usd_path, sim.model, sim.steps_per_frame * sim.dt)
-    with H5Recorder(h5_path, sim.model, d, sim.checkpoint, to_toml(d), kind) as recorder:
+    with H5Recorder(h5_path, sim.model, sim.scene, sim.checkpoint, kind) as recorder:
 
         def on_frame(frame):
             frames.append((frame.index, frame.time, frame.positions))

@@ -79,13 +79,13 @@ def test_a_kite_recording_plots_its_line_pull(tmp_path):
     from warpsim.objects.kite import anchor_pull
     from warpsim.physics.config import GRAVITY
     from warpsim.run.simulation import Simulation
-    from warpsim.scene.descriptor import defaults, to_toml
+    from warpsim.scene.descriptor import defaults
     from warpsim.sweeps.plot import recording_series
 
     path = tmp_path / "kite.h5"
     sim = Simulation(defaults("kite"))
     pulls = []
-    with H5Recorder(path, sim.model, sim.descriptor, sim.checkpoint, to_toml(sim.descriptor), "kite") as recorder:
+    with H5Recorder(path, sim.model, sim.scene, sim.checkpoint, "kite") as recorder:
 
         def on_frame(frame):
             recorder.write(frame)

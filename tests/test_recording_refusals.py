@@ -151,12 +151,12 @@ def test_an_interrupt_just_after_the_lock_creates_the_file_leaves_no_file(tmp_pa
     path = tmp_path / "k.h5"
     monkeypatch.setattr(hdf5, "claim", claim_then_interrupted)
     with pytest.raises(KeyboardInterrupt):
-        H5Recorder(path, sim.model, d, sim.checkpoint, to_toml(d), "flag")
+        H5Recorder(path, sim.model, sim.scene, sim.checkpoint, "flag")
     assert not path.exists()
     monkeypatch.undo()
-    with H5Recorder(path, sim.model, d, sim.checkpoint, to_toml(d), "flag") as first:
+    with H5Recorder(path, sim.model, sim.scene, sim.checkpoint, "flag") as first:
         with pytest.raises(Exception, match="another warpsim run is writing"):
-            H5Recorder(path, sim.model, d, sim.checkpoint, to_toml(d), "flag")
+            H5Recorder(path, sim.model, sim.scene, sim.checkpoint, "flag")
         assert path.exists() and first.file is not None
 
 
@@ -164,7 +164,7 @@ def test_empty_and_skeleton_recordings_are_refused(tmp_path, capsys):
     d = defaults("flag")
     empty = tmp_path / "empty.h5"
     sim = Simulation(d)
-    H5Recorder(empty, sim.model, d, sim.checkpoint, to_toml(d), "flag").close()  # created, closed before any frame
+    H5Recorder(empty, sim.model, sim.scene, sim.checkpoint, "flag").close()  # created, closed before any frame
     skeleton = tmp_path / "skeleton.h5"
     with h5py.File(skeleton, "w") as f:
         f.attrs["format"] = "warpsim-recording"
@@ -189,7 +189,7 @@ def _crafted(tmp_path, name: str) -> Path:
     d["scene"]["seconds"] = 0.1
     path = tmp_path / name
     sim = Simulation(d)
-    with H5Recorder(path, sim.model, d, sim.checkpoint, to_toml(d), "flag") as recorder:
+    with H5Recorder(path, sim.model, sim.scene, sim.checkpoint, "flag") as recorder:
         sim.run(0.1, on_frame=recorder.write)
     return path
 
@@ -394,7 +394,7 @@ def test_a_replay_of_controls_its_scene_lacks_is_one_line(tmp_path, capsys):
     path = tmp_path / "kite.h5"
     sim = Simulation(d)
     sim.set_controls(anchor=(1.0, 0.0))
-    with H5Recorder(path, sim.model, d, sim.checkpoint, to_toml(d), "kite") as recorder:
+    with H5Recorder(path, sim.model, sim.scene, sim.checkpoint, "kite") as recorder:
         sim.run(0.1, on_frame=recorder.write)
     with Recording(path) as r:
         cp, slot, frame = r.checkpoint(), r._slot, r.checkpoint_frame

@@ -254,7 +254,7 @@ def test_a_damaged_checkpoint_falls_back_to_the_other_slot_and_two_are_refused(t
     rec = tmp_path / "k.h5"
     d = defaults("kite")
     sim = Simulation(d)
-    with H5Recorder(rec, sim.model, d, sim.checkpoint, to_toml(d), "kite") as recorder:
+    with H5Recorder(rec, sim.model, sim.scene, sim.checkpoint, "kite") as recorder:
         recorder.sync_interval = 0.0  # a checkpoint after every frame: both slots filled
         sim.run(1.0, on_frame=recorder.write)
     slots = _slot_offsets(rec)

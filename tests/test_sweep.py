@@ -22,7 +22,7 @@ pytestmark = pytest.mark.dask  # the [sweep] extra: Dask clusters, pandas tables
 
 from sweep_support import AXES, SECONDS, _cli, _plan, _same, _scene  # noqa: E402
 
-from warpsim import sweeps  # noqa: E402
+from warpsim import Scene, sweeps  # noqa: E402
 from warpsim.cli import main  # noqa: E402
 from warpsim.run.diagnostics import object_metrics  # noqa: E402
 from warpsim.run.simulation import Simulation  # noqa: E402
@@ -35,29 +35,31 @@ def test_plan_is_the_cartesian_product_and_chunks_group_shared_keys():
     assert plan.columns[:2] == ["wind.gust_seed", "kite.tow_point"]
     assert plan.cases == [(1, 0.25), (1, 0.3), (1, 0.35), (2, 0.25), (2, 0.3), (2, 0.35)]
     assert [t.cases for t in plan.chunks(4)] == [[0, 1, 2, 3], [4, 5]]
-    assert plan.chunks(4)[0].descriptor["worlds"]["kite"]["tow_point"] == [0.25, 0.3, 0.35, 0.25]
+    assert plan.chunks(4)[0].scene.varied["kite.tow_point"] == [0.25, 0.3, 0.35, 0.25]
     # a key one launch cannot vary between worlds (the solver's) splits the chunks
     d = _scene()
-    mixed = sweeps.SweepPlan(d, sweeps.parse_axes(d, ["solver.iterations=30,55", "wind.speed=4,8"]), 1.0)
+    mixed = sweeps.SweepPlan(Scene(d), sweeps.parse_axes(Scene(d), ["solver.iterations=30,55", "wind.speed=4,8"]), 1.0)
     tasks = mixed.chunks(64)
     assert [t.cases for t in tasks] == [[0, 1], [2, 3]]
-    assert [t.descriptor["solver"]["iterations"] for t in tasks] == [30, 55]
+    assert [t.scene.settings.solver.iterations for t in tasks] == [30, 55]
     # so does a design, which sets the air model and the step: each chunk is built with its own preset
-    designs = sweeps.SweepPlan(d, sweeps.parse_axes(d, ["kite.design=paper,flying", "wind.speed=4,8"]), 1.0)
+    designs = sweeps.SweepPlan(
+        Scene(d), sweeps.parse_axes(Scene(d), ["kite.design=paper,flying", "wind.speed=4,8"]), 1.0
+    )
     tasks = designs.chunks(64)
     assert [t.cases for t in tasks] == [[0, 1], [2, 3]]
-    assert [(t.descriptor["air"]["model"], t.descriptor["solver"]["dt"]) for t in tasks] == [
+    assert [(t.scene.table("air")["model"], t.scene.dt) for t in tasks] == [
         ("paper", 0.01),
         ("sail", 0.005),
     ]
-    assert designs.case_descriptor(0)["kite"]["tow_point"] == 0.35
+    assert designs.case_scene(0).object_config().tow_point == 0.35
 
 
 def test_each_case_measures_what_a_single_run_of_it_shows(reference):
     """Case 4 (seed 2, tow point 0.3) against the same scene run alone by the ordinary runner, its window
     altitude averaged here from the recorded frames."""
     plan = _plan()
-    sim = Simulation(plan.case_descriptor(4))
+    sim = Simulation(plan.case_scene(4))
     heights = []
 
     def on_frame(frame):
@@ -134,7 +136,7 @@ def test_ctrl_c_keeps_the_finished_rows_and_a_rerun_runs_only_the_rest(tmp_path,
 
 def test_a_case_that_blows_up_is_a_row_and_leaves_its_chunk_mates_alone():
     d = desc_mod.defaults("kite")
-    plan = sweeps.SweepPlan(d, sweeps.parse_axes(d, ["wind.speed=6,60"]), 1.0)
+    plan = sweeps.SweepPlan(Scene(d), sweeps.parse_axes(Scene(d), ["wind.speed=6,60"]), 1.0)
     together = sweeps.run_chunk(plan.chunks(2)[0])
     calm, storm = together
     assert not calm["blew_up"] and math.isnan(calm["blowup_time"]) and calm["blowup_reason"] == ""
@@ -154,7 +156,9 @@ def test_csv_table_and_h5_per_chunk(cluster, tmp_path, reference):
     from warpsim.io.recording import Recording
 
     out = tmp_path / "s.csv"
-    table = sweeps.sweep(_scene(), AXES, seconds=SECONDS, out=out, scheduler=cluster, chunk=4, h5_dir=tmp_path / "rec")
+    table = sweeps.sweep(
+        Scene(_scene()), AXES, seconds=SECONDS, out=out, scheduler=cluster, chunk=4, h5_dir=tmp_path / "rec"
+    )
     _same(table, reference)
     back = sweeps.read_csv(out)
     back["blowup_reason"] = back["blowup_reason"].astype(object).where(back["blowup_reason"].notna(), "")
@@ -174,12 +178,14 @@ def test_csv_table_and_h5_per_chunk(cluster, tmp_path, reference):
 @pytest.mark.slow
 def test_a_grown_sweep_keeps_its_rows_and_another_sweep_is_refused(cluster, tmp_path, reference):
     out = tmp_path / "s.parquet"
-    small = sweeps.SweepPlan(_scene(), sweeps.parse_axes(_scene(), ["wind.gust_seed=1", AXES[1]]), SECONDS)
+    small = sweeps.SweepPlan(
+        Scene(_scene()), sweeps.parse_axes(Scene(_scene()), ["wind.gust_seed=1", AXES[1]]), SECONDS
+    )
     assert sweeps.run_sweep(small, out=out, scheduler=cluster).ran == 3
     grown = sweeps.run_sweep(_plan(), out=out, scheduler=cluster)
     assert (grown.kept, grown.ran) == (3, 3)
     _same(grown.table, reference)
-    other = sweeps.SweepPlan(_scene(), sweeps.parse_axes(_scene(), AXES), SECONDS / 2)
+    other = sweeps.SweepPlan(Scene(_scene()), sweeps.parse_axes(Scene(_scene()), AXES), SECONDS / 2)
     with pytest.raises(sweeps.SweepError, match="whose --seconds differ"):
         sweeps.run_sweep(other, out=out, scheduler=cluster)
 
@@ -204,12 +210,12 @@ def test_sweep_table_in_a_descriptor(tmp_path):
     d, _, _ = desc_mod.resolve(str(scene))
     assert d["sweep"] == {"kite": {"tow_point": [0.25, 0.3, 0.35]}, "wind": {"speed": [4.0, 8.0]}}
     assert desc_mod.load_text(desc_mod.to_toml(d), "again")["sweep"] == d["sweep"]
-    axes = sweeps.parse_axes(d, ["wind.speed=5,6,7"])  # --vary replaces the table's axis of the same key
+    axes = sweeps.parse_axes(Scene(d), ["wind.speed=5,6,7"])  # --vary replaces the table's axis of the same key
     assert [(a.name, a.values) for a in axes] == [
         ("kite.tow_point", (0.25, 0.3, 0.35)),
         ("wind.speed", (5.0, 6.0, 7.0)),
     ]
-    assert len(sweeps.SweepPlan(d, axes, 1.0).cases) == 9
+    assert len(sweeps.SweepPlan(Scene(d), axes, 1.0).cases) == 9
     assert Simulation(d).world_count == 1  # `warpsim run` runs the scene as written
 
 
@@ -324,7 +330,7 @@ def test_axes_from_any_text_are_checked_or_refused():
     @given(st.text(max_size=40))
     def check(text):
         try:
-            axes = sweeps.parse_axes(d, [text])
+            axes = sweeps.parse_axes(Scene(d), [text])
         except desc_mod.DescriptorError:
             return
         assert len(axes) == 1 and len(axes[0].values) >= 1

@@ -23,7 +23,7 @@ pytestmark = pytest.mark.dask  # the [sweep] extra: Dask clusters, pandas tables
 
 from sweep_support import _cli  # noqa: E402
 
-from warpsim import sweeps  # noqa: E402
+from warpsim import Scene, sweeps  # noqa: E402
 from warpsim.cli import main  # noqa: E402
 from warpsim.scene import descriptor as desc_mod  # noqa: E402
 from warpsim.sweeps import chunk as sweep_chunk  # noqa: E402
@@ -271,7 +271,7 @@ def test_a_spoiled_journal_is_one_line_before_anything_runs(spoil, tmp_path, mon
 
 def _quick_definition() -> dict:
     d = desc_mod.defaults("kite")
-    return sweeps.SweepPlan(d, sweeps.parse_axes(d, ["wind.speed=4.0,6.0,8.0"]), 0.05).definition()
+    return sweeps.SweepPlan(Scene(d), sweeps.parse_axes(Scene(d), ["wind.speed=4.0,6.0,8.0"]), 0.05).definition()
 
 
 @pytest.mark.parametrize("where", ["journal", "table"])
@@ -532,7 +532,7 @@ def test_two_sweeps_sharing_an_h5_dir_keep_their_own_recordings(tmp_path, monkey
     winds = []
     for name in names:
         with Recording(rec_dir / name) as recording:
-            winds.append(recording.descriptor("test")["worlds"]["wind"]["speed"])
+            winds.append(recording.recorded_scene("test").varied["wind.speed"])
     assert winds == [[4.0, 6.0, 8.0], [5.0, 7.0, 9.0]]
 
 

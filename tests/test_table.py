@@ -7,6 +7,7 @@ import re
 import numpy as np
 import pytest
 
+from warpsim import Scene
 from warpsim.cli import main
 
 pd = pytest.importorskip("pandas")
@@ -51,7 +52,7 @@ def test_table_matches_the_printed_spread_and_the_sweep(kite_tables):
     assert np.all(np.diff(parquet["line_pull_mean"]) > 0)  # more wind: a stronger pull (the line's angle at 5-10 s
     # still depends on how far each kite has climbed)
     base = descriptor.resolve("kite")[0]
-    plan = sweeps.SweepPlan(base, sweeps.parse_axes(base, ["wind.speed=4:8:3"]), seconds=10.0)
+    plan = sweeps.SweepPlan(Scene(base), sweeps.parse_axes(Scene(base), ["wind.speed=4:8:3"]), seconds=10.0)
     rows = sweeps.run_chunk(plan.chunks(3, set(), "cpu", None)[0])
     for name in ("line_angle_mean", "line_pull_max", "altitude_min", "worst_stretch", "airborne"):
         assert parquet[name].to_numpy() == pytest.approx([row[name] for row in rows], rel=1e-9, abs=1e-12), name

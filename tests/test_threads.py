@@ -13,6 +13,7 @@ import h5py
 import numpy as np
 import pytest
 
+from warpsim import Scene
 from warpsim.cli import EXIT_INTERRUPTED, main
 from warpsim.io.recording import Recording
 from warpsim.run.simulation import BlowUpError, Simulation
@@ -163,7 +164,7 @@ def test_sweep_chunk_rows_are_the_same_on_threads():
     from warpsim import sweeps
 
     desc = desc_mod.defaults("kite")
-    plan = sweeps.SweepPlan(desc, sweeps.parse_axes(desc, ["wind.speed=4,6,8"]), 0.4)
+    plan = sweeps.SweepPlan(Scene(desc), sweeps.parse_axes(Scene(desc), ["wind.speed=4,6,8"]), 0.4)
     (task,) = plan.chunks(8)
     one = sweeps.run_chunk(task)
     two = sweeps.run_chunk(dataclasses.replace(task, threads=2))

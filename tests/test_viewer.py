@@ -14,7 +14,7 @@ from warpsim.cli import main
 from warpsim.io.recording import Recording
 from warpsim.objects.hang_glider import bank
 from warpsim.run.simulation import Simulation
-from warpsim.scene.descriptor import merge, resolve, to_toml
+from warpsim.scene.descriptor import merge, resolve
 from warpsim.scene.dirs import scene_dirs
 from warpsim.viewer import NullBackend, Viewer
 
@@ -27,7 +27,7 @@ def _viewer(scene: str, record=None, **overrides) -> tuple[Viewer, NullBackend]:
     if overrides:
         descriptor = merge("test", descriptor, overrides)
     backend = NullBackend()
-    viewer = Viewer(Simulation(descriptor), backend, record=record, descriptor_text=to_toml(descriptor), scene=where)
+    viewer = Viewer(Simulation(descriptor), backend, record=record, where=where)
     viewer.say = lambda line: None
     return viewer, backend
 

@@ -20,7 +20,7 @@ import numpy as np
 from warpsim.objects.hang_glider import bank
 from warpsim.physics import _warp
 from warpsim.run.simulation import Simulation
-from warpsim.scene.descriptor import resolve, to_toml
+from warpsim.scene.descriptor import resolve
 from warpsim.scene.dirs import scene_dirs
 from warpsim.viewer.core import Viewer
 from warpsim.viewer.gl import PygletBackend, view_matrix
@@ -36,7 +36,7 @@ def open_viewer(scene: str, title: str, record: Path | None):
     descriptor, _, where = resolve(scene, scene_dirs())
     sim = Simulation(descriptor)
     backend = PygletBackend(SIZE, keep_pictures=True)
-    viewer = Viewer(sim, backend, title, record, to_toml(descriptor), where, say=lambda line: None)
+    viewer = Viewer(sim, backend, title, record, where, say=lambda line: None)
     window = xdotool("search", "--sync", "--name", title).split()[0]
     xdotool("windowfocus", "--sync", window)
     return viewer, backend
@@ -146,7 +146,7 @@ def _fly(scene: str, title: str, seconds: float, camera: str, overrides: dict | 
     if overrides:
         descriptor = merge("test", descriptor, overrides)
     backend = PygletBackend(SIZE, keep_pictures=True)
-    viewer = Viewer(Simulation(descriptor), backend, title, None, to_toml(descriptor), where, say=lambda line: None)
+    viewer = Viewer(Simulation(descriptor), backend, title, None, where, say=lambda line: None)
     viewer.camera = camera
     Clock(viewer).seconds(seconds)
     return viewer, backend

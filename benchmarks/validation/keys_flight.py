@@ -42,7 +42,7 @@ def fly(scene: str = "scenes/hang_glider_lattice.toml", out: Path = Path("docs")
     from benchmarks.validation.piloting import body_angles
     from warpsim.objects.hang_glider import bank
     from warpsim.run.simulation import Simulation
-    from warpsim.scene.descriptor import resolve, to_toml
+    from warpsim.scene.descriptor import resolve
     from warpsim.scene.dirs import scene_dirs
     from warpsim.viewer.core import Viewer
     from warpsim.viewer.gl import PygletBackend
@@ -53,7 +53,7 @@ def fly(scene: str = "scenes/hang_glider_lattice.toml", out: Path = Path("docs")
     backend = PygletBackend(SIZE, keep_pictures=True)
     record = out / "keys_flight.h5"
     record.unlink(missing_ok=True)
-    viewer = Viewer(Simulation(descriptor), backend, title, record, to_toml(descriptor), where, say=lambda line: None)
+    viewer = Viewer(Simulation(descriptor), backend, title, record, where, say=lambda line: None)
     viewer.camera = "chase"
     window = _xdotool("search", "--sync", "--name", title).split()[0]
     _xdotool("windowfocus", "--sync", window)

@@ -57,8 +57,12 @@ def rectangle(aspect_ratio: float, span_panels: int, chord_panels: int, offset=(
     o = np.asarray(offset, dtype=np.float64)
     span = float(aspect_ratio)
     _, _, tris = b.add_grid(
-        o + (0.0, -0.5 * span, 0.0), (0.0, span / span_panels, 0.0), (1.0 / chord_panels, 0.0, 0.0),
-        span_panels + 1, chord_panels + 1, 1.0,
+        o + (0.0, -0.5 * span, 0.0),
+        (0.0, span / span_panels, 0.0),
+        (1.0 / chord_panels, 0.0, 0.0),
+        span_panels + 1,
+        chord_panels + 1,
+        1.0,
     )
     return _finish(b, tris, span, span, 1.0, o + (0.25, 0.0, 0.0), device)
 
@@ -69,9 +73,7 @@ def delta(sweep_deg: float, divisions: int, root_chord: float = 1.0, offset=(0.0
     b = ModelBuilder()
     o = np.asarray(offset, dtype=np.float64)
     semi = root_chord / math.tan(math.radians(sweep_deg))
-    _, _, tris = b.add_subdivided_triangle(
-        o, o + (root_chord, -semi, 0.0), o + (root_chord, semi, 0.0), divisions, 1.0
-    )
+    _, _, tris = b.add_subdivided_triangle(o, o + (root_chord, -semi, 0.0), o + (root_chord, semi, 0.0), divisions, 1.0)
     area = semi * root_chord
     return _finish(b, tris, 2.0 * semi, area, area / (2.0 * semi), o + (2.0 * root_chord / 3.0, 0.0, 0.0), device)
 
@@ -98,8 +100,15 @@ def loads(wing: Wing, alpha_deg: float, beta_deg: float = 0.0, p: float = 0.0, r
     tri_force = wp.zeros(m.tri_count, dtype=wp.vec3, device=m.device)
     particle = wp.zeros(m.particle_count, dtype=wp.vec3, device=m.device)
     vortex_air_force(
-        m, state, control, dt, AirConfig(model=AeroModel.VORTEX, density=1.0), WindConfig(), VortexScratch(m),
-        tri_force, particle,
+        m,
+        state,
+        control,
+        dt,
+        AirConfig(model=AeroModel.VORTEX, density=1.0),
+        WindConfig(),
+        VortexScratch(m),
+        tri_force,
+        particle,
     )
     f = particle.numpy().astype(np.float64)
     np.add.at(f, m.tri_indices_np.reshape(-1), np.repeat(tri_force.numpy().astype(np.float64), 3, axis=0))

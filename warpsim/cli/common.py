@@ -148,18 +148,21 @@ def add_world_options(parser) -> None:
     )
 
 
-def load_scene(args, worlds_from_vary: bool = True) -> tuple[dict, str, str]:
-    """The scene of ``args`` with its ``--set``, ``--dt``, ``--iterations``, ``--fps``, ``--seconds`` and (with
-    ``worlds_from_vary``) ``--worlds``/``--vary`` applied: ``(descriptor, source text, where)``."""
-    from ..scene.descriptor import merge, resolve
+def load_scene(args, worlds_from_vary: bool = True):
+    """The :class:`~warpsim.scene.scene.Scene` of ``args`` with its ``--set``, ``--dt``, ``--iterations``,
+    ``--fps``, ``--seconds`` and (with ``worlds_from_vary``) ``--worlds``/``--vary`` applied, each checked as it is
+    applied and named in its error: ``(scene, source text)``; ``scene.where`` says where it came from."""
+    from ..scene.descriptor import resolve
+    from ..scene.scene import Scene
     from ..scene.values import parse_override, parse_vary
 
     descriptor, text, where = resolve(args.scene, scene_dirs())
+    scene = Scene(descriptor, where)
     overrides = [(item, parse_override(item)) for item in args.set]
     # a design is a preset of other keys: its --set applies first, so that the others win in any order
     overrides.sort(key=lambda pair: not any("design" in keys for keys in pair[1].values()))
     for item, override in overrides:
-        descriptor = merge(f"--set {item}", descriptor, override)
+        scene = scene.with_values(override, f"--set {item}")
     count = getattr(args, "worlds", None)
     worlds: dict = {}
     for item in getattr(args, "vary", []) if worlds_from_vary else []:
@@ -170,7 +173,7 @@ def load_scene(args, worlds_from_vary: bool = True) -> tuple[dict, str, str]:
         worlds["count"] = count
     if worlds:
         flags = " ".join([f"--worlds {count}"] + [f"--vary {v}" for v in args.vary])
-        descriptor = merge(flags, descriptor, {"worlds": worlds})
+        scene = scene.with_values({"worlds": worlds}, flags)
     overrides = {
         ("solver", "dt", "--dt"): getattr(args, "dt", None),
         ("solver", "iterations", "--iterations"): getattr(args, "iterations", None),
@@ -178,9 +181,9 @@ def load_scene(args, worlds_from_vary: bool = True) -> tuple[dict, str, str]:
         ("scene", "seconds", "--seconds"): getattr(args, "seconds", None),
     }
     for (section, key, flag), value in overrides.items():
-        if value is not None:  # checked against the descriptor's bounds like any other value
-            descriptor = merge(f"{flag} {value:g}", descriptor, {section: {key: value}})
-    return descriptor, text, where
+        if value is not None:  # checked against the scene's bounds like any other value
+            scene = scene.with_values({section: {key: value}}, f"{flag} {value:g}")
+    return Scene(scene.descriptor(), where), text
 
 
 def world_count_type(text: str) -> int:

@@ -21,10 +21,10 @@ def command(args) -> int:
         raise UsageError(f"{out}: the mesh file must end in {', '.join(SUFFIXES)}")
     if not out.parent.is_dir():
         raise UsageError(f"{out}: its folder {out.parent} does not exist")
-    descriptor, _, _ = load_scene(args, worlds_from_vary=False)
+    scene, _ = load_scene(args, worlds_from_vary=False)
     interruptible()  # the files are written next
     try:
-        mesh, scene, left_out = export_design(descriptor, out)
+        mesh, scene, left_out = export_design(scene, out)
     except ValueError as err:
         raise UsageError(str(err)) from None
     print(f"{args.scene} -> {mesh} and {scene}")

@@ -10,11 +10,9 @@ def command(args) -> int:
     import numpy as np
 
     from ..objects import registry
-    from ..scene.descriptor import to_toml
-    from ..scene.scene import Scene
 
-    descriptor, _, where = load_scene(args)
-    scene = Scene(descriptor, where)
+    scene, _ = load_scene(args)
+    where = scene.where
     model = scene.build_model("cpu")
     kind = scene.kind
     print(f"scene: {where} (object: {kind})")
@@ -43,7 +41,7 @@ def command(args) -> int:
             )
     print(f"  terrain: {model.terrain}")
     print("settings:")
-    print("  " + to_toml(descriptor).replace("\n", "\n  ").rstrip())
+    print("  " + scene.toml().replace("\n", "\n  ").rstrip())
     return 0
 
 

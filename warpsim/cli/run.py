@@ -199,7 +199,6 @@ def _resolve_run(args) -> _RunInputs:
     """The scene of the command line, or the one a ``--resume`` recording holds with its checkpoint."""
     from ..io.hdf5 import RecordingError
     from ..io.recording import Recording
-    from ..scene.scene import Scene
 
     if args.replay:
         try:
@@ -207,23 +206,22 @@ def _resolve_run(args) -> _RunInputs:
                 if recording.frame_count == 0:
                     raise RecordingError(f"{args.replay}: the recording has no frames")
                 controls = recording.controls()
-                descriptor = recording.descriptor(f"{args.replay} (replayed)")
+                scene = recording.recorded_scene(f"{args.replay} (replayed)")
                 length, terrain = float(recording.time[-1]), recording.terrain()
         except RecordingError as err:
             raise UsageError(f"--replay {err}") from None
         seconds = args.seconds if args.seconds is not None else length
-        return _RunInputs(Scene(descriptor, f"{args.replay} (replayed)"), seconds, controls=controls, terrain=terrain)
+        return _RunInputs(scene, seconds, controls=controls, terrain=terrain)
     if not args.resume:
-        descriptor, _, where = load_scene(args)
-        return _RunInputs(Scene(descriptor, where), None)
+        return _RunInputs(load_scene(args)[0], None)
     try:
         with Recording(args.resume, owner=True) as recording:
             checkpoint, frame = recording.checkpoint(), recording.checkpoint_frame
             where = f"{args.resume} (resumed)"
-            descriptor, terrain = recording.descriptor(where), recording.terrain()
+            scene, terrain = recording.recorded_scene(where), recording.terrain()
     except RecordingError as err:
         raise UsageError(f"--resume {err}") from None
-    return _RunInputs(Scene(descriptor, where), args.seconds, checkpoint, frame, terrain=terrain)
+    return _RunInputs(scene, args.seconds, checkpoint, frame, terrain=terrain)
 
 
 def _start(run: _RunInputs, device: str, args):
@@ -296,8 +294,7 @@ class _Outputs:
         self._failed: set[int] = set()
         stack.callback(self.close)
         opened = RunOutputs(
-            run.scene.descriptor(),
-            "" if args.resume else run.scene.toml(),
+            run.scene,
             "" if args.resume else run.where,
             resume=bool(args.resume),
             lock=lock,

@@ -57,10 +57,9 @@ def command(args) -> int:
     sweeps.require("pandas")
     if not args.scheduler:
         sweeps.require("cryptography")
-    descriptor, _, where = load_scene(args, worlds_from_vary=False)  # here --vary makes the sweep's axes
-    from ..scene.scene import Scene
-
-    kind = Scene(descriptor, where).kind
+    scene, _ = load_scene(args, worlds_from_vary=False)  # here --vary makes the sweep's axes
+    where = scene.where
+    kind = scene.kind
     if args.list_metrics:
         for name in sweeps.metrics_of(kind):
             unit, _, meaning = sweeps.METRICS[name]
@@ -79,8 +78,8 @@ def command(args) -> int:
     same_file_check(args.scene, {"--out": out})
     if args.device != "cpu":
         check_device(args.device)
-    axes = sweeps.parse_axes(descriptor, args.vary)
-    plan = sweeps.SweepPlan(descriptor, axes, args.seconds, args.window, args.metrics)
+    axes = sweeps.parse_axes(scene, args.vary)
+    plan = sweeps.SweepPlan(scene, axes, args.seconds, args.window, args.metrics)
     if not args.scheduler:
         sweeps.check_workers(args.workers)
     h5_dir = _check_h5_dir(args.h5_dir) if args.h5_dir and not args.scheduler else args.h5_dir

@@ -83,7 +83,6 @@ def command(args) -> int:
     from ..io.hdf5 import RecordingError, check_recording_path
     from ..io.render import check_picture_path
     from ..run.simulation import Simulation, available_cores
-    from ..scene.descriptor import to_toml
     from ..viewer.core import Viewer
 
     browser = args.browser or args.host is not None or args.port is not None
@@ -101,7 +100,8 @@ def command(args) -> int:
         except RuntimeError as err:
             raise UsageError(f"--screenshot: {err}") from None
     device = check_device(args.device)
-    descriptor, _, where = load_scene(args)
+    scene, _ = load_scene(args)
+    where = scene.where
     same_file_check(args.scene, {"--h5": h5_path, "--screenshot": shot})
     if browser:
         port = 8765 if args.port is None else args.port
@@ -110,10 +110,10 @@ def command(args) -> int:
         options = {"size": args.size, "keep_pictures": shot is not None}
     # a missing extra, display or port is said before the model is built
     backend = make_backend("browser" if browser else "window", **options)
-    sim = Simulation(descriptor, device=device, where=where, threads=args.threads or available_cores())
+    sim = Simulation(scene, device=device, where=where, threads=args.threads or available_cores())
     interruptible()  # the recording opens next
     try:
-        viewer = Viewer(sim, backend, f"warpsim: {where}", h5_path, to_toml(descriptor), where, seconds=args.seconds)
+        viewer = Viewer(sim, backend, f"warpsim: {where}", h5_path, where, seconds=args.seconds)
     except RecordingError as err:
         raise UsageError(f"--h5 {err}") from None
     except ViewerUnavailableError as err:

@@ -93,11 +93,10 @@ class H5Recorder(FrameOutput):
     Args:
         path: the ``.h5`` file to create (``resume=False``) or to continue (``resume=True``).
         model: the :class:`warpsim.Model` whose frames are recorded.
-        descriptor: the scene's validated descriptor (its time step and frame rate are stored).
+        scene: the run's :class:`~warpsim.scene.scene.Scene`: its TOML, time step and frame rate are stored.
         checkpoint: returns the run's :class:`warpsim.run.checkpoint.Checkpoint` now (e.g.
             :meth:`warpsim.run.simulation.Simulation.checkpoint`); asked when a frame is made durable.
-        descriptor_text: the full descriptor as TOML (see :func:`warpsim.scene.descriptor.to_toml`).
-        scene: where the scene came from (a path or ``built-in NAME``), stored as an attribute.
+        where: where the scene came from (a path or ``built-in NAME``), stored as the ``scene`` attribute.
         resume: open an existing recording and append after its checkpoint's frame.
         lock: the path's :func:`claim`, when the caller took it already (a resume reads the recording under
             it); taken here otherwise. Released when the recorder closes.
@@ -113,16 +112,16 @@ class H5Recorder(FrameOutput):
         self,
         path,
         model,
-        descriptor: dict,
+        scene,
         checkpoint: Callable[[], Checkpoint],
-        descriptor_text: str = "",
-        scene: str = "",
+        where: str = "",
+        *,
         resume: bool = False,
         lock=None,
     ):
         self.path = Path(path)
         self.model = model
-        self.descriptor = descriptor
+        self.scene = scene
         self.checkpoint = checkpoint
         self.file = None
         self.failed: OutputWriteError | None = None
@@ -135,7 +134,7 @@ class H5Recorder(FrameOutput):
             if resume:
                 self._open_existing()
             else:
-                self._create(descriptor_text, scene)
+                self._create(where)
         except BaseException as err:
             if self.file is not None:
                 with contextlib.suppress(Exception):
@@ -198,13 +197,13 @@ class H5Recorder(FrameOutput):
                 if name not in group or group[name].shape != shape:
                     raise RecordingError(f"{self.path}: checkpoint/{slot}/{name} is missing or damaged")
 
-    def _create(self, descriptor_text: str, scene: str) -> None:
+    def _create(self, where: str) -> None:
         import warp as wp
 
         from .._version import __version__
-        from ..scene.scene import Scene
 
-        model, spec = self.model, Scene.of(self.descriptor)  # (``scene``: where the scene came from)
+        model, spec = self.model, self.scene
+        descriptor_text = spec.toml()
         dt = spec.dt
         steps_per_frame = spec.settings.scene.steps_per_frame(dt)
         n, objects = model.particle_count, len(model.objects)
@@ -217,7 +216,7 @@ class H5Recorder(FrameOutput):
                 "format_version": FORMAT_VERSION,
                 "descriptor": descriptor_text,
                 "descriptor_sha256": descriptor_digest(descriptor_text),
-                "scene": scene,
+                "scene": where,
                 "solver": json.dumps(spec.table("solver")),
                 "warpsim_version": __version__,
                 "warp_version": wp.config.version,

@@ -26,8 +26,6 @@ import numpy as np
 
 from ..objects.mesh_file import file_numbering, write_mesh
 from ..objects.registry import MESH, section
-from ..scene.build import build_model
-from ..scene.descriptor import to_toml, world_descriptor
 from ..scene.scene import Scene
 
 HEAVY_SHARE = 0.05
@@ -43,7 +41,7 @@ def _aspect_ratio(design: np.ndarray, area: float) -> float:
     return float(np.clip(span * span / area, 0.3, 30.0))
 
 
-def _export_own(descriptor: dict, record, tris: np.ndarray, out: Path) -> tuple[Path, Path, list[str]]:
+def _export_own(own: Scene, record, tris: np.ndarray, out: Path) -> tuple[Path, Path, list[str]]:
     """A mesh design written back as it was read: its vertices in its own coordinates, its groups, and its scene
     with ``mesh.file`` the new file (so that it reads back to the same model)."""
     cloth = np.asarray(record.parts["cloth"], dtype=np.int64)
@@ -54,7 +52,6 @@ def _export_own(descriptor: dict, record, tris: np.ndarray, out: Path) -> tuple[
     groups = groups or {"cloth": np.arange(len(tris))}
     write_mesh(out, record.design, local[tris], groups)
     numbering = file_numbering(out.suffix, local[tris], groups, len(record.design))
-    own = Scene.of(descriptor)
     mesh = own.table(section(MESH))
     # the file holds the design's own coordinates, units and scale applied, and its groups: a part keeps its groups
     # and boxes, and one that named vertices names them by the new file's own numbering
@@ -63,21 +60,21 @@ def _export_own(descriptor: dict, record, tris: np.ndarray, out: Path) -> tuple[
         if "vertices" in entry:
             entry = {**entry, "vertices": [int(i) for i in numbering[chosen]]}
         parts.append(entry)
-    scene = own.as_mesh_design({**mesh, "file": out.name, "units": "m", "scale": 1.0, "parts": parts})
+    text = own.as_mesh_design({**mesh, "file": out.name, "units": "m", "scale": 1.0, "parts": parts})
     scene_path = out.with_suffix(".toml")
     header = (
         f"# a design exported by warpsim export to {out.name}, as it was read\n# Run: warpsim run {scene_path.name}\n"
     )
-    scene_path.write_text(header + to_toml(scene), encoding="utf-8")
+    scene_path.write_text(header + text, encoding="utf-8")
     return out, scene_path, []
 
 
-def export_design(descriptor: dict, out: str | Path) -> tuple[Path, Path, list[str]]:
-    """Write world 0 of ``descriptor``'s object as the mesh file ``out`` (.obj, .glb, .gltf or .stl) and a scene
+def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]:
+    """Write world 0 of ``scene``'s object as the mesh file ``out`` (.obj, .glb, .gltf or .stl) and a scene
     ``out`` with ``.toml`` that flies it; returns (mesh path, scene path, what the export left out)."""
     out = Path(out)
-    single = world_descriptor(descriptor, 0)  # world 0 with its own [worlds] values
-    model = build_model(single, "cpu", "export")
+    single = scene.world(0)  # world 0 with its own [worlds] values
+    model = single.build_model("cpu", "export")
     record = model.objects[0]
     tris = np.asarray(model.tri_indices_np, dtype=np.int64)
     if len(tris) == 0:
@@ -217,7 +214,7 @@ def export_design(descriptor: dict, out: str | Path) -> tuple[Path, Path, list[s
         left_out.append("its particles' own masses (the export's cloth has them by area, its frame's folded in)")
 
     compliances = compliance[cloth_sticks & (weight <= 1.0)]
-    scene = Scene.of(descriptor).as_mesh_design(
+    text = single.as_mesh_design(
         {
             "file": out.name,
             "position": [float(cx), float(cy), 0.0],
@@ -235,5 +232,5 @@ def export_design(descriptor: dict, out: str | Path) -> tuple[Path, Path, list[s
     ]
     if left_out:
         header.append("# Left out: " + "; ".join(left_out) + ".")
-    scene_path.write_text("\n".join(header) + "\n" + to_toml(scene), encoding="utf-8")
+    scene_path.write_text("\n".join(header) + "\n" + text, encoding="utf-8")
     return out, scene_path, left_out

@@ -13,32 +13,16 @@ from dataclasses import dataclass
 from pathlib import Path
 
 
-def open_recording(
-    path,
-    sim,
-    descriptor_text: str = "",
-    scene: str = "",
-    *,
-    descriptor: dict | None = None,
-    resume: bool = False,
-    lock=None,
-):
+def open_recording(path, sim, where: str = "", *, scene=None, resume: bool = False, lock=None):
     """The :class:`~warpsim.io.hdf5.H5Recorder` of ``sim``'s run (a :class:`~warpsim.run.simulation.Simulation`):
-    its model, its checkpoints, ``descriptor`` (default: the simulation's), the descriptor's TOML text and where
-    the scene came from; ``resume`` appends to the recording at ``path`` (``lock``: its writer's lock, when the
+    its model, its checkpoints, ``scene`` (a :class:`~warpsim.scene.scene.Scene`, default: the simulation's) and
+    where the scene came from; ``resume`` appends to the recording at ``path`` (``lock``: its writer's lock, when the
     caller took it already). Raises :class:`~warpsim.io.hdf5.RecordingError` or
     :class:`~warpsim.io.OutputWriteError` as the recorder does."""
     from .hdf5 import H5Recorder
 
     return H5Recorder(
-        path,
-        sim.model,
-        sim.descriptor if descriptor is None else descriptor,
-        sim.checkpoint,
-        descriptor_text,
-        scene,
-        resume=resume,
-        lock=lock,
+        path, sim.model, sim.scene if scene is None else scene, sim.checkpoint, where, resume=resume, lock=lock
     )
 
 
@@ -60,12 +44,11 @@ def open_picture(path: str | Path, sim, size: tuple[int, int] = (960, 540), azim
 
 @dataclass(frozen=True)
 class RunOutputs:
-    """What an output of a ``warpsim run`` opens with besides its path and the simulation: the run's descriptor,
-    its TOML text and where the scene came from (empty when resumed: the recording has them), whether the run
-    continues a recording (``resume``) and the writer's lock of the recording, when the command took it."""
+    """What an output of a ``warpsim run`` opens with besides its path and the simulation: the run's
+    :class:`~warpsim.scene.scene.Scene` and where it came from (empty when resumed: the recording has it), whether
+    the run continues a recording (``resume``) and the writer's lock of the recording, when the command took it."""
 
-    descriptor: dict
-    descriptor_text: str = ""
+    scene: object
     where: str = ""
     resume: bool = False
     lock: object = None
@@ -126,9 +109,7 @@ def _check_picture(path) -> Path:
 
 
 def _open_recording(path, sim, run: RunOutputs):
-    return open_recording(
-        path, sim, run.descriptor_text, run.where, descriptor=run.descriptor, resume=run.resume, lock=run.lock
-    )
+    return open_recording(path, sim, run.where, scene=run.scene, resume=run.resume, lock=run.lock)
 
 
 OUTPUTS: tuple[OutputKind, ...] = (

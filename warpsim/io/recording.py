@@ -225,27 +225,26 @@ class Recording:
             except ValueError as err:
                 raise RecordingError(f"{path}: its terrain cannot be used ({err})") from None
 
-    def descriptor(self, where: str | None = None) -> dict:
-        """The recorded scene's validated descriptor, checked against what the file holds before anything is built
-        from it: one world per recorded object (a crafted descriptor of 4,096 worlds was built for minutes before
-        its particle count was compared). ``where`` names it in errors (default: the file's descriptor)."""
+    def recorded_scene(self, where: str | None = None):
+        """The recorded :class:`~warpsim.scene.scene.Scene`, checked against what the file holds before anything is
+        built from it: one world per recorded object (a crafted descriptor of 4,096 worlds was built for minutes
+        before its particle count was compared). ``where`` names it in errors (default: the file's descriptor)."""
         from ..scene.descriptor import load_text
         from ..scene.scene import Scene
 
-        descriptor = load_text(self.descriptor_text, where or f"{self.path}: descriptor")
+        where = where or f"{self.path}: descriptor"
+        scene = Scene(load_text(self.descriptor_text, where), where)
         objects = len(self.file["topology"].attrs.get("objects", []))
-        worlds = Scene(descriptor).world_count
+        worlds = scene.world_count
         if worlds != objects:
             raise RecordingError(
                 f"{self.path}: its descriptor asks for {worlds:,} worlds, its frames hold {objects:,} objects"
             )
-        return descriptor
+        return scene
 
     def build_model(self, device: str = "cpu"):
         """The recorded scene's :class:`warpsim.Model`, checked against the recorded particle count."""
-        from ..scene.build import build_model
-
-        model = build_model(self.descriptor(), device, str(self.path), self.terrain())
+        model = self.recorded_scene().build_model(device, str(self.path), self.terrain())
         if model.particle_count != self.particle_count:
             raise RecordingError(
                 f"{self.path}: its descriptor builds {model.particle_count} particles, its frames hold "

@@ -353,7 +353,6 @@ def render_recording(
     frame the ropes and lines too (:class:`Scene`).
     Returns the path written.
     """
-    from ..scene import scene as scenes  # (this module's Scene is what a picture draws)
     from .hdf5 import RecordingError
     from .recording import Recording
 
@@ -363,9 +362,8 @@ def render_recording(
         count = recording.frame_count
         if count == 0:
             raise RecordingError(f"{recording_path}: the recording has no frames")
-        descriptor = recording.descriptor()
+        name = recording.recorded_scene().kind
         scene = Scene(recording.build_model(), wide)
-        name = scenes.Scene.of(descriptor).kind
         if output.suffix.lower() == ".png":
             k = count - 1 if frame is None else frame
             if not -count <= k < count:

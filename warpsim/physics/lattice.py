@@ -68,7 +68,6 @@ class Lattice:
         return len(self.edge_corner)
 
 
-
 def surface_edges(tris: np.ndarray) -> dict[tuple[int, int], list[tuple[int, int]]]:
     """Every undirected edge ``(min, max)`` of triangles ``tris`` ``[n, 3]`` -> the ``(triangle row, corner)`` pairs
     that hold it, in triangle order."""

@@ -384,7 +384,6 @@ class Gusts:
         return Gusts(*(getattr(self, f.name)[first:end] for f in dataclasses.fields(self)))
 
 
-
 @dataclass
 class Turbulence:
     """Every world's frozen turbulence (:mod:`warpsim.physics.turbulence`): one field shared by the worlds, each world

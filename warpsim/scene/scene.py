@@ -9,12 +9,16 @@ write or merge them (TOML, a recording, a sweep's chunk). Nothing outside ``scen
 from __future__ import annotations
 
 import copy
+import json
 from dataclasses import dataclass, field
 
 from ..objects import registry
 from ..physics.config import WindConfig, from_section
 from .build import Settings, build_model, settings
-from .descriptor import load_scene, merge, to_toml, world_descriptor
+from .descriptor import check_axis, load_scene, merge, one_of_batch, to_toml, world_descriptor
+
+LAUNCH_SECTIONS = ("solver", "air", "terrain", "ground")
+"""The sections one launch of the kernels cannot vary between worlds: scenes that differ in them step apart."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -121,21 +125,50 @@ class Scene:
         where = self.where if where is None else where
         return Scene(merge(where, self._tables, override), where)
 
+    # ------------------------------------------------------------------ a sweep's scenes
+    def for_sweep(self, seconds: float) -> Scene:
+        """This scene as a sweep's base: every case runs ``seconds`` [s], and its ``[sweep]`` table (the axes, read
+        by the sweep's plan) is dropped. Raises :class:`~warpsim.scene.values.DescriptorError`."""
+        tables = merge("sweep", self._tables, {"scene": {"seconds": seconds}})
+        tables.pop("sweep", None)
+        return Scene(tables, "sweep")
+
+    def check_axis(self, where: str, section: str, key: str, values) -> list:
+        """One sweep axis over this scene, checked: ``section.key`` takes each of ``values`` (a list or a range
+        text ``START:STOP:COUNT``); :func:`~warpsim.scene.descriptor.check_axis`."""
+        return check_axis(where, self._tables, section, key, values)
+
+    def batch(self, count: int, shared: dict, per_world: dict) -> Scene:
+        """``count`` worlds of this scene: ``shared`` (section -> key -> value) set in all of them, ``per_world``
+        (section -> key -> ``count`` values) one value per world. Raises
+        :class:`~warpsim.scene.values.DescriptorError`."""
+        return Scene(merge(self.where, self._tables, {**shared, "worlds": {"count": count, **per_world}}), self.where)
+
+    def one_of_batch(self, world: int) -> Scene:
+        """World ``world`` of this batch as a batch of one (its ``[worlds]`` values kept as one-value lists: a
+        sweep's case run alone, as its chunk ran it)."""
+        return Scene(one_of_batch(self._tables, world), self.where)
+
+    def launch_key(self) -> str:
+        """The scene's :data:`LAUNCH_SECTIONS` as canonical JSON: two scenes with the same key compile and launch the
+        same kernels."""
+        return json.dumps({k: v for k, v in self._tables.items() if k in LAUNCH_SECTIONS}, sort_keys=True)
+
     # ------------------------------------------------------------------ the plain tables
     def descriptor(self) -> dict:
         """A copy of the plain descriptor (section -> key -> value): what is written or merged."""
         return copy.deepcopy(self._tables)
 
-    def as_mesh_design(self, mesh: dict) -> dict:
-        """This scene's descriptor for its object flown as a design of its own from a mesh file (what ``warpsim
-        export`` writes beside the mesh): its shared sections, the controls of its schedule a mesh design has, and
-        ``mesh`` (the mesh section's keys) in place of the object's section."""
+    def as_mesh_design(self, mesh: dict) -> str:
+        """This scene as TOML for its object flown as a design of its own from a mesh file (what ``warpsim export``
+        writes beside the mesh): its shared sections, the controls of its schedule a mesh design has, and ``mesh``
+        (the mesh section's keys) in place of the object's section."""
         out = {k: copy.deepcopy(v) for k, v in self._tables.items() if k not in ("worlds", "sweep", self.section)}
         out["scene"]["object"] = registry.MESH
         names = set(registry.OBJECTS[registry.MESH].controls) | {"wind", "time", "ramp"}
         out["controls"] = [c for c in self.controls if set(c) <= names]
         out[registry.section(registry.MESH)] = copy.deepcopy(mesh)
-        return out
+        return to_toml(out)
 
     def table(self, section: str) -> dict:
         """A copy of one section's plain table (``solver``...), for what stores it as written."""

@@ -3,7 +3,6 @@ calls), and the kernels compiled once before the workers start."""
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -11,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io.protocol import write_frame
-from ..scene.descriptor import DescriptorError, to_toml
+from ..scene.descriptor import DescriptorError
 from .metrics import SweepError
 from .plan import ChunkTask
 
@@ -42,7 +41,7 @@ def run_chunk(task: ChunkTask) -> list[dict]:
     from ..run.simulation import Simulation
 
     try:
-        sim = Simulation(task.descriptor, device=task.device, where="sweep case", threads=task.threads)
+        sim = Simulation(task.scene, device=task.device, where="sweep case", threads=task.threads)
     except DescriptorError as err:
         if len(task.cases) == 1:
             return _failed_rows(task, f"not built: {err}")
@@ -104,7 +103,7 @@ def _chunk_recorder(task: ChunkTask, sim):
     if path.is_symlink():  # the chunk's own name: a link planted there is removed, never written through
         path.unlink()
     # the recorder takes the file's writer lock before it truncates it: a run writing it is never overwritten
-    return open_recording(path, sim, to_toml(sim.descriptor), "warpsim sweep")
+    return open_recording(path, sim, "warpsim sweep")
 
 
 def check_recordings_free(tasks: Sequence[ChunkTask]) -> None:
@@ -128,14 +127,11 @@ def warm_kernels(tasks: Sequence[ChunkTask], device: str) -> None:
 
     seen = set()
     for task in tasks:
-        key = json.dumps({k: v for k, v in task.descriptor.items() if k in _SHARED})
+        key = task.scene.launch_key()
         if key in seen:
             continue
         seen.add(key)
         try:
-            Simulation(task.single(0).descriptor, device=device)
+            Simulation(task.single(0).scene, device=device)
         except DescriptorError:  # a case that cannot be built: its row will say so
             pass
-
-
-_SHARED = ("solver", "air", "terrain", "ground")

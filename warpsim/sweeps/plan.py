@@ -1,4 +1,4 @@
-"""A sweep's plan: its axes (swept keys and values, checked against the descriptor), its cases (the cartesian
+"""A sweep's plan: its axes (swept keys and values, checked against the scene), its cases (the cartesian
 product, first axis slowest), each case's key, and the chunks of cases that run as one task each."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..scene.descriptor import VARIABLE_SECTIONS, DescriptorError, check_axis, merge, one_of_batch, to_toml
+from ..scene.descriptor import VARIABLE_SECTIONS, DescriptorError
 from ..scene.scene import Scene
 from ..scene.values import parse_vary
 from .metrics import SweepError, metrics_of
@@ -27,7 +27,7 @@ another format is not resumed (its rows' units would mix with the new ones)."""
 
 @dataclass(frozen=True)
 class Axis:
-    """One swept key: ``section.key`` takes each of ``values`` in turn (checked against the descriptor)."""
+    """One swept key: ``section.key`` takes each of ``values`` in turn (checked against the scene)."""
 
     section: str
     key: str
@@ -39,12 +39,12 @@ class Axis:
         return f"{self.section}.{self.key}"
 
 
-def parse_axes(descriptor: dict, items: Sequence[str] | dict, where: str = "--vary") -> list[Axis]:
-    """The sweep's axes: the descriptor's ``[sweep]`` table, then ``items`` (``--vary`` texts
+def parse_axes(scene: Scene, items: Sequence[str] | dict, where: str = "--vary") -> list[Axis]:
+    """The sweep's axes: the scene's ``[sweep]`` table, then ``items`` (``--vary`` texts
     ``KEY=START:STOP:COUNT`` or ``KEY=V1,V2,...``, or a dict ``{"section.key": values or "START:STOP:COUNT"}``),
     which replace a ``[sweep]`` axis of the same key. Raises :class:`~warpsim.scene.descriptor.DescriptorError`."""
     axes: dict[str, Axis] = {}
-    for section, keys in Scene.of(descriptor).sweep.items():
+    for section, keys in scene.sweep.items():
         for key, values in keys.items():
             axes[f"{section}.{key}"] = Axis(section, key, tuple(values))
     pairs: list[tuple[str, str, object, str]] = []
@@ -59,7 +59,7 @@ def parse_axes(descriptor: dict, items: Sequence[str] | dict, where: str = "--va
             section, key, values = parse_vary(text, None, where)
             pairs.append((section, key, values, f"{where} {text}"))
     for section, key, values, origin in pairs:
-        axes[f"{section}.{key}"] = Axis(section, key, tuple(check_axis(origin, descriptor, section, key, values)))
+        axes[f"{section}.{key}"] = Axis(section, key, tuple(scene.check_axis(origin, section, key, values)))
     names = set(axes)
     if {"wind.speed", "wind.velocity"} <= names:
         raise DescriptorError(f"{where}: sweep wind.speed or wind.velocity, not both")
@@ -86,17 +86,17 @@ def case_key(values: Sequence) -> str:
 
 @dataclass
 class ChunkTask:
-    """One Dask task: the cases ``cases`` (plan indices) run as the worlds of ``descriptor``.
+    """One Dask task: the cases ``cases`` (plan indices) run as the worlds of ``scene``.
 
     Attributes:
-        descriptor: the chunk's validated descriptor, ``[worlds]`` holding each case's per-world values.
+        scene: the chunk's :class:`~warpsim.scene.scene.Scene`, its worlds holding each case's values.
         cases: plan indices of the cases, in world order. columns: their swept values, by axis name.
         seconds: simulated time [s]. window: ``(start, stop)`` [s] the window metrics cover.
         metrics: metric columns to report. device: Warp device. h5: recording to write, or None.
         threads: threads stepping the chunk's worlds (:class:`~warpsim.run.simulation.Simulation`).
     """
 
-    descriptor: dict
+    scene: Scene
     cases: list[int]
     columns: list[dict]
     seconds: float
@@ -109,7 +109,7 @@ class ChunkTask:
     def single(self, k: int) -> ChunkTask:
         """The task of this chunk's ``k``-th case alone."""
         return replace(
-            self, descriptor=one_of_batch(self.descriptor, k), cases=[self.cases[k]], columns=[self.columns[k]], h5=None
+            self, scene=self.scene.one_of_batch(k), cases=[self.cases[k]], columns=[self.columns[k]], h5=None
         )
 
 
@@ -117,7 +117,7 @@ class SweepPlan:
     """The cases of a sweep and how they are cut into tasks.
 
     Args:
-        descriptor: the scene's validated descriptor (without ``[worlds]``; its ``[sweep]`` is not read here).
+        scene: the :class:`~warpsim.scene.scene.Scene` swept (of one world; its ``[sweep]`` is not read here).
         axes: the swept keys (:func:`parse_axes`).
         seconds: simulated time of every case [s] (default: the scene's).
         window: ``(start, stop)`` [s] of the window metrics (default: the second half of the run).
@@ -126,13 +126,12 @@ class SweepPlan:
 
     def __init__(
         self,
-        descriptor: dict,
+        scene: Scene,
         axes: Sequence[Axis],
         seconds: float | None = None,
         window: tuple[float, float] | None = None,
         metrics: Sequence[str] | None = None,
     ):
-        scene = Scene.of(descriptor)
         if scene.world_count != 1:
             raise SweepError("a sweep makes its own worlds: remove [worlds] from the scene (use --vary instead)")
         self.kind = scene.kind
@@ -141,8 +140,7 @@ class SweepPlan:
         if not (self.seconds > 0 and math.isfinite(self.seconds)):
             raise SweepError(f"--seconds must be a positive number, got {self.seconds}")
         # the same definition whether --seconds or the scene says it; a sweep's [sweep] table is not the cases'
-        base = scene.with_values({"scene": {"seconds": self.seconds}}, "sweep").descriptor()
-        self.base = {section: table for section, table in base.items() if section != "sweep"}
+        self.base = scene.for_sweep(self.seconds)
         self.window = (self.seconds / 2, self.seconds) if window is None else (float(window[0]), float(window[1]))
         start, stop = self.window
         if not (0.0 <= start <= stop <= self.seconds):
@@ -173,7 +171,7 @@ class SweepPlan:
         a sweep may gain values and keep the rows it has)."""
         return {
             "table_format": TABLE_FORMAT,
-            "scene": to_toml(self.base),
+            "scene": self.base.toml(),
             "terrain": self._terrain,
             "seconds": self.seconds,
             "window": list(self.window),
@@ -181,19 +179,19 @@ class SweepPlan:
             "metrics": list(self.metrics),
         }
 
-    def case_descriptor(self, index: int) -> dict:
-        """The descriptor of case ``index`` run alone (one world)."""
-        return self._chunk_descriptor([index])
+    def case_scene(self, index: int) -> Scene:
+        """The scene of case ``index`` run alone (one world)."""
+        return self._chunk_scene([index])
 
-    def _chunk_descriptor(self, indices: Sequence[int]) -> dict:
+    def _chunk_scene(self, indices: Sequence[int]) -> Scene:
         shared: dict = {}
-        worlds: dict = {"count": len(indices)}
+        worlds: dict = {}
         for a, (axis, per_world) in enumerate(zip(self.axes, self._per_world, strict=True)):
             if per_world:
                 worlds.setdefault(axis.section, {})[axis.key] = [self.cases[i][a] for i in indices]
             else:  # one value for the whole chunk: its cases share it (see chunks)
                 shared.setdefault(axis.section, {})[axis.key] = self.cases[indices[0]][a]
-        return merge("sweep", self.base, {**shared, "worlds": worlds})
+        return self.base.batch(len(indices), shared, worlds)
 
     def chunks(
         self,
@@ -221,7 +219,7 @@ class SweepPlan:
                 h5 = str(Path(h5_dir) / f"{h5_prefix}-{indices[0]:06d}-{indices[-1]:06d}.h5") if h5_dir else None
                 tasks.append(
                     ChunkTask(
-                        self._chunk_descriptor(indices),
+                        self._chunk_scene(indices),
                         indices,
                         columns,
                         self.seconds,

@@ -253,13 +253,12 @@ def recording_series(path, metrics) -> tuple[np.ndarray, dict[str, np.ndarray], 
     from ..io.h5format import RecordingError
     from ..io.recording import Recording
     from ..run.figures import Figures
-    from ..scene.scene import Scene
 
     with Recording(path) as recording:
         count = recording.frame_count
         if count == 0:
             raise RecordingError(f"{path}: the recording has no frames")
-        scene = Scene(recording.descriptor())
+        scene = recording.recorded_scene()
         kind = scene.kind
         known = recording_metrics(kind)
         for name in metrics:
@@ -278,9 +277,7 @@ def recording_series(path, metrics) -> tuple[np.ndarray, dict[str, np.ndarray], 
             out["kinetic_energy"] = recording.file["diagnostics/kinetic_energy"][:count].astype(float)[:, None]
         wanted = [name for name in metrics if name not in RECORDED]
         if wanted:
-            winds = np.array(
-                [scene.wind_of(w).velocity for w in range(model.world_count)], dtype=float
-            )
+            winds = np.array([scene.wind_of(w).velocity for w in range(model.world_count)], dtype=float)
             figures = Figures(model)
             q = recording.positions()
             values = {name: np.full((count, len(names)), np.nan) for name in wanted}

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..run.summary import available_cores
+from ..scene.scene import Scene
 from . import chunk as chunks
 from . import cluster
 from .metrics import SweepError, require
@@ -147,7 +148,7 @@ def _run_owned(
 
 
 def sweep(
-    scene: str | dict,
+    scene: str | Scene,
     axes: dict | Sequence[str] = (),
     *,
     seconds: float | None = None,
@@ -164,7 +165,7 @@ def sweep(
     """Sweep a scene over every combination of ``axes`` and return one row per case (a pandas DataFrame).
 
     Args:
-        scene: a built-in object name, a scene name or ``.toml`` path, or a validated descriptor (dict).
+        scene: a built-in object name, a scene name or ``.toml`` path, or a :class:`~warpsim.scene.scene.Scene`.
         axes: ``{"section.key": [values] or "START:STOP:COUNT"}`` or ``--vary`` texts
             (``"kite.tow_point=0.2:0.5:4"``); added to the scene's ``[sweep]`` table.
         seconds: simulated time of every case [s] (default: the scene's).
@@ -181,10 +182,9 @@ def sweep(
         from ..scene.descriptor import resolve
         from ..scene.dirs import scene_dirs
 
-        descriptor = resolve(scene, scene_dirs())[0]
-    else:
-        descriptor = scene
-    plan = SweepPlan(descriptor, parse_axes(descriptor, axes), seconds, window, metrics)
+        descriptor, _, where = resolve(scene, scene_dirs())
+        scene = Scene(descriptor, where)
+    plan = SweepPlan(scene, parse_axes(scene, axes), seconds, window, metrics)
     outcome = run_sweep(plan, Path(out) if out else None, workers, scheduler, chunk, device, h5_dir, restart)
     if outcome.interrupted:
         raise KeyboardInterrupt

@@ -97,7 +97,7 @@ class Viewer:
         sim: the scene, at its start. backend: the window (:class:`~warpsim.viewer.backend.Backend`).
         title: window title. record: path of an ``.h5`` recording of what is flown (None: no recording);
             after a restart (``R``) the next take goes to ``NAME.take2.h5`` and so on.
-        descriptor_text: the scene as TOML, stored in the recording. scene: where it came from.
+        where: where the scene came from, stored in the recording.
         seconds: quit after this much simulated time (None: when the user quits).
         say: where messages go (one line each; stderr by default).
 
@@ -124,8 +124,7 @@ class Viewer:
         backend: Backend,
         title: str = "warpsim",
         record: str | Path | None = None,
-        descriptor_text: str = "",
-        scene: str = "",
+        where: str = "",
         seconds: float | None = None,
         say=None,
     ):
@@ -172,7 +171,7 @@ class Viewer:
         self.recorder = None
         self._record_path = Path(record) if record else None
         self.takes: list[Path] = []  # the recordings made: NAME.h5, then NAME.take2.h5, ... after each restart
-        self._descriptor_text, self._scene = descriptor_text, scene
+        self._where = where
         self.backend.open(self.draw_list, title, hud.key_map(self))
         if self._record_path is not None:
             try:
@@ -186,7 +185,7 @@ class Viewer:
         from ..io.outputs import open_recording
         from ..io.protocol import write_frame
 
-        self.recorder = open_recording(path, self.sim, self._descriptor_text, self._scene)
+        self.recorder = open_recording(path, self.sim, self._where)
         write_frame(self.recorder, self.frame)
         self.takes.append(path)
         self.say(f"recording to {path}")

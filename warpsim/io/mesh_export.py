@@ -89,8 +89,43 @@ def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]
     ground = float(model.terrain.height(cx, cy))
     origin = np.array([cx, cy, ground])
     design = q0[cloth] - origin
-    left_out: list[str] = []
+    numbering = _write_cloth(out, record, tris, local, design)
 
+    def vertices_of(ids) -> list[int]:
+        return [int(numbering[local[int(i)]]) for i in sorted(ids)]
+
+    sticks = np.asarray(model.stick_particles_np, dtype=np.int64)
+    weight = model.stick_weight.numpy().astype(np.float64)
+    compliance = np.asarray(model.stick_compliance, dtype=np.float64) * weight
+    cloth_sticks = np.isin(sticks, cloth).all(axis=1)
+    rope, heavy, virtual, light = _off_cloth(record, cloth, sticks, mass)
+    area = 0.5 * float(
+        np.linalg.norm(np.cross(q0[tris[:, 1]] - q0[tris[:, 0]], q0[tris[:, 2]] - q0[tris[:, 0]]), axis=1).sum()
+    )
+    cloth_mass = float(mass[cloth].sum() + mass[virtual].sum())
+    left_out: list[str] = []
+    parts = _nail_and_spar_parts(model, sticks, weight, cloth_sticks, local, virtual, vertices_of)
+    parts += _line_part(model, record, sticks, weight, mass, rope, local, origin, vertices_of, left_out)
+    parts += _mass_parts(model, record, sticks, mass, heavy, rope, light, local, origin, vertices_of, left_out)
+    left_out += _left_out_of_model(model, tris, q0, cloth, mass, cloth_mass, area)
+
+    compliances = compliance[cloth_sticks & (weight <= 1.0)]
+    mesh = {
+        "file": out.name,
+        "position": [float(cx), float(cy), 0.0],
+        "velocity": [float(v) for v in np.asarray(model.particle_qd0, dtype=np.float64)[cloth].mean(axis=0)],
+        "mass_per_area": cloth_mass / area,
+        "cloth_compliance": float(np.median(compliances)) if len(compliances) else 0.0,
+        "aspect_ratio": _aspect_ratio(design, area),
+        "parts": parts,
+    }
+    return out, _write_scene(single, record, out, mesh, left_out), left_out
+
+
+def _write_cloth(out: Path, record, tris: np.ndarray, local: dict[int, int], design: np.ndarray) -> np.ndarray:
+    """Write the cloth's triangles ``tris`` (particles, renumbered by ``local``) on the vertices ``design`` [m] as the
+    mesh file ``out``, grouped by the record's named triangle parts (a triangle in the first that names it, the rest
+    in ``cloth``); returns the file's own numbering of the vertices (:func:`file_numbering`)."""
     groups: dict[str, list[int]] = {}
     taken = np.zeros(len(tris), dtype=bool)
     named = [(n, ids) for n, ids in record.tri_parts.items() if n != "cloth"] + [("cloth", np.arange(len(tris)))]
@@ -102,13 +137,13 @@ def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]
     mesh_tris = np.vectorize(local.get)(tris)
     groups_np = {n: np.asarray(v) for n, v in groups.items()}
     write_mesh(out, design, mesh_tris, groups_np)
-    numbering = file_numbering(out.suffix, mesh_tris, groups_np, len(cloth))
+    return file_numbering(out.suffix, mesh_tris, groups_np, len(design))
 
-    sticks = np.asarray(model.stick_particles_np, dtype=np.int64)
-    weight = model.stick_weight.numpy().astype(np.float64)
-    compliance = np.asarray(model.stick_compliance, dtype=np.float64) * weight
-    on_cloth = np.isin(sticks, cloth)
-    cloth_sticks = on_cloth.all(axis=1)
+
+def _off_cloth(record, cloth: np.ndarray, sticks: np.ndarray, mass: np.ndarray):
+    """The object's particles off the cloth, by what they are: its rope's (a set), the heavy ones (each over
+    :data:`HEAVY_SHARE` of the object's mass ``mass`` [kg]: point masses), a rigid frame's virtual particles (tied
+    by ``sticks`` to three cloth particles or more) and the light rest (lines, straps, bars; a set)."""
     rope = set(int(p) for p in record.parts.get("rope", []))
     heavy = [
         int(p) for p in np.setdiff1d(record.particles, cloth) if mass[p] > HEAVY_SHARE * mass[record.particles].sum()
@@ -121,15 +156,14 @@ def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]
         and int(np.isin(sticks[(sticks == p).any(axis=1)], cloth).sum()) >= 3
     ]
     light = set(int(p) for p in np.setdiff1d(record.particles, cloth)) - rope - set(heavy) - set(virtual)
-    area = 0.5 * float(
-        np.linalg.norm(np.cross(q0[tris[:, 1]] - q0[tris[:, 0]], q0[tris[:, 2]] - q0[tris[:, 0]]), axis=1).sum()
-    )
-    cloth_mass = float(mass[cloth].sum() + mass[virtual].sum())
+    return rope, heavy, virtual, light
+
+
+def _nail_and_spar_parts(model, sticks, weight, cloth_sticks, local, virtual, vertices_of) -> list[dict]:
+    """The ``nail`` of the nailed cloth particles, the rigid ``spar`` of the cloth particles tied to the ``virtual``
+    particles, and the flexible ``spar`` of the cloth's sticks of weight over 1 (each part only where it has
+    vertices)."""
     parts: list[dict] = []
-
-    def vertices_of(ids) -> list[int]:
-        return [int(numbering[local[int(i)]]) for i in sorted(ids)]
-
     nailed = [int(p) for p in model.nail_particles if int(p) in local]
     if nailed:
         parts.append({"kind": "nail", "vertices": vertices_of(nailed)})
@@ -142,30 +176,47 @@ def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]
         parts.append(
             {"kind": "spar", "vertices": vertices_of(ends), "rigid": False, "weight": float(np.median(weight[stiff]))}
         )
+    return parts
+
+
+def _line_part(model, record, sticks, weight, mass, rope, local, origin, vertices_of, left_out) -> list[dict]:
+    """The ``line`` of a rope to a nailed anchor, as a list of one (empty without one): its anchor (x, y) [m], length
+    [m], segments and mass per length [kg/m], hung from the cloth particle it ties to or through a bridle's knot (its
+    position relative to ``origin`` [m]). Adds to ``left_out`` a rope's doubled sticks."""
     anchor_nail = getattr(record, "anchor_nail", -1)
-    if anchor_nail >= 0 and rope:
-        tow = int(record.tow)
-        rope_sticks = np.asarray(record.stick_groups.get("rope", []), dtype=np.int64)
-        length = float(model.stick_rest.numpy()[rope_sticks].sum())
-        target = model.nail_target0[anchor_nail]
-        line = {
-            "kind": "line",
-            "anchor": [float(target[0]), float(target[1])],
-            "length": length,
-            "segments": len(rope_sticks),
-            "mass_per_length": float(mass[sorted(rope)].sum()) / length,
-            "diameter": 0.0,
-        }
-        if tow in local:
-            line["vertices"] = vertices_of([tow])
-        else:
-            legs = {int(o) for s in sticks[(sticks == tow).any(axis=1)] for o in s if int(o) in local}
-            line["vertices"] = vertices_of(legs)
-            line["bridle"] = [float(v) for v in q0[tow] - origin]
-        if (weight[rope_sticks] > 1.0).any():
-            left_out.append("the rope's doubled sticks (the line's sticks all count once)")
-        parts.append(line)
+    if not (anchor_nail >= 0 and rope):
+        return []
+    q0 = np.asarray(model.particle_q0, dtype=np.float64)
+    tow = int(record.tow)
+    rope_sticks = np.asarray(record.stick_groups.get("rope", []), dtype=np.int64)
+    length = float(model.stick_rest.numpy()[rope_sticks].sum())
+    target = model.nail_target0[anchor_nail]
+    line = {
+        "kind": "line",
+        "anchor": [float(target[0]), float(target[1])],
+        "length": length,
+        "segments": len(rope_sticks),
+        "mass_per_length": float(mass[sorted(rope)].sum()) / length,
+        "diameter": 0.0,
+    }
+    if tow in local:
+        line["vertices"] = vertices_of([tow])
+    else:
+        legs = {int(o) for s in sticks[(sticks == tow).any(axis=1)] for o in s if int(o) in local}
+        line["vertices"] = vertices_of(legs)
+        line["bridle"] = [float(v) for v in q0[tow] - origin]
+    if (weight[rope_sticks] > 1.0).any():
+        left_out.append("the rope's doubled sticks (the line's sticks all count once)")
+    return [line]
+
+
+def _mass_parts(model, record, sticks, mass, heavy, rope, light, local, origin, vertices_of, left_out) -> list[dict]:
+    """A ``mass`` for each ``heavy`` particle, hung from the cloth particles its sticks reach through light ones (not
+    heavy, not the rope's): its mass [kg] with its lines' and straps', position relative to ``origin`` [m], drag area
+    [m^2] and, for a glider, its ``shift``. Adds to ``left_out`` a heavy particle that no stick ties to the cloth."""
+    q0 = np.asarray(model.particle_q0, dtype=np.float64)
     drag = dict(zip(model.drag_particles.numpy().tolist(), model.drag_area.numpy().tolist(), strict=True))
+    parts: list[dict] = []
     for p in heavy:
         reach, hang, seen = [p], set(), {p}
         while reach:  # through lines, straps and bars to the cloth
@@ -194,6 +245,13 @@ def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]
         if any(travel):
             entry["shift"] = travel
         parts.append(entry)
+    return parts
+
+
+def _left_out_of_model(model, tris, q0, cloth, mass, cloth_mass: float, area: float) -> list[str]:
+    """What of the model the export cannot carry: its bending hinges, a whole-canopy air law, and particle masses
+    [kg] off by more than 1 % of the heaviest from the cloth's ``cloth_mass`` [kg] spread by ``area`` [m^2]."""
+    left_out = []
     if model.hinge_count:
         left_out.append("its bending hinges (mesh.bending_stiffness is 0)")
     if model.canopy_count:
@@ -212,19 +270,13 @@ def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]
     by_area = corner_area[cloth] * cloth_mass / area
     if np.abs(by_area - mass[cloth]).max() > 0.01 * mass[cloth].max():
         left_out.append("its particles' own masses (the export's cloth has them by area, its frame's folded in)")
+    return left_out
 
-    compliances = compliance[cloth_sticks & (weight <= 1.0)]
-    text = single.as_mesh_design(
-        {
-            "file": out.name,
-            "position": [float(cx), float(cy), 0.0],
-            "velocity": [float(v) for v in np.asarray(model.particle_qd0, dtype=np.float64)[cloth].mean(axis=0)],
-            "mass_per_area": cloth_mass / area,
-            "cloth_compliance": float(np.median(compliances)) if len(compliances) else 0.0,
-            "aspect_ratio": _aspect_ratio(design, area),
-            "parts": parts,
-        }
-    )
+
+def _write_scene(single: Scene, record, out: Path, mesh: dict, left_out: list[str]) -> Path:
+    """Write the scene of ``single`` flying the ``[mesh]`` table ``mesh`` beside the mesh file ``out`` (``out`` with
+    ``.toml``), its header naming the object and what was ``left_out``; returns its path."""
+    text = single.as_mesh_design(mesh)
     scene_path = out.with_suffix(".toml")
     header = [
         f"# {record.kind} exported by warpsim export to {out.name}: its cloth and its parts as a design of its own.",
@@ -233,4 +285,4 @@ def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]
     if left_out:
         header.append("# Left out: " + "; ".join(left_out) + ".")
     scene_path.write_text("\n".join(header) + "\n" + text, encoding="utf-8")
-    return out, scene_path, left_out
+    return scene_path

@@ -228,90 +228,22 @@ class KiteRecord(ObjectRecord):
 
 def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> KiteRecord:
     """Add the kite of ``cfg`` and its rope; returns its record (parts, stick groups, anchor nail)."""
-    n, kd = int(cfg.divisions), int(cfg.keel_divisions)
-    if n < 3 or kd < 1:
-        raise ValueError(f"divisions must be >= 3 and keel_divisions >= 1, got {n} and {kd}")
-    if 2 + 2 * kd > n:
-        raise ValueError(f"keel_divisions = {kd} needs divisions >= {2 + 2 * kd} (the keel spans 2 sail rows each)")
-    if cfg.rope_particles < 2:
-        raise ValueError(f"rope_particles must be at least 2, got {cfg.rope_particles}")
-    cloth_share = 1.0 - cfg.spar_mass_fraction - cfg.frame_mass_fraction
-    if cloth_share <= 0.0:
-        raise ValueError(
-            f"spar_mass_fraction + frame_mass_fraction must be below 1 (the cloth needs a mass), got "
-            f"{cfg.spar_mass_fraction:g} + {cfg.frame_mass_fraction:g}"
-        )
-    fwd, left, up = body_axes(cfg.heading + 180.0, cfg.attack)  # nose into the wind
-    ax, ay = cfg.anchor
-    anchor = np.array([ax, ay, float(terrain.height(ax, ay))])
-    h, e = np.radians(cfg.heading), np.radians(cfg.elevation)
-    tow = anchor + cfg.rope_length * np.array([np.cos(h) * np.cos(e), np.sin(h) * np.cos(e), np.sin(e)])
-    # spine row r lies r/n of the spine behind the nose; the tow point sits under rows 2 .. 2 + 2 kd
-    front, back = 2 / n, (2 + 2 * kd) / n
-    along = front + cfg.tow_point * (back - front)
-    nose = tow + along * cfg.spine * fwd + cfg.keel_depth * up
-    tip_l = nose - cfg.spine * fwd + 0.5 * cfg.span * left
-    tip_r = nose - cfg.spine * fwd - 0.5 * cfg.span * left
-
-    sail_count = (n + 1) * (n + 2) // 2
-    keel_count = (kd + 1) * (kd + 2) // 2 - (kd + 1)
-    per_particle = cfg.mass * cloth_share / (sail_count + keel_count)
+    n = int(cfg.divisions)
+    _kite_check(cfg)
+    sail_count, keel_count, per_particle = _kite_masses(cfg)
+    (fwd, left, up), anchor, tow, (nose, tip_l, tip_r) = _kite_geometry(cfg, terrain)
     p0 = builder.particle_count
-    tan_dihedral = np.tan(np.radians(cfg.dihedral))
-
-    def dihedral(points: np.ndarray) -> np.ndarray:
-        return points + np.outer(np.abs((points - nose) @ left) * tan_dihedral, up)
-
-    rows, sail_sticks, sail_tris = builder.add_subdivided_triangle(
-        nose, tip_l, tip_r, n, per_particle * sail_count, shape=dihedral
-    )
+    rows, sail_sticks, sail_tris = _kite_sail(builder, cfg, (nose, tip_l, tip_r), left, up, per_particle * sail_count)
     _kite_sail_air(builder, cfg, sail_tris, rows, nose, fwd, left)
     keel_top, keel_rows, keel_sticks, keel_tris, keel = _kite_keel(builder, cfg, rows, tow, per_particle, keel_count)
     tow_particle = keel_rows[0][0]
-    centre = (nose + tip_l + tip_r) / 3.0
-    spars = add_rigid_frame(
-        builder,
-        rows,
-        sail_sticks,
-        centre,
-        cfg.frame_height * up,
-        (1, -1),
-        cfg.mass * cfg.spar_mass_fraction / 2.0,
-        cfg.frame_weight,
-    )
-    if cfg.straight_spars:
-        spars.sticks.extend(add_spar_braces(builder, rows, cfg.frame_weight))
-    _kite_frame_weights(builder, cfg, rows, sail_sticks, spars)
+    spars = _kite_frame(builder, cfg, rows, sail_sticks, (nose + tip_l + tip_r) / 3.0, up)
     if cfg.keel_edges:
-        # the keel's reinforced edges: the tow point tied straight to the keel's ends on the spine and to the
-        # spars' virtual particles, so the line's pull reaches the frame in one stick, not down a chain of keel
-        # cloth sticks that stretch under it
-        keel_sticks = np.concatenate(
-            [
-                keel_sticks,
-                [
-                    builder.add_stick(tow_particle, a, weight=cfg.frame_weight)
-                    for a in (keel_top[0], keel_top[-1], *spars.virtual)
-                ],
-            ]
-        )
-
-    cloth = np.setdiff1d(sail_sticks, spars.sticks)  # the sail's own cloth sticks, without the frame's
-    if cfg.sail_compliance > 0.0:
-        builder.set_compliance(cloth, cfg.sail_compliance)
-    if cfg.frame_compliance > 0.0:
-        # the spars and the keel elastic: with rigid ties every finer step would fly a stiffer kite
-        builder.set_compliance([*spars.sticks, *keel_sticks], cfg.frame_compliance)
+        keel_sticks = np.concatenate([keel_sticks, _kite_keel_edges(builder, cfg, tow_particle, keel_top, spars)])
+    cloth = _kite_cloth(builder, cfg, sail_sticks, spars, keel_sticks)
     if cfg.tail_drag > 0.0:
         builder.set_drag_area(spars.keel[-1], cfg.tail_drag)
-    if cfg.billow > 0.0:
-        builder.pretension(cloth, -cfg.billow)
-    # rope: from the tow point down to the anchor; the first sticks count double
-    count = int(cfg.rope_particles)
-    rope, rope_sticks = builder.add_rope(tow, anchor, count, cfg.rope_mass, first=tow_particle)
-    for s in rope_sticks[: cfg.rope_doubled]:
-        builder.stick_weight[s] = 2.0
-    nail = builder.add_nail(rope[-1], anchor)
+    rope, rope_sticks, nail = _kite_rope(builder, cfg, tow, anchor, tow_particle)
 
     return builder.add_object(
         KiteRecord(
@@ -341,6 +273,121 @@ def build_kite(builder: ModelBuilder, cfg: KiteConfig, terrain: Heightfield) -> 
             sag_chain=np.array(rope[::-1][: len(rope) - max(int(cfg.rope_doubled), 0)], dtype=np.int64),
         )
     )
+
+
+def _kite_check(cfg: KiteConfig) -> None:
+    """Refuse divisions below 3, a keel below 1 division or too large for the sail's rows, and a rope of fewer than
+    2 particles (``ValueError``)."""
+    n, kd = int(cfg.divisions), int(cfg.keel_divisions)
+    if n < 3 or kd < 1:
+        raise ValueError(f"divisions must be >= 3 and keel_divisions >= 1, got {n} and {kd}")
+    if 2 + 2 * kd > n:
+        raise ValueError(f"keel_divisions = {kd} needs divisions >= {2 + 2 * kd} (the keel spans 2 sail rows each)")
+    if cfg.rope_particles < 2:
+        raise ValueError(f"rope_particles must be at least 2, got {cfg.rope_particles}")
+
+
+def _kite_masses(cfg: KiteConfig) -> tuple[int, int, float]:
+    """The sail's and the keel's own particle counts and the cloth's mass per particle [kg] (what the spars and the
+    frame do not carry, spread evenly over both); ``ValueError`` when the spars and the frame leave the cloth none."""
+    n, kd = int(cfg.divisions), int(cfg.keel_divisions)
+    cloth_share = 1.0 - cfg.spar_mass_fraction - cfg.frame_mass_fraction
+    if cloth_share <= 0.0:
+        raise ValueError(
+            f"spar_mass_fraction + frame_mass_fraction must be below 1 (the cloth needs a mass), got "
+            f"{cfg.spar_mass_fraction:g} + {cfg.frame_mass_fraction:g}"
+        )
+    sail_count = (n + 1) * (n + 2) // 2
+    keel_count = (kd + 1) * (kd + 2) // 2 - (kd + 1)
+    return sail_count, keel_count, cfg.mass * cloth_share / (sail_count + keel_count)
+
+
+def _kite_geometry(cfg: KiteConfig, terrain: Heightfield):
+    """Where the kite starts: its body axes ``(fwd, left, up)`` (nose into the wind), the anchor on ``terrain``, the
+    tow point at the rope's length and elevation from it, and the sail's corners ``(nose, left tip, right tip)``, all
+    [m]."""
+    n, kd = int(cfg.divisions), int(cfg.keel_divisions)
+    fwd, left, up = body_axes(cfg.heading + 180.0, cfg.attack)  # nose into the wind
+    ax, ay = cfg.anchor
+    anchor = np.array([ax, ay, float(terrain.height(ax, ay))])
+    h, e = np.radians(cfg.heading), np.radians(cfg.elevation)
+    tow = anchor + cfg.rope_length * np.array([np.cos(h) * np.cos(e), np.sin(h) * np.cos(e), np.sin(e)])
+    # spine row r lies r/n of the spine behind the nose; the tow point sits under rows 2 .. 2 + 2 kd
+    front, back = 2 / n, (2 + 2 * kd) / n
+    along = front + cfg.tow_point * (back - front)
+    nose = tow + along * cfg.spine * fwd + cfg.keel_depth * up
+    tip_l = nose - cfg.spine * fwd + 0.5 * cfg.span * left
+    tip_r = nose - cfg.spine * fwd - 0.5 * cfg.span * left
+    return (fwd, left, up), anchor, tow, (nose, tip_l, tip_r)
+
+
+def _kite_sail(builder: ModelBuilder, cfg: KiteConfig, corners, left, up, mass: float):
+    """The sail: the triangle ``corners`` (nose, left tip, right tip) [m] cut ``divisions`` times, ``mass`` [kg]
+    spread evenly over its particles, its wings raised by the ``dihedral`` towards the tips. Returns its rows,
+    sticks and triangles (:meth:`~warpsim.physics.shapes.MeshShapes.add_subdivided_triangle`)."""
+    nose, tip_l, tip_r = corners
+    tan_dihedral = np.tan(np.radians(cfg.dihedral))
+
+    def dihedral(points: np.ndarray) -> np.ndarray:
+        return points + np.outer(np.abs((points - nose) @ left) * tan_dihedral, up)
+
+    return builder.add_subdivided_triangle(nose, tip_l, tip_r, int(cfg.divisions), mass, shape=dihedral)
+
+
+def _kite_frame(builder: ModelBuilder, cfg: KiteConfig, rows, sail_sticks, centre, up):
+    """The spars: two virtual particles ``frame_height`` [m] above and below the sail's ``centre`` [m], carrying
+    ``spar_mass_fraction`` of the mass and tied to the spine and the leading edges, with the ``straight_spars``
+    braces and the frame's weights (:func:`_kite_frame_weights`). Returns the frame
+    (:func:`~warpsim.objects.delta.add_rigid_frame`), its sticks the braces too."""
+    spars = add_rigid_frame(
+        builder,
+        rows,
+        sail_sticks,
+        centre,
+        cfg.frame_height * up,
+        (1, -1),
+        cfg.mass * cfg.spar_mass_fraction / 2.0,
+        cfg.frame_weight,
+    )
+    if cfg.straight_spars:
+        spars.sticks.extend(add_spar_braces(builder, rows, cfg.frame_weight))
+    _kite_frame_weights(builder, cfg, rows, sail_sticks, spars)
+    return spars
+
+
+def _kite_keel_edges(builder: ModelBuilder, cfg: KiteConfig, tow_particle: int, keel_top, spars) -> list[int]:
+    """The keel's reinforced edges (``keel_edges``): the tow point tied straight to the keel's ends on the spine and
+    to the spars' virtual particles, so the line's pull reaches the frame in one stick, not down a chain of keel
+    cloth sticks that stretch under it. Returns the new sticks, of ``frame_weight``."""
+    return [
+        builder.add_stick(tow_particle, a, weight=cfg.frame_weight) for a in (keel_top[0], keel_top[-1], *spars.virtual)
+    ]
+
+
+def _kite_cloth(builder: ModelBuilder, cfg: KiteConfig, sail_sticks, spars, keel_sticks) -> np.ndarray:
+    """The sail's own cloth sticks (its sticks but the frame's), made to stretch ``sail_compliance`` [m/N] and cut
+    ``billow`` long, and the frame's and the keel's sticks made to stretch ``frame_compliance`` [m/N]. Returns the
+    cloth sticks."""
+    cloth = np.setdiff1d(sail_sticks, spars.sticks)
+    if cfg.sail_compliance > 0.0:
+        builder.set_compliance(cloth, cfg.sail_compliance)
+    if cfg.frame_compliance > 0.0:
+        # the spars and the keel elastic: with rigid ties every finer step would fly a stiffer kite
+        builder.set_compliance([*spars.sticks, *keel_sticks], cfg.frame_compliance)
+    if cfg.billow > 0.0:
+        builder.pretension(cloth, -cfg.billow)
+    return cloth
+
+
+def _kite_rope(builder: ModelBuilder, cfg: KiteConfig, tow, anchor, tow_particle: int):
+    """The rope: ``rope_particles`` particles of ``rope_mass`` [kg] in all, from the tow point ``tow`` [m] down to
+    ``anchor`` [m], its first ``rope_doubled`` sticks counting double, its ground end nailed there. Returns its
+    particles (the tow point first), its sticks and the nail."""
+    count = int(cfg.rope_particles)
+    rope, rope_sticks = builder.add_rope(tow, anchor, count, cfg.rope_mass, first=tow_particle)
+    for s in rope_sticks[: cfg.rope_doubled]:
+        builder.stick_weight[s] = 2.0
+    return rope, rope_sticks, builder.add_nail(rope[-1], anchor)
 
 
 def _kite_sail_air(builder: ModelBuilder, cfg: KiteConfig, sail_tris, rows, nose, fwd, left) -> None:

@@ -165,62 +165,19 @@ def build_mesh(builder: ModelBuilder, cfg: MeshConfig, terrain: Heightfield) -> 
     parts = [p if isinstance(p, Part) else None for p in cfg.parts]
     if None in parts:
         parts = parse_parts(list(cfg.parts))
-    rot = rotation_matrix(cfg.rotation)
-    px, py, height = cfg.position
-    origin = np.array([px, py, float(terrain.height(px, py)) + height])
-
-    def place(points) -> np.ndarray:
-        return np.asarray(points, dtype=np.float64) @ rot.T + origin
-
     tris = mesh.triangles
-    world = place(design)
-    ground = np.asarray(terrain.height(world[:, 0], world[:, 1]), dtype=np.float64)
-    if (world[:, 2] < ground).any():
-        raise ValueError(
-            f"the design is placed {float((ground - world[:, 2]).max()):.3g} m below the terrain at its lowest; raise "
-            "mesh.position's height (the height of its origin above the terrain)"
-        )
-    cross = np.cross(design[tris[:, 1]] - design[tris[:, 0]], design[tris[:, 2]] - design[tris[:, 0]])
-    areas = 0.5 * np.linalg.norm(cross, axis=1)
-    mass = np.zeros(len(design))
-    np.add.at(mass, tris.reshape(-1), np.repeat(areas * cfg.mass_per_area / 3.0, 3))
+    rot, place, world = _placement(cfg, terrain, design)
+    cross, mass = _cloth_masses(cfg, design, tris)
     edges, held = mesh_edges(tris)
     used = np.unique(tris)
     if len(used) != len(design):
         raise ValueError(f"{cfg.file}: {len(design) - len(used)} vertices are on no triangle")
-
     selections = [select(p, mesh, design) for p in parts]
-    spar_edges: dict[int, np.ndarray] = {}
-    spar_mass: dict[int, float] = {}
-    for part in parts:
-        if part.kind != "spar":
-            continue
-        inside = select_edges(part, mesh, design, edges)
-        spar_edges[part.index] = edges[inside]
-        if not inside.any() and (part.values["mass_per_length"] > 0.0 or not part.values["rigid"]):
-            raise ValueError(
-                f"{part.label()} selects no edge of the mesh (a spar runs along edges between its vertices)"
-            )
-        length = np.linalg.norm(design[edges[inside, 1]] - design[edges[inside, 0]], axis=1)
-        spar_mass[part.index] = float(length.sum()) * part.values["mass_per_length"]
-        share = 0.75 if part.values["rigid"] else 1.0  # a rigid spar's virtual particles carry the rest
-        np.add.at(mass, edges[inside].reshape(-1), np.repeat(share * length * part.values["mass_per_length"] / 2, 2))
+    spar_edges, spar_mass = _spar_edges_and_masses(parts, mesh, design, edges, mass)
 
     p0 = builder.particle_count
     velocity = tuple(cfg.velocity)
-    for x, m in zip(world, mass, strict=True):
-        builder.add_particle(x, m, velocity)
-    ids = np.arange(p0, builder.particle_count)
-    s0 = builder.stick_count
-    for a, b in edges:
-        builder.add_stick(int(ids[a]), int(ids[b]))
-    cloth_sticks = np.arange(s0, builder.stick_count)
-    if cfg.cloth_compliance > 0.0:
-        builder.set_compliance(cloth_sticks, cfg.cloth_compliance)
-    t0 = builder.tri_count
-    for a, b, c in tris:
-        builder.add_triangle(int(ids[a]), int(ids[b]), int(ids[c]))
-    cloth_tris = np.arange(t0, builder.tri_count)
+    ids, cloth_sticks, cloth_tris = _add_cloth(builder, cfg, world, mass, edges, tris, velocity)
     builder.set_triangle_sail(cloth_tris, sail_coefficients(_aspect_ratio(cfg, design, cross)))
     if cfg.lattice:
         builder.add_lifting_surface(cloth_tris, ids[_aft_edges(design, tris, edges, held)])
@@ -231,42 +188,20 @@ def build_mesh(builder: ModelBuilder, cfg: MeshConfig, terrain: Heightfield) -> 
     groups: dict[str, list[int]] = {"cloth": list(cloth_sticks)}
     curves: dict[str, list[list[int]]] = {}
     shift = {"sticks": [], "ends": [], "mass": [], "pitch": [], "roll": []}
-    fwd, left = rot[:, 0], rot[:, 1]
     for part, sel in zip(parts, selections, strict=True):
-        v = part.values
         if part.kind == "nail":
             for i in sel:
                 builder.add_nail(int(ids[i]))
         elif part.kind == "spar":
             sticks = [int(s) for s in cloth_sticks[_edge_rows(edges, spar_edges[part.index])]]
-            for s in sticks:
-                builder.stick_weight[s] = v["weight"]
-            if v["rigid"]:
-                virtual, ties = _rigid_frame(builder, ids[sel], world[sel], rot, v, spar_mass[part.index])
-                parts_of.setdefault("virtual", []).extend(virtual)
-                sticks += ties
+            _add_spar(builder, part, sticks, ids[sel], world[sel], rot, spar_mass[part.index], parts_of, groups)
+            if part.values["rigid"]:
                 rigid[sel] = True
-            builder.set_compliance(sticks, v["compliance"])
-            groups.setdefault("frame", []).extend(sticks)
         elif part.kind == "mass":
-            at = place(v["position"])
-            if at[2] < float(terrain.height(at[0], at[1])):
-                raise ValueError(f"{part.label()} is placed below the terrain; raise it or mesh.position's height")
-            payload = builder.add_particle(at, v["mass"], velocity)
-            if v["drag_area"] > 0.0:
-                builder.set_drag_area(payload, v["drag_area"])
-            hang = [builder.add_stick(payload, int(ids[i])) for i in sel]
-            groups.setdefault("hang", []).extend(hang)
-            curves.setdefault("lines", []).extend([[payload, int(ids[i])] for i in sel])
-            parts_of.setdefault("payload", []).append(payload)
-            if record.payload < 0:
-                record.payload = payload
-            if any(v["shift"]):
-                shift["sticks"] += hang
-                shift["ends"] += [world[i] for i in sel]
-                shift["mass"] += [at] * len(sel)
-                shift["pitch"] += [v["shift"][0] * fwd] * len(sel)
-                shift["roll"] += [-v["shift"][1] * left] * len(sel)  # roll = +1: the mass to the right
+            _add_mass(
+                builder, record, part, ids[sel], world[sel], place, terrain, parts_of, groups, curves, velocity,
+                shift, rot,
+            )  # fmt: skip
         elif part.kind == "line":
             _add_line(builder, record, part, ids[sel], world[sel], place, terrain, parts_of, groups, curves, velocity)
     if cfg.bending_stiffness > 0.0:
@@ -282,6 +217,122 @@ def build_mesh(builder: ModelBuilder, cfg: MeshConfig, terrain: Heightfield) -> 
         for key in ("ends", "mass", "pitch", "roll"):
             setattr(record, f"shift_{key}", np.asarray(shift[key], dtype=np.float64).reshape(-1, 3))
     return builder.add_object(record)
+
+
+def _placement(cfg: MeshConfig, terrain: Heightfield, design: np.ndarray):
+    """The design's rotation matrix (:func:`rotation_matrix` of ``mesh.rotation``), ``place`` (points in the
+    design's coordinates [m] to the world's [m]: rotated, then moved to ``mesh.position`` above ``terrain``) and the
+    design's vertices placed ``[V, 3]`` [m]; ``ValueError`` when a vertex is placed below the terrain."""
+    rot = rotation_matrix(cfg.rotation)
+    px, py, height = cfg.position
+    origin = np.array([px, py, float(terrain.height(px, py)) + height])
+
+    def place(points) -> np.ndarray:
+        return np.asarray(points, dtype=np.float64) @ rot.T + origin
+
+    world = place(design)
+    ground = np.asarray(terrain.height(world[:, 0], world[:, 1]), dtype=np.float64)
+    if (world[:, 2] < ground).any():
+        raise ValueError(
+            f"the design is placed {float((ground - world[:, 2]).max()):.3g} m below the terrain at its lowest; raise "
+            "mesh.position's height (the height of its origin above the terrain)"
+        )
+    return rot, place, world
+
+
+def _cloth_masses(cfg: MeshConfig, design: np.ndarray, tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The triangles' edge cross products ``[T, 3]`` [m^2] (twice their vector areas, in the design's axes) and the
+    vertices' masses ``[V]`` [kg]: each triangle's area times ``mass_per_area``, a third to each corner."""
+    cross = np.cross(design[tris[:, 1]] - design[tris[:, 0]], design[tris[:, 2]] - design[tris[:, 0]])
+    areas = 0.5 * np.linalg.norm(cross, axis=1)
+    mass = np.zeros(len(design))
+    np.add.at(mass, tris.reshape(-1), np.repeat(areas * cfg.mass_per_area / 3.0, 3))
+    return cross, mass
+
+
+def _spar_edges_and_masses(parts, mesh, design, edges, mass) -> tuple[dict[int, np.ndarray], dict[int, float]]:
+    """Each spar's edges ``[k, 2]`` (rows of ``edges``) and its mass [kg], by part index; adds to the vertices'
+    ``mass`` [kg] the share its vertices carry (a rigid spar's virtual particles carry a quarter). ``ValueError``
+    for a spar with a mass, or not rigid, that selects no edge."""
+    spar_edges: dict[int, np.ndarray] = {}
+    spar_mass: dict[int, float] = {}
+    for part in parts:
+        if part.kind != "spar":
+            continue
+        inside = select_edges(part, mesh, design, edges)
+        spar_edges[part.index] = edges[inside]
+        if not inside.any() and (part.values["mass_per_length"] > 0.0 or not part.values["rigid"]):
+            raise ValueError(
+                f"{part.label()} selects no edge of the mesh (a spar runs along edges between its vertices)"
+            )
+        length = np.linalg.norm(design[edges[inside, 1]] - design[edges[inside, 0]], axis=1)
+        spar_mass[part.index] = float(length.sum()) * part.values["mass_per_length"]
+        share = 0.75 if part.values["rigid"] else 1.0  # a rigid spar's virtual particles carry the rest
+        np.add.at(mass, edges[inside].reshape(-1), np.repeat(share * length * part.values["mass_per_length"] / 2, 2))
+    return spar_edges, spar_mass
+
+
+def _add_cloth(builder, cfg, world, mass, edges, tris, velocity) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The cloth: a particle at each vertex ``world`` [m] of its ``mass`` [kg] moving at ``velocity`` [m/s], a stick
+    on every edge (stretching ``cloth_compliance`` [m/N]) and the triangles. Returns its particles, sticks and
+    triangles (the builder's indices)."""
+    p0 = builder.particle_count
+    for x, m in zip(world, mass, strict=True):
+        builder.add_particle(x, m, velocity)
+    ids = np.arange(p0, builder.particle_count)
+    s0 = builder.stick_count
+    for a, b in edges:
+        builder.add_stick(int(ids[a]), int(ids[b]))
+    cloth_sticks = np.arange(s0, builder.stick_count)
+    if cfg.cloth_compliance > 0.0:
+        builder.set_compliance(cloth_sticks, cfg.cloth_compliance)
+    t0 = builder.tri_count
+    for a, b, c in tris:
+        builder.add_triangle(int(ids[a]), int(ids[b]), int(ids[c]))
+    return ids, cloth_sticks, np.arange(t0, builder.tri_count)
+
+
+def _add_spar(builder, part, sticks, particles, points, rot, spar_mass, parts_of, groups) -> None:
+    """A spar along the cloth's ``sticks``: they weigh the part's ``weight`` and stretch its ``compliance`` [m/N];
+    a rigid one also holds its vertices ``particles`` (at ``points`` [m]) in a rigid frame (:func:`_rigid_frame`)
+    of the spar's mass ``spar_mass`` [kg], whose virtual particles and ties join ``parts_of`` and the frame."""
+    v = part.values
+    for s in sticks:
+        builder.stick_weight[s] = v["weight"]
+    if v["rigid"]:
+        virtual, ties = _rigid_frame(builder, particles, points, rot, v, spar_mass)
+        parts_of.setdefault("virtual", []).extend(virtual)
+        sticks = sticks + ties
+    builder.set_compliance(sticks, v["compliance"])
+    groups.setdefault("frame", []).extend(sticks)
+
+
+def _add_mass(builder, record, part, attach, points, place, terrain, parts_of, groups, curves, velocity, shift, rot):
+    """A point mass at the part's ``position`` (design coordinates, into the world's by ``place``) moving at
+    ``velocity`` [m/s], with its drag area, hung by a stick from each of its vertices ``attach`` (at ``points`` [m]);
+    the first mass is the record's ``payload``. A mass with a ``shift`` adds its hanging sticks to ``shift``, with
+    how far it moves [m] at pitch = 1 and roll = 1 along the design's axes ``rot``. ``ValueError`` for a mass placed
+    below the terrain."""
+    v = part.values
+    at = place(v["position"])
+    if at[2] < float(terrain.height(at[0], at[1])):
+        raise ValueError(f"{part.label()} is placed below the terrain; raise it or mesh.position's height")
+    payload = builder.add_particle(at, v["mass"], velocity)
+    if v["drag_area"] > 0.0:
+        builder.set_drag_area(payload, v["drag_area"])
+    hang = [builder.add_stick(payload, int(a)) for a in attach]
+    groups.setdefault("hang", []).extend(hang)
+    curves.setdefault("lines", []).extend([[payload, int(a)] for a in attach])
+    parts_of.setdefault("payload", []).append(payload)
+    if record.payload < 0:
+        record.payload = payload
+    if any(v["shift"]):
+        fwd, left = rot[:, 0], rot[:, 1]
+        shift["sticks"] += hang
+        shift["ends"] += list(points)
+        shift["mass"] += [at] * len(attach)
+        shift["pitch"] += [v["shift"][0] * fwd] * len(attach)
+        shift["roll"] += [-v["shift"][1] * left] * len(attach)  # roll = +1: the mass to the right
 
 
 def _edge_rows(edges: np.ndarray, chosen: np.ndarray) -> np.ndarray:

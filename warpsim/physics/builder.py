@@ -333,6 +333,29 @@ class ModelBuilder(MeshShapes):
         m.particle_count, m.stick_count, m.tri_count = n, self.stick_count, self.tri_count
         m.nail_count = len(self.nail_particles)
         m.world_count = self.world_count
+        self._finalize_particles(m, device)
+        self._finalize_sticks(m, device)
+        self._finalize_triangles(m, device)
+        self._finalize_canopies(m, device)
+        self._finalize_hinges(m, device)
+        tris = m.tri_indices_np
+        start, ids = _csr(tris.reshape(-1), np.repeat(np.arange(len(tris), dtype=np.int32), 3), n)
+        m.particle_tri_start = wp.array(start, dtype=wp.int32, device=device)
+        m.particle_tri_ids = wp.array(ids, dtype=wp.int32, device=device)
+        m.lattice = build_lattice(tris, self.lifting_surfaces, n)
+        m.vortex_arrays = lattice_arrays(m.lattice, device)
+
+        m.terrain = self.terrain if self.terrain is not None else Heightfield.flat()
+        m.terrain_data = m.terrain.device_data(device)
+        m.gravity = wp.vec3(0.0, 0.0, -self.gravity)
+        m.objects = list(self.objects)
+        return m
+
+    def _finalize_particles(self, m: Model, device) -> None:
+        """Set ``m``'s particle arrays: masses [kg] (a nailed particle's ``inf``, its free mass 0, its inverse mass
+        0), worlds, nails and their targets [m], and the initial positions [m] and velocities [m/s]. Refuses a
+        particle without a positive mass."""
+        n = self.particle_count
         mass = np.array(self.particle_mass, dtype=np.float64)
         nails = np.array(self.nail_particles, dtype=np.int32)
         weightless = np.flatnonzero(~(mass > 0.0))
@@ -357,6 +380,11 @@ class ModelBuilder(MeshShapes):
         m.nail_particles = nails
         m.nail_target0 = np.array(self.nail_target, dtype=np.float64).reshape(-1, 3)
 
+    def _finalize_sticks(self, m: Model, device) -> None:
+        """Set ``m``'s stick arrays: ends, rest lengths [m], weights, pretensions, compliances [m/N] (a stick of
+        weight ``k`` counts as ``k`` in parallel), each particle's summed stick weight and its sticks' ends in CSR
+        form."""
+        n = self.particle_count
         sticks = np.array(self.stick_particles, dtype=np.int32).reshape(-1, 2)
         m.stick_particles_np = sticks
         m.stick_particles = wp.array(sticks, dtype=wp.vec2i, device=device)
@@ -373,6 +401,9 @@ class ModelBuilder(MeshShapes):
         m.particle_stick_start = wp.array(start, dtype=wp.int32, device=device)
         m.particle_stick_refs = wp.array(refs, dtype=wp.int32, device=device)
 
+    def _finalize_triangles(self, m: Model, device) -> None:
+        """Set ``m``'s triangle arrays and their per-triangle air (loading, ``sail`` coefficients, leading edges),
+        and its drag bodies (particles and drag areas [m^2], by particle)."""
         tris = np.array(self.tri_indices, dtype=np.int32).reshape(-1, 3)
         m.tri_indices_np = tris
         m.tri_indices = wp.array(tris, dtype=wp.vec3i, device=device)
@@ -384,6 +415,10 @@ class ModelBuilder(MeshShapes):
         m.drag_count = len(drag)
         m.drag_particles = wp.array(np.array([p for p, _ in drag], dtype=np.int32), dtype=wp.int32, device=device)
         m.drag_area = wp.array(np.array([a for _, a in drag], dtype=np.float32), dtype=wp.float32, device=device)
+
+    def _finalize_canopies(self, m: Model, device) -> None:
+        """Set ``m``'s canopy arrays: each canopy's triangles (CSR), its force table and parameters, and its nominal
+        area [m^2]; the device arrays hold at least one entry when there is no canopy."""
         m.canopy_count = len(self.canopies)
         if self.canopies:
             sizes = [len(ids) for ids, _, _ in self.canopies]
@@ -401,6 +436,10 @@ class ModelBuilder(MeshShapes):
         m.canopy_tri_owner = wp.array(owner, dtype=wp.int32, device=device)
         m.canopy_table = wp.array(table, dtype=wp.vec2, device=device)
         m.canopy_params = wp.array(params, dtype=wp.vec4, device=device)
+
+    def _finalize_hinges(self, m: Model, device) -> None:
+        """Set ``m``'s hinge arrays (particles, weights, stiffnesses [N/m]; the device arrays hold at least one
+        entry), each particle's hinge slots in CSR form, and ``bending_dt`` [s]. Needs ``m.particle_mass``."""
         hinges = np.array(self.hinge_particles, dtype=np.int32).reshape(-1, 4)
         weights = np.array(self.hinge_weights, dtype=np.float32).reshape(-1, 4)
         stiffness = np.array(self.hinge_stiffness, dtype=np.float32)
@@ -412,21 +451,10 @@ class ModelBuilder(MeshShapes):
         m.hinge_stiffness = wp.array(stiffness if some else np.zeros(1, np.float32), device=device)
         used = weights.reshape(-1) != 0.0  # a hinge's padding slot (weight 0) is nobody's
         slots = np.arange(hinges.size, dtype=np.int32)[used]
-        start, refs = _csr(hinges.reshape(-1)[used], slots, n)
+        start, refs = _csr(hinges.reshape(-1)[used], slots, self.particle_count)
         m.particle_hinge_start = wp.array(start, dtype=wp.int32, device=device)
         m.particle_hinge_refs = wp.array(refs if len(refs) else np.zeros(1, np.int32), dtype=wp.int32, device=device)
         m.bending_dt = stable_dt(hinges, weights, stiffness, m.particle_mass)
-        start, ids = _csr(tris.reshape(-1), np.repeat(np.arange(len(tris), dtype=np.int32), 3), n)
-        m.particle_tri_start = wp.array(start, dtype=wp.int32, device=device)
-        m.particle_tri_ids = wp.array(ids, dtype=wp.int32, device=device)
-        m.lattice = build_lattice(tris, self.lifting_surfaces, n)
-        m.vortex_arrays = lattice_arrays(m.lattice, device)
-
-        m.terrain = self.terrain if self.terrain is not None else Heightfield.flat()
-        m.terrain_data = m.terrain.device_data(device)
-        m.gravity = wp.vec3(0.0, 0.0, -self.gravity)
-        m.objects = list(self.objects)
-        return m
 
 
 def _check_loading(value: float) -> float:

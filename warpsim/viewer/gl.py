@@ -115,6 +115,20 @@ NO_DISPLAY_HINT = (
 )
 
 
+def _window_library():
+    """pyglet (:func:`_pyglet`), its ``gl`` module and its ``Shader`` and ``ShaderProgram`` classes;
+    :class:`ViewerUnavailableError` when its window library cannot start (a missing libGL or X library, an X server
+    that does not answer)."""
+    pyglet = _pyglet()
+    try:
+        import pyglet.window
+        from pyglet import gl
+        from pyglet.graphics.shader import Shader, ShaderProgram
+    except Exception as err:  # noqa: BLE001 - a missing libGL or X library, an X server that does not answer
+        raise ViewerUnavailableError(f"the viewer's window library cannot start ({err}); {NO_DISPLAY_HINT}") from None
+    return pyglet, gl, Shader, ShaderProgram
+
+
 def check_display() -> None:
     """Raise :class:`ViewerUnavailableError` when the viewer cannot work here: pyglet missing, or (on Linux and
     other X11 systems) no ``DISPLAY`` to open a window on."""
@@ -187,15 +201,21 @@ class PygletBackend(Backend):
         check_display()
 
     def open(self, draw_list: DrawList, title: str, keys: tuple = ()) -> None:
-        pyglet = _pyglet()
-        try:
-            import pyglet.window
-            from pyglet import gl
-            from pyglet.graphics.shader import Shader, ShaderProgram
-        except Exception as err:  # noqa: BLE001 - a missing libGL or X library, an X server that does not answer
-            raise ViewerUnavailableError(
-                f"the viewer's window library cannot start ({err}); {NO_DISPLAY_HINT}"
-            ) from None
+        pyglet, gl, Shader, ShaderProgram = _window_library()
+        self._open_window(pyglet, gl, title)
+        self.gl, self.pyglet = gl, pyglet
+        self.window.switch_to()
+        self._program = ShaderProgram(Shader(_VERTEX, "vertex"), Shader(_FRAGMENT, "fragment"))
+        self.draw_list = draw_list
+        self._make_buffers(draw_list)
+        self._make_text()
+        self._bind_events()
+        self.window.dispatch_events()
+
+    def _open_window(self, pyglet, gl, title: str) -> None:
+        """Open ``self.window``, ``self.size`` [pixels] and resizable, titled ``title``, double-buffered with a 24-bit
+        depth buffer on OpenGL 3.3, without vsync; :class:`ViewerUnavailableError` when it cannot (no display, no
+        GLX, no OpenGL 3.3)."""
         try:
             config = gl.Config(double_buffer=True, depth_size=24, major_version=3, minor_version=3)
             self.window = pyglet.window.Window(
@@ -204,10 +224,12 @@ class PygletBackend(Backend):
         except Exception as err:  # noqa: BLE001 - no display, no GLX, no OpenGL 3.3
             reason = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
             raise ViewerUnavailableError(f"cannot open a window ({reason}); {NO_DISPLAY_HINT}") from None
-        self.gl, self.pyglet = gl, pyglet
-        self.window.switch_to()
-        self._program = ShaderProgram(Shader(_VERTEX, "vertex"), Shader(_FRAGMENT, "fragment"))
-        self.draw_list = d = draw_list
+
+    def _make_buffers(self, d: DrawList) -> None:
+        """The vertex buffers of the draw list ``d``: the terrain (uploaded here, once), each mesh (its particles and
+        their triangles renumbered), the curves' line segments, the spheres, the tubes and the sky; and the colour of
+        the hazy ground beyond the terrain."""
+        gl = self.gl
         self._terrain = _Buffer(gl, len(d.terrain_points), d.terrain_triangles, gl.GL_TRIANGLES)
         self._terrain.update(d.terrain_points, vertex_normals(d.terrain_points, d.terrain_triangles), d.terrain_colours)
         self._meshes = []
@@ -222,8 +244,20 @@ class PygletBackend(Backend):
             colours.append(np.tile(np.asarray(rgb, np.float32), (2 * max(len(chain) - 1, 0), 1)))
         self._segments, self._segment_colours = np.concatenate(ends), np.concatenate(colours)
         self._lines = _Buffer(gl, len(self._segments), None, gl.GL_LINES)
+        self._make_sphere_buffer(d)
+        self._make_tube_buffer(d)
+        self._sky_corners = np.array([[-1, -1, 0.999], [1, -1, 0.999], [1, 1, 0.999], [-1, 1, 0.999]], np.float32)
+        self._sky = _Buffer(gl, 4, np.array([0, 1, 2, 0, 2, 3]), gl.GL_TRIANGLES)
+        from ..objects.style import COLOURS
+
+        self._ground_colour = tuple(float(c) * 0.95 for c in COLOURS["terrain"])
+
+    def _make_sphere_buffer(self, d: DrawList) -> None:
+        """One buffer for every sphere of ``d`` (``self._spheres``, None without any): the unit sphere scaled by each
+        radius [m] as offsets from its particle, their normals and colours; only the centres move."""
         self._spheres = None
-        if d.spheres:  # one buffer for every sphere; only the centres move
+        if d.spheres:
+            gl = self.gl
             unit, sphere_triangles = sphere()
             n, count = len(unit), len(d.spheres)
             triangles = np.concatenate([sphere_triangles + k * n for k in range(count)])
@@ -232,19 +266,24 @@ class PygletBackend(Backend):
             self._sphere_particles = np.repeat([p for p, _, _ in d.spheres], n)
             self._sphere_normals = np.tile(unit, (count, 1))
             self._sphere_colours = np.concatenate([np.tile(np.asarray(c, np.float32), (n, 1)) for *_, c in d.spheres])
+
+    def _make_tube_buffer(self, d: DrawList) -> None:
+        """One buffer for every tube of ``d`` (``self._tubes``, None without any), with the tubes' end particles,
+        radii [m] and colours; the ends move with their points."""
         self._tubes = None
-        if d.tubes:  # one buffer for every tube; the ends move with their points
+        if d.tubes:
+            gl = self.gl
             count = len(d.tubes)
             self._tube_ends = np.array([(a, b) for a, b, _, _ in d.tubes], dtype=np.int64)
             self._tube_radii = np.array([r for _, _, r, _ in d.tubes], dtype=np.float64)
             per = len(tube_points(np.zeros((1, 3)), np.ones((1, 3)), np.ones(1))[0])
             self._tube_colours = np.repeat(np.array([c for *_, c in d.tubes], np.float32), per, axis=0)
             self._tubes = _Buffer(gl, per * count, tube_mesh(count), gl.GL_TRIANGLES)
-        self._sky_corners = np.array([[-1, -1, 0.999], [1, -1, 0.999], [1, 1, 0.999], [-1, 1, 0.999]], np.float32)
-        self._sky = _Buffer(gl, 4, np.array([0, 1, 2, 0, 2, 3]), gl.GL_TRIANGLES)
-        from ..objects.style import COLOURS
 
-        self._ground_colour = tuple(float(c) * 0.95 for c in COLOURS["terrain"])
+    def _make_text(self) -> None:
+        """The heads-up text (top left, on its dark panel) and the overlay's (centred, on its shade), pyglet's labels
+        in a smaller font in a window under 1000 pixels wide."""
+        pyglet = self.pyglet
         small = self.size[0] < 1000
 
         def label(font_size: int, colour: tuple, **place):
@@ -262,6 +301,11 @@ class PygletBackend(Backend):
             anchor_y="center", width=int(width * 0.8),
         )  # fmt: skip
         self._shade = pyglet.shapes.Rectangle(0, 0, 1, 1, color=(20, 25, 35, 200))
+
+    def _bind_events(self) -> None:
+        """Queue the window's input for :meth:`events`: keys pressed and released (held until then, or until the
+        window loses the focus), the character keys typed, mouse drags [pixels] and scrolls, and the window's
+        closing; a resize moves the text with the window's size."""
         w = self.window
 
         @w.event
@@ -311,8 +355,6 @@ class PygletBackend(Backend):
             self._hud.y, self._hud.width = height - 12, max(width - 28, 10)
             self._overlay.x, self._overlay.y = width // 2, height // 2
             self._overlay.width = max(int(width * 0.8), 10)
-
-        w.dispatch_events()
 
     def _name(self, symbol: int) -> str | None:
         name = self.pyglet.window.key.symbol_string(symbol)

@@ -89,7 +89,11 @@ def _read_trimesh(path: Path) -> list[tuple[str, np.ndarray, np.ndarray]]:
     scene = trimesh.load(path, force="scene", process=False)
     turn = Y_UP_TO_Z_UP if path.suffix.lower() in (".gltf", ".glb") else np.eye(3)
     pieces = []
-    for node in scene.graph.nodes_geometry:
+    # in the order the file lists its meshes (trimesh's graph gives its nodes in another order, which renumbered a
+    # written glTF's vertices: a kite's line then hung from the wrong vertex), nodes of one mesh by name
+    listed = {name: k for k, name in enumerate(scene.geometry)}
+    nodes = sorted(scene.graph.nodes_geometry, key=lambda node: (listed.get(scene.graph[node][1], len(listed)), node))
+    for node in nodes:
         transform, name = scene.graph[node]
         geometry = scene.geometry[name]
         if not hasattr(geometry, "faces") or len(geometry.faces) == 0:

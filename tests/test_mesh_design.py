@@ -428,3 +428,35 @@ def test_a_sweep_over_a_mesh_designs_cloth_stiffness_runs(tmp_path, capsys):
     table = pandas.read_csv(out)
     assert list(table["mesh.cloth_compliance"]) == [1e-5, 1e-4]
     assert table["line_angle_mean"].between(10.0, 80.0).all() and (table["line_pull_mean"] > 0.0).all()
+
+
+def test_export_never_writes_over_what_it_reads_and_asks_before_replacing(tmp_path, capsys):
+    """A newcomer's trial: `warpsim export square.toml square.obj` replaced the hand-written design it exported, and
+    a second .gltf export to the folder replaced the first's buffer files."""
+    assert main(["export", "kite", str(tmp_path / "k.obj")]) == 0
+    before = (tmp_path / "k.obj").read_bytes(), (tmp_path / "k.toml").read_text()
+    line = _one_error(capsys, ["export", "kite", str(tmp_path / "k.obj")])
+    assert "exist already" in line and "--force" in line
+    line = _one_error(capsys, ["export", str(tmp_path / "k.toml"), str(tmp_path / "k.obj"), "--force"])
+    assert "is what the export reads" in line
+    assert ((tmp_path / "k.obj").read_bytes(), (tmp_path / "k.toml").read_text()) == before  # nothing written
+    assert main(["export", "kite", str(tmp_path / "k.obj"), "--force"]) == 0
+    capsys.readouterr()
+    # two glTF exports side by side, each whole in its own file
+    assert main(["export", "kite", str(tmp_path / "a.gltf")]) == 0
+    assert main(["export", "hang-glider", str(tmp_path / "b.gltf")]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir() if p.suffix not in (".obj", ".toml")) == ["a.gltf", "b.gltf"]
+    kite = build_model(descriptor.resolve(str(tmp_path / "a.toml"))[0])
+    assert kite.tri_count == build_model(descriptor.defaults("kite")).tri_count
+    # a mesh file named where a scene goes: one line saying what to do
+    line = _one_error(capsys, ["run", str(tmp_path / "k.obj")])
+    assert "a mesh file, not a scene" in line and "--set mesh.file=" in line
+
+
+def test_an_exported_nailed_flag_keeps_its_free_mass(tmp_path):
+    """The design's cloth takes its mass by area and its nails then hold theirs: the export spreads the free mass
+    over the free cloth (the flag, nailed along its hoist, came back 3.1 % light)."""
+    assert main(["export", "flag", str(tmp_path / "f.obj")]) == 0
+    built = build_model(descriptor.defaults("flag"))
+    again = build_model(descriptor.resolve(str(tmp_path / "f.toml"))[0])
+    assert again.particle_free_mass.sum() == pytest.approx(built.particle_free_mass.sum(), rel=0.002)

@@ -22,6 +22,7 @@ def command(args) -> int:
     if not out.parent.is_dir():
         raise UsageError(f"{out}: its folder {out.parent} does not exist")
     scene, _ = load_scene(args, worlds_from_vary=False)
+    _check_outputs(out, scene, args.scene, args.force)
     interruptible()  # the files are written next
     try:
         mesh, scene, left_out = export_design(scene, out)
@@ -31,6 +32,26 @@ def command(args) -> int:
     for item in left_out:
         print(f"  left out: {item}")
     return 0
+
+
+def _check_outputs(out, scene, source: str, force: bool) -> None:
+    """Refuse to write over what the export reads (the scene file, its mesh or terrain) at all, and over other files
+    that exist unless ``force``: an export once replaced a hand-written design it was asked to export."""
+    import os
+    from pathlib import Path
+
+    written = [out, out.with_suffix(".toml")]
+    read = [Path(source)] if Path(source).is_file() else []
+    read += [Path(name) for name in scene.files()]
+    for path in written:
+        for other in read:
+            if os.path.abspath(path) == os.path.abspath(other) or (
+                path.exists() and other.exists() and os.path.samefile(path, other)
+            ):
+                raise UsageError(f"{path}: is what the export reads ({source}); write the export under another name")
+    existing = [str(p) for p in written if p.exists()]
+    if existing and not force:
+        raise UsageError(f"{' and '.join(existing)} exist already: give --force to replace them, or another name")
 
 
 def add_parser(sub) -> None:
@@ -48,4 +69,7 @@ def add_parser(sub) -> None:
     )
     export.add_argument("scene", metavar="SCENE")
     export.add_argument("output", metavar="OUT.obj|.glb|.gltf|.stl")
+    export.add_argument(
+        "--force", action="store_true", help="replace OUT and OUT.toml where they exist (never the scene exported)"
+    )
     add_scene_options(export, worlds=False)

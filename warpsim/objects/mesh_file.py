@@ -318,6 +318,12 @@ def write_mesh(path: str | Path, vertices: np.ndarray, triangles: np.ndarray, gr
             used = np.unique(triangles[ids])
             local = np.searchsorted(used, triangles[ids])
             scene.add_geometry(trimesh.Trimesh(up[used], local, process=False), geom_name=name, node_name=name)
-        scene.export(path)
+        if suffix == ".gltf":  # its buffers inside the file: trimesh's side files (gltf_buffer_0.bin, ...) have
+            # names of their own, and a second export to the same folder replaced the first's
+            from trimesh.exchange.gltf import export_gltf
+
+            path.write_bytes(export_gltf(scene, embed_buffers=True)["model.gltf"])
+        else:
+            scene.export(path)
         return
     raise MeshError(f"{path}: writes OBJ, STL, glTF or GLB (.obj, .stl, .gltf, .glb)")

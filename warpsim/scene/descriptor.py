@@ -38,6 +38,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 from ..objects import registry
+from ..objects.mesh_file import FORMATS as MESH_FORMATS
 from ..physics.config import SECTIONS, Bounds, as_section, field_bounds, field_choices, field_entries, plain
 from .controls import ControlError, ControlSchedule
 from .values import FLOAT_LIMIT, DescriptorError, range_values, suggest
@@ -410,6 +411,12 @@ def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, st
     """
     path = Path(scene)
     bare = path.suffix != ".toml" and len(path.parts) == 1 and scene in registry.OBJECTS
+    if path.suffix.lower() in MESH_FORMATS and path.is_file():  # a natural first try with a design's mesh
+        mesh = registry.section(registry.MESH)
+        raise DescriptorError(
+            f"{scene}: a mesh file, not a scene: a design flies from a scene (.toml) whose [{mesh}] names it "
+            f"(docs: Fly your own design), or try warpsim run {registry.MESH} --set {mesh}.file={scene}"
+        )
     if not bare and (path.suffix == ".toml" or path.exists()):
         if not path.is_file():
             raise DescriptorError(f"{scene}: scene file not found")

@@ -170,6 +170,16 @@ class Scene:
         out[registry.section(registry.MESH)] = copy.deepcopy(mesh)
         return to_toml(out)
 
+    def files(self) -> list[str]:
+        """The files the scene reads besides its own (a terrain's heights, a design's mesh; absolute where the
+        scene came from a file), each once."""
+        names = []
+        for section in ("terrain", *(registry.section(kind) for kind in registry.OBJECTS)):
+            name = self._tables.get(section, {}).get("file")
+            if isinstance(name, str) and name and name not in names:
+                names.append(name)
+        return names
+
     def table(self, section: str) -> dict:
         """A copy of one section's plain table (``solver``...), for what stores it as written."""
         return copy.deepcopy(self._tables[section])

@@ -215,3 +215,13 @@ def test_a_run_off_a_terminal_says_it_is_alive(monkeypatch, capsys):
     err = capsys.readouterr().err
     lines = [line for line in err.splitlines() if "steps/s" in line and "t =" in line]
     assert lines and "\r" not in err
+
+
+def test_a_simulation_takes_a_scenes_name_or_path():
+    """A newcomer's trial: `warpsim.Simulation("x.toml")` failed with 'string indices must be integers'."""
+    from warpsim import Simulation
+
+    assert Simulation("scenes/kite.toml").scene.kind == "kite"
+    assert Simulation("parachute").scene.where == "parachute"
+    with pytest.raises(TypeError, match="a scene is a Scene"):
+        Simulation(3)

@@ -336,3 +336,18 @@ def test_axes_from_any_text_are_checked_or_refused():
         assert len(axes) == 1 and len(axes[0].values) >= 1
 
     check()
+
+
+def test_a_case_that_cannot_be_built_is_said_so_not_counted_as_a_blow_up(tmp_path, capsys):
+    """A newcomer's trial: sweeping a design's scale moved its vertices out of its parts' boxes, and the summary
+    said those cases blew up (at t = 0)."""
+    out = tmp_path / "s.csv"
+    argv = ["sweep", "diamond_kite", "--vary", "mesh.scale=0.8,1.0", "--seconds", "0.1", "--workers", "1"]
+    assert main([*argv, "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "0 blew up, 1 not built" in said, said
+    table = sweeps.read_csv(out)
+    unbuilt = table[table["mesh.scale"] == 0.8].iloc[0]
+    assert unbuilt["blew_up"] and math.isnan(unbuilt["blowup_time"]) and "not built" in unbuilt["blowup_reason"]
+    assert main([*argv, "--out", str(out)]) == 0  # run again: nothing left, said so
+    assert "nothing left to run" in capsys.readouterr().out

@@ -113,16 +113,20 @@ def command(args) -> int:
     if progress is not None:
         sys.stderr.write("\r" + " " * 70 + "\r")
     table = outcome.table
-    blew = int(table["blew_up"].sum()) if len(table) else 0
+    unbuilt = int(table["blowup_reason"].astype(str).str.startswith("not built").sum()) if len(table) else 0
+    blew = (int(table["blew_up"].sum()) if len(table) else 0) - unbuilt
     if not args.quiet:
         rate = outcome.ran / outcome.wall if outcome.wall > 0 else 0.0
         kept = f"{outcome.kept} already in {out}; " if outcome.kept else ""
-        where_run = plural(outcome.workers, "worker") if outcome.ran else "nothing to run"
         status = "failed" if outcome.failures else "interrupted" if outcome.interrupted else "done"
-        print(
-            f"{status}: {kept}{plural(outcome.ran, 'case')} run in {outcome.wall:.1f} s on {where_run} "
-            f"({rate:.2f} cases/s); {plural(len(table), 'row')}, {blew} blew up"
+        ran = (
+            f"{plural(outcome.ran, 'case')} run in {outcome.wall:.1f} s on {plural(outcome.workers, 'worker')} "
+            f"({rate:.2f} cases/s)"
+            if outcome.ran
+            else "nothing left to run"
         )
+        not_built = f", {unbuilt} not built (their rows say why)" if unbuilt else ""
+        print(f"{status}: {kept}{ran}; {plural(len(table), 'row')}, {blew} blew up{not_built}")
         print(f"  table: {out}")
     if outcome.failures:  # one line: the first failure's first line (a Dask error text runs over many)
         err = outcome.failures[0]

@@ -79,7 +79,8 @@ class Simulation:
     """A scene ready to run: model, state, control, solver and inputs built from a validated descriptor.
 
     Args:
-        scene: the :class:`~warpsim.scene.scene.Scene`, or a validated descriptor (see :mod:`warpsim.scene.descriptor`).
+        scene: the :class:`~warpsim.scene.scene.Scene`, a validated descriptor (see :mod:`warpsim.scene.descriptor`),
+            or a built-in object, scene name or ``.toml`` path (:meth:`warpsim.scene.scene.Scene.load`).
         device: Warp device (``cpu`` default, ``cuda`` when present).
         use_graph: replay each step (and each frame) as a captured graph (default True).
         where: origin of the descriptor for error messages.
@@ -91,7 +92,7 @@ class Simulation:
 
     def __init__(
         self,
-        scene: Scene | dict,
+        scene: Scene | dict | str,
         device: str | None = "cpu",
         use_graph: bool = True,
         where: str = "scene",

@@ -11,6 +11,7 @@ from __future__ import annotations
 import copy
 import json
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from ..objects import registry
 from ..physics.config import WindConfig, from_section
@@ -39,10 +40,17 @@ class Scene:
         object.__setattr__(self, "settings", settings(self._tables))
 
     @classmethod
-    def of(cls, scene: Scene | dict, where: str = "scene") -> Scene:
-        """``scene`` itself, or a validated descriptor (:func:`~warpsim.scene.descriptor.defaults`,
-        :func:`~warpsim.scene.descriptor.merge`) as a Scene."""
-        return scene if isinstance(scene, Scene) else cls(scene, where)
+    def of(cls, scene: Scene | dict | str, where: str = "scene") -> Scene:
+        """``scene`` itself, a validated descriptor (:func:`~warpsim.scene.descriptor.defaults`,
+        :func:`~warpsim.scene.descriptor.merge`) as a Scene, or a built-in object, scene name or ``.toml`` path
+        (:meth:`load`)."""
+        if isinstance(scene, Scene):
+            return scene
+        if isinstance(scene, str | Path):
+            return cls.load(str(scene))
+        if not isinstance(scene, dict):
+            raise TypeError(f"a scene is a Scene, a descriptor (dict) or a scene's name or path, not {scene!r}")
+        return cls(scene, where)
 
     @classmethod
     def load(cls, name: str) -> Scene:

@@ -19,7 +19,7 @@ def _failed_rows(task: ChunkTask, reason: str) -> list[dict]:
     rows = []
     for columns in task.columns:
         row = {name: math.nan for name in task.metrics}
-        row.update(columns, blew_up=True, blowup_time=0.0, blowup_reason=reason)
+        row.update(columns, blew_up=True, blowup_time=math.nan, blowup_reason=reason)  # it never ran
         if "window_frames" in row:
             row["window_frames"] = 0
         rows.append(row)

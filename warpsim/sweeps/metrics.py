@@ -43,7 +43,7 @@ def _metric_table() -> dict[str, tuple[str, tuple[str, ...] | None, str]]:
             "worst_stretch": ("%", None, "largest |l - r|/r of the case's sticks over the whole run, in percent"),
             "window_frames": ("-", None, "frames measured in the window (fewer when the case blew up in it)"),
             "blew_up": ("-", None, "true when the case blew up (or could not be built); always in the table"),
-            "blowup_time": ("s", None, "when it blew up (NaN: it did not); always in the table"),
+            "blowup_time": ("s", None, "when it blew up (NaN: it did not, or was never built); always in the table"),
             "blowup_reason": ("-", None, "what was seen ('' when it did not blow up); always in the table"),
         }
     )

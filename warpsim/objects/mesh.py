@@ -500,7 +500,7 @@ MESH_FIGURES = {
     "glide": (
         "-",
         "horizontal airspeed / sink of the mass centre (NaN unless it sinks faster than 0.05 m/s, and for a design on "
-        "a line)",
+        "a line or nailed)",
     ),
     "swing": (
         "deg",
@@ -513,12 +513,14 @@ MESH_FIGURES = {
 def mesh_figures(model, record: MeshRecord):
     """The mesh design's :data:`MESH_FIGURES` of a frame (a :class:`~.figures.FigureView`)."""
     cloth = record.parts["cloth"]
+    # a design on a line or nailed (a flag on its pole) does not glide: its sink is its cloth's motion
+    held = record.anchor_nail >= 0 or bool(np.isin(np.asarray(model.nail_particles), record.particles).any())
 
     def measure(view) -> dict[str, float]:
         nan = float("nan")
         sink = float(-view.velocity[2])
         horizontal = float(np.linalg.norm((view.velocity - view.wind)[:2]))
-        glide = horizontal / sink if sink > 0.05 and record.anchor_nail < 0 else nan  # a tethered design glides not
+        glide = horizontal / sink if sink > 0.05 and not held else nan
         out = {"line_angle": nan, "line_pull": nan, "glide": glide, "swing": nan}
         if record.anchor_nail >= 0:
             out["line_angle"] = line_elevation(record, view.positions)

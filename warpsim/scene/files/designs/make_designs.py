@@ -1,7 +1,8 @@
 """Write the mesh files of the shipped designs that are not built in: ``diamond_kite.obj`` (a two-stick diamond kite
 with a bowed spreader) and ``cross_canopy.glb`` (a flat cross parachute canopy). Run it from anywhere:
-``python warpsim/scene/files/designs/make_designs.py``; the scenes ``diamond_kite.toml`` and ``cross_canopy.toml``
-beside the shipped scenes fly them.
+``python warpsim/scene/files/designs/make_designs.py`` writes the shipped files beside itself, which the scenes
+``diamond_kite.toml`` and ``cross_canopy.toml`` beside the shipped scenes fly; ``--out DIR`` writes them to ``DIR``
+instead (a design of your own drawn from these: leave the shipped ones as they are).
 
 Both are drawn in a design's own axes (x forward, y left, z up, metres) and written by warpsim's own mesh writer, so
 that the files and their vertex numbering are the same on every machine (the scenes name vertices by index).
@@ -117,13 +118,20 @@ def arm_tip_corners(vertices: np.ndarray) -> np.ndarray:
     return np.flatnonzero(tip)
 
 
-def main() -> None:
-    """Write both files and print the vertex indices the scenes name."""
+def main(argv: list[str] | None = None) -> None:
+    """Write both files (beside this script, or to ``--out DIR``) and print the vertex indices the scenes name."""
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", type=Path, default=HERE, help="the folder to write to (default: beside this script)")
+    out = parser.parse_args(argv).out
+    if not out.is_dir():
+        parser.error(f"--out {out}: no such folder")
     v, t, g = diamond_kite()
-    write_mesh(HERE / "diamond_kite.obj", v, t, g)
+    write_mesh(out / "diamond_kite.obj", v, t, g)
     print(f"diamond_kite.obj: {len(v)} vertices, {len(t)} triangles")
     v, t, g = cross_canopy()
-    write_mesh(HERE / "cross_canopy.glb", v, t, g)
+    write_mesh(out / "cross_canopy.glb", v, t, g)
     print(f"cross_canopy.glb: {len(v)} vertices, {len(t)} triangles; arm-tip corners {arm_tip_corners(v).tolist()}")
 
 

@@ -285,6 +285,8 @@ def test_export_writes_the_cloth_and_a_scene_that_builds_it_again(tmp_path, caps
     assert main(["export", "kite", str(out)]) == 0
     said = capsys.readouterr().out
     assert "kite.toml" in said and "left out" in said
+    # what the written scene, built again, lacks is said too (the kite's tuned air: why it lands)
+    assert "per-triangle air coefficients" in said and "sweep" in said and "drag bodies" in said, said
     built = build_model(descriptor.defaults("kite"))
     scene = descriptor.resolve(str(tmp_path / "kite.toml"))[0]
     again = build_model(scene)

@@ -123,7 +123,50 @@ def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]
         "aspect_ratio": _aspect_ratio(design, area),
         "parts": parts,
     }
-    return out, _write_scene(single, record, out, mesh, left_out), left_out
+    scene_path = _write_scene(single, record, out, mesh, left_out)
+    found = _left_out_by_flying(model, record, scene_path)  # what the written scene, built, does not have
+    if found:
+        left_out += found
+        scene_path = _write_scene(single, record, out, mesh, left_out)
+    return out, scene_path, left_out
+
+
+def _left_out_by_flying(model, record, scene_path: Path) -> list[str]:
+    """What the model of the written scene lacks against ``model`` (the object exported): per-triangle air
+    coefficients, sweep, chordwise loading, lifting surfaces, drag bodies, sticks' own compliances, controls; each
+    said once. A written scene that does not build is said too."""
+    from ..objects import registry
+    from ..scene.descriptor import DescriptorError
+
+    try:
+        again = Scene.load(str(scene_path)).build_model("cpu", "export check")
+    except (DescriptorError, ValueError) as err:
+        return [f"(the written scene does not build as it is: {str(err).splitlines()[0]})"]
+    out = []
+
+    def rows(array) -> np.ndarray:
+        values = np.asarray(array.numpy() if hasattr(array, "numpy") else array, dtype=np.float64)
+        return np.unique(np.round(values.reshape(len(values), -1), 6), axis=0)
+
+    if rows(model.tri_sail).shape != rows(again.tri_sail).shape or not np.allclose(
+        rows(model.tri_sail), rows(again.tri_sail)
+    ):
+        out.append("its per-triangle air coefficients (the design's come from mesh.aspect_ratio and the air law)")
+    if (model.tri_span.numpy()[:, 0] >= 0).any() and not (again.tri_span.numpy()[:, 0] >= 0).any():
+        out.append("its leading edges' sweep")
+    if not np.allclose(np.sort(model.tri_loading.numpy()), np.sort(again.tri_loading.numpy())):
+        out.append("its chordwise loading")
+    if model.lattice.panel_count > again.lattice.panel_count:
+        out.append("its lifting surfaces (the vortex law's lattice)")
+    if model.drag_count > again.drag_count:
+        out.append(f"{model.drag_count - again.drag_count} of its drag bodies (a pilot's, a frame's, a tail's)")
+    if len(np.unique(np.round(model.stick_compliance, 12))) > len(np.unique(np.round(again.stick_compliance, 12))):
+        out.append("its sticks' own compliances (the design's cloth has one, its spars another)")
+    kept = set(registry.OBJECTS[registry.MESH].controls)
+    lost = [c for c in registry.OBJECTS[record.kind].controls if c not in kept]
+    if lost:
+        out.append(f"its controls {', '.join(lost)} (a design has {', '.join(sorted(kept))})")
+    return out
 
 
 def _write_cloth(out: Path, record, tris: np.ndarray, local: dict[int, int], design: np.ndarray) -> np.ndarray:

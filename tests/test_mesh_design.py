@@ -462,3 +462,26 @@ def test_an_exported_nailed_flag_keeps_its_free_mass(tmp_path):
     built = build_model(descriptor.defaults("flag"))
     again = build_model(descriptor.resolve(str(tmp_path / "f.toml"))[0])
     assert again.particle_free_mass.sum() == pytest.approx(built.particle_free_mass.sum(), rel=0.002)
+
+
+def test_a_part_without_a_kind_a_misspelt_kind_an_empty_box_and_a_folder_get_one_line(tmp_path, capsys):
+    """A newcomer's trial: `kind = None is not one of ...`, a box of several that selected nothing passed silently,
+    and a folder named as the mesh was 'not found'."""
+    v, t = _square(2)
+    write_mesh(tmp_path / "sq.obj", v, t, {"cloth": np.arange(len(t))})
+
+    def scene(parts: str, file: str = "sq.obj") -> str:
+        path = tmp_path / "s.toml"
+        path.write_text(f'[scene]\nobject = "mesh"\n[mesh]\nfile = "{file}"\n{parts}', encoding="utf-8")
+        return str(path)
+
+    line = _one_error(capsys, ["info", scene("[[mesh.parts]]\nvertices = [0]\n")])
+    assert "needs a kind: one of" in line
+    line = _one_error(capsys, ["info", scene('[[mesh.parts]]\nkind = "nial"\nvertices = [0]\n')])
+    assert "did you mean 'nail'" in line
+    boxes = "[[-1, -1, -1, 0.1, 0.1, 0.1], [5, 5, 5, 6, 6, 6]]"
+    line = _one_error(capsys, ["info", scene(f'[[mesh.parts]]\nkind = "nail"\nbox = {boxes}\n')])
+    assert "box 2 of 2 selects no vertex" in line
+    (tmp_path / "folder.obj").mkdir()
+    line = _one_error(capsys, ["info", scene("", "folder.obj")])
+    assert "a folder, not a mesh file" in line

@@ -55,6 +55,8 @@ def read_mesh(path: str | Path) -> SurfaceMesh:
     suffix = path.suffix.lower()
     if suffix not in FORMATS:
         raise MeshError(f"{path}: not a mesh file this reads ({', '.join(FORMATS)})")
+    if path.is_dir():
+        raise MeshError(f"{path}: a folder, not a mesh file")
     if not path.is_file():
         raise MeshError(f"{path}: mesh file not found")
     meters = None

@@ -105,8 +105,12 @@ def parse_parts(entries) -> list[Part]:
         if not isinstance(entry, dict):
             raise ValueError(f"{where} must be a table with a kind, got {entry!r}")
         kind = entry.get("kind")
+        if kind is None:
+            raise ValueError(f"{where} needs a kind: one of {', '.join(_KEYS)} (kind = \"{next(iter(_KEYS))}\")")
         if not isinstance(kind, str) or kind not in _KEYS:
-            raise ValueError(f"{where}: kind = {kind!r} is not one of {', '.join(_KEYS)}")
+            close = difflib.get_close_matches(str(kind), list(_KEYS), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ValueError(f"{where}: kind = {kind!r} is not one of {', '.join(_KEYS)}{hint}")
         where = f"{where} ({kind})"
         allowed = {"kind", *SELECTORS, *_KEYS[kind]}
         unknown = sorted(set(entry) - allowed)
@@ -235,6 +239,8 @@ def _labels(part: Part, mesh, design: np.ndarray) -> np.ndarray:
     else:
         for k, box in reversed(list(enumerate(part.selection))):
             inside = ((design >= np.asarray(box[:3])) & (design <= np.asarray(box[3:]))).all(axis=1)
+            if not inside.any() and len(part.selection) > 1:  # one box of several that holds nothing: a typo
+                raise ValueError(f"{part.label()}: its box {k + 1} of {len(part.selection)} selects no vertex")
             labels[inside] = k
     if (labels < 0).all():
         low, high = design.min(axis=0), design.max(axis=0)

@@ -225,3 +225,15 @@ def test_a_simulation_takes_a_scenes_name_or_path():
     assert Simulation("parachute").scene.where == "parachute"
     with pytest.raises(TypeError, match="a scene is a Scene"):
         Simulation(3)
+
+
+def test_vary_takes_a_list_of_files_or_names_as_bare_words():
+    """A newcomer's trial: `--vary mesh.file=a.obj,b.obj` was refused (only the TOML list form was taken)."""
+    from warpsim.scene.descriptor import DescriptorError
+    from warpsim.scene.values import parse_vary
+
+    assert parse_vary("mesh.file=a.obj,designs/b.obj", None) == ("mesh", "file", ["a.obj", "designs/b.obj"])
+    assert parse_vary("kite.design=flying,paper", None)[2] == ["flying", "paper"]
+    assert parse_vary("wind.speed=4,6", None)[2] == [4, 6]
+    with pytest.raises(DescriptorError, match="a.obj,b.obj"):
+        parse_vary("wind.speed=4,6x", None)

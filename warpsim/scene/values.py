@@ -52,8 +52,8 @@ def parse_vary(text: str, count: int | None, flag: str = "--vary") -> tuple[str,
 
     VALUES is ``START:STOP:COUNT`` (``COUNT`` evenly spaced values, both ends included; whole numbers stay
     whole when both ends are), ``START:STOP`` (spread over ``count`` worlds; an error when ``count`` is None),
-    or a comma-separated / TOML list (``4,6,8``, ``flying,paper`` or ``[[4,0,0],[8,0,0]]``). ``flag`` names the
-    option in errors.
+    or a comma-separated / TOML list (``4,6,8``, ``flying,paper``, ``a.obj,designs/b.obj`` or ``[[4,0,0],[8,0,0]]``).
+    ``flag`` names the option in errors.
     """
     section, key, raw = _split_assignment(flag, text, "wind.speed=4:12:5 or wind.speed=4,8")
     if ":" in raw and not raw.startswith("["):
@@ -62,9 +62,11 @@ def parse_vary(text: str, count: int | None, flag: str = "--vary") -> tuple[str,
         values = tomllib.loads(f"v = {raw if raw.startswith('[') else f'[{raw}]'}")["v"]
     except tomllib.TOMLDecodeError:
         words = [word.strip() for word in raw.split(",")]
-        if raw.startswith("[") or not all(re.fullmatch(r"[A-Za-z_][\w-]*", word) for word in words):
-            raise DescriptorError(f"{flag} {text!r}: VALUES must be START:STOP:COUNT or a list like 4,6,8") from None
-        values = words  # bare words are names (a choice such as design=flying,paper), as if quoted
+        if raw.startswith("[") or not all(re.fullmatch(r"[A-Za-z_./~][\w./~+-]*", word) for word in words):
+            raise DescriptorError(
+                f"{flag} {text!r}: VALUES must be START:STOP:COUNT or a list like 4,6,8 (or flying,paper, a.obj,b.obj)"
+            ) from None
+        values = words  # bare words are names or files (design=flying,paper; mesh.file=a.obj,b.obj), as if quoted
     return section, key, values
 
 

@@ -158,7 +158,8 @@ class SceneConfig(Checked):
         object: the object kind (a name of :data:`warpsim.objects.registry.OBJECTS`; the scene layer names
             :data:`~warpsim.objects.registry.DEFAULT_OBJECT` where a scene names none).
         seconds: simulated time a run lasts [s] (> 0).
-        fps: output frames per simulated second [1/s].
+        fps: output frames per simulated second [1/s], as near as whole steps make it: a frame every
+            ``round(1 / (fps * dt))`` steps (30 at dt 0.005 is every 7 steps, 28.6 frames a second).
     """
 
     object: str = ""

@@ -67,6 +67,7 @@ def _log_to(path) -> list:
     os.set_blocking(fd, True)
     handler = logging.StreamHandler(open(fd, "a", encoding="utf-8"))  # noqa: SIM115
     handler.setFormatter(logging.Formatter("%(asctime)s %(process)d %(name)s %(levelname)s: %(message)s"))
+    handler.setLevel(logging.WARNING)  # what went wrong; a worker's routine "Stopping worker" lines left a log behind
     saved = []
     for logger in dask_loggers():
         saved.append((logger, logger.handlers[:], logger.propagate))

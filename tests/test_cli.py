@@ -220,9 +220,12 @@ def test_a_run_off_a_terminal_says_it_is_alive(monkeypatch, capsys):
 def test_a_simulation_takes_a_scenes_name_or_path():
     """A newcomer's trial: `warpsim.Simulation("x.toml")` failed with 'string indices must be integers'."""
     from warpsim import Simulation
+    from warpsim.scene.dirs import SHIPPED
 
-    assert Simulation("scenes/kite.toml").scene.kind == "kite"
-    assert Simulation("parachute").scene.where == "parachute"
+    assert Simulation(str(SHIPPED / "kite.toml")).scene.kind == "kite"
+    assert Simulation("parachute").scene.where == "built-in parachute"
+    gusty = Simulation("kite_gusty").scene  # a scene name, found as warpsim run finds it
+    assert gusty.where.endswith("kite_gusty.toml") and gusty.kind == "kite"
     with pytest.raises(TypeError, match="a scene is a Scene"):
         Simulation(3)
 
@@ -234,6 +237,7 @@ def test_vary_takes_a_list_of_files_or_names_as_bare_words():
 
     assert parse_vary("mesh.file=a.obj,designs/b.obj", None) == ("mesh", "file", ["a.obj", "designs/b.obj"])
     assert parse_vary("kite.design=flying,paper", None)[2] == ["flying", "paper"]
+    assert parse_vary("mesh.file=2024.obj,b.obj", None)[2] == ["2024.obj", "b.obj"]
     assert parse_vary("wind.speed=4,6", None)[2] == [4, 6]
     with pytest.raises(DescriptorError, match="a.obj,b.obj"):
         parse_vary("wind.speed=4,6x", None)

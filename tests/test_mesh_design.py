@@ -4,6 +4,7 @@ masses and their keys), the shipped designs in flight, and export and back."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -444,10 +445,35 @@ def test_export_never_writes_over_what_it_reads_and_asks_before_replacing(tmp_pa
     assert ((tmp_path / "k.obj").read_bytes(), (tmp_path / "k.toml").read_text()) == before  # nothing written
     assert main(["export", "kite", str(tmp_path / "k.obj"), "--force"]) == 0
     capsys.readouterr()
+    # a scene found by name (./scenes) is never written over, even with --force
+    scenes = tmp_path / "scenes"
+    scenes.mkdir()
+    (scenes / "mine.toml").write_text((tmp_path / "k.toml").read_text())
+    (scenes / "k.obj").write_bytes((tmp_path / "k.obj").read_bytes())
+    mine = (scenes / "mine.toml").read_text()
+    cwd = os.getcwd()
+    try:
+        os.chdir(tmp_path)
+        line = _one_error(capsys, ["export", "mine", str(scenes / "mine.obj"), "--force"])
+    finally:
+        os.chdir(cwd)
+    assert "is what the export reads" in line and (scenes / "mine.toml").read_text() == mine
+    # a folder in the way is one line before anything is written; a link is replaced, not written through
+    (tmp_path / "dir.obj").mkdir()
+    assert "is a folder" in _one_error(capsys, ["export", "kite", str(tmp_path / "dir.obj"), "--force"])
+    (tmp_path / "target.toml").write_text("keep me")
+    (tmp_path / "l.toml").symlink_to(tmp_path / "target.toml")
+    assert "exists already" in _one_error(capsys, ["export", "kite", str(tmp_path / "l.obj")])
+    assert main(["export", "kite", str(tmp_path / "l.obj"), "--force"]) == 0
+    assert (tmp_path / "target.toml").read_text() == "keep me" and not (tmp_path / "l.toml").is_symlink()
+    capsys.readouterr()
     # two glTF exports side by side, each whole in its own file
     assert main(["export", "kite", str(tmp_path / "a.gltf")]) == 0
     assert main(["export", "hang-glider", str(tmp_path / "b.gltf")]) == 0
-    assert sorted(p.name for p in tmp_path.iterdir() if p.suffix not in (".obj", ".toml")) == ["a.gltf", "b.gltf"]
+    assert sorted(p.name for p in tmp_path.iterdir() if p.suffix == ".gltf" or p.suffix == ".bin") == [
+        "a.gltf",
+        "b.gltf",
+    ]
     kite = build_model(descriptor.resolve(str(tmp_path / "a.toml"))[0])
     assert kite.tri_count == build_model(descriptor.defaults("kite")).tri_count
     # a mesh file named where a scene goes: one line saying what to do

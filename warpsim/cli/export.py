@@ -22,7 +22,7 @@ def command(args) -> int:
     if not out.parent.is_dir():
         raise UsageError(f"{out}: its folder {out.parent} does not exist")
     scene, _ = load_scene(args, worlds_from_vary=False)
-    _check_outputs(out, scene, args.scene, args.force)
+    _check_outputs(out, scene, args.force)
     interruptible()  # the files are written next
     try:
         mesh, scene, left_out = export_design(scene, out)
@@ -34,24 +34,32 @@ def command(args) -> int:
     return 0
 
 
-def _check_outputs(out, scene, source: str, force: bool) -> None:
-    """Refuse to write over what the export reads (the scene file, its mesh or terrain) at all, and over other files
-    that exist unless ``force``: an export once replaced a hand-written design it was asked to export."""
+def _check_outputs(out, scene, force: bool) -> None:
+    """Refuse, before anything is written, to write over what the export reads (the scene's file, its meshes or
+    terrain, in any world) at all, over a folder, and over other files or links that exist unless ``force`` (a link
+    is then removed, never written through): an export once replaced a hand-written design it was asked to export."""
     import os
     from pathlib import Path
 
     written = [out, out.with_suffix(".toml")]
-    read = [Path(source)] if Path(source).is_file() else []
+    read = [Path(scene.where)] if Path(scene.where).is_file() else []  # the scene's own file, found by name or path
     read += [Path(name) for name in scene.files()]
     for path in written:
         for other in read:
-            if os.path.abspath(path) == os.path.abspath(other) or (
-                path.exists() and other.exists() and os.path.samefile(path, other)
-            ):
-                raise UsageError(f"{path}: is what the export reads ({source}); write the export under another name")
-    existing = [str(p) for p in written if p.exists()]
+            same = os.path.abspath(path) == os.path.abspath(other) or os.path.realpath(path) == os.path.realpath(other)
+            if same:
+                raise UsageError(
+                    f"{path}: is what the export reads ({scene.where}); write the export under another name"
+                )
+        if path.is_dir():
+            raise UsageError(f"{path}: is a folder; give the export another name")
+    existing = [str(p) for p in written if p.exists() or p.is_symlink()]
     if existing and not force:
-        raise UsageError(f"{' and '.join(existing)} exist already: give --force to replace them, or another name")
+        verb = "exists" if len(existing) == 1 else "exist"
+        raise UsageError(f"{' and '.join(existing)} {verb} already: give --force to replace, or another name")
+    for path in written:
+        if path.is_symlink():  # replaced, not written through
+            path.unlink()
 
 
 def add_parser(sub) -> None:

@@ -124,6 +124,8 @@ def command(args) -> int:
             f"({rate:.2f} cases/s)"
             if outcome.ran
             else "nothing left to run"
+            if status == "done"
+            else "no case finished"
         )
         not_built = f", {unbuilt} not built (their rows say why)" if unbuilt else ""
         print(f"{status}: {kept}{ran}; {plural(len(table), 'row')}, {blew} blew up{not_built}")

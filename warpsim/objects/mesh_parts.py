@@ -106,7 +106,7 @@ def parse_parts(entries) -> list[Part]:
             raise ValueError(f"{where} must be a table with a kind, got {entry!r}")
         kind = entry.get("kind")
         if kind is None:
-            raise ValueError(f"{where} needs a kind: one of {', '.join(_KEYS)} (kind = \"{next(iter(_KEYS))}\")")
+            raise ValueError(f'{where} needs a kind: one of {", ".join(_KEYS)} (kind = "{next(iter(_KEYS))}")')
         if not isinstance(kind, str) or kind not in _KEYS:
             close = difflib.get_close_matches(str(kind), list(_KEYS), n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""

@@ -399,7 +399,9 @@ def load_text(text: str, where: str) -> dict:
 def load_scene(scene: str) -> dict:
     """The checked descriptor of ``scene``: a built-in object (``"kite"``), a scene name (``"kite_gusty"``, from
     ``./scenes`` or the shipped ones) or a ``.toml`` path. Raises :class:`DescriptorError` with one line."""
-    return resolve(scene)[0]
+    from .dirs import scene_dirs
+
+    return resolve(scene, scene_dirs())[0]
 
 
 def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, str, str]:

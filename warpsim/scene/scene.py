@@ -16,7 +16,7 @@ from pathlib import Path
 from ..objects import registry
 from ..physics.config import WindConfig, from_section
 from .build import Settings, build_model, settings
-from .descriptor import check_axis, load_scene, merge, one_of_batch, to_toml, world_descriptor
+from .descriptor import check_axis, merge, one_of_batch, resolve, to_toml, world_descriptor
 
 LAUNCH_SECTIONS = ("solver", "air", "terrain", "ground")
 """The sections one launch of the kernels cannot vary between worlds: scenes that differ in them step apart."""
@@ -54,8 +54,12 @@ class Scene:
 
     @classmethod
     def load(cls, name: str) -> Scene:
-        """A built-in object, a scene name or a ``.toml`` path (:func:`~warpsim.scene.descriptor.load_scene`)."""
-        return cls(load_scene(name), name)
+        """A built-in object, a scene name (``./scenes``, then the shipped ones) or a ``.toml`` path
+        (:func:`~warpsim.scene.descriptor.resolve`); ``where`` says which (the file's path, ``built-in kite``)."""
+        from .dirs import scene_dirs
+
+        descriptor, _, where = resolve(name, scene_dirs())
+        return cls(descriptor, where)
 
     # ------------------------------------------------------------------ what the layers above read
     @property
@@ -179,13 +183,17 @@ class Scene:
         return to_toml(out)
 
     def files(self) -> list[str]:
-        """The files the scene reads besides its own (a terrain's heights, a design's mesh; absolute where the
-        scene came from a file), each once."""
-        names = []
+        """The files the scene reads besides its own (a terrain's heights, a design's mesh, in any world or sweep
+        case; absolute where the scene came from a file), each once."""
+        names: list[str] = []
         for section in ("terrain", *(registry.section(kind) for kind in registry.OBJECTS)):
-            name = self._tables.get(section, {}).get("file")
-            if isinstance(name, str) and name and name not in names:
-                names.append(name)
+            tables = [self._tables.get(section, {})]
+            tables += [self._tables.get(t, {}).get(section, {}) for t in ("worlds", "sweep")]
+            for table in tables:
+                found = table.get("file") if isinstance(table, dict) else None
+                for name in found if isinstance(found, list) else [found]:
+                    if isinstance(name, str) and name and name not in names:
+                        names.append(name)
         return names
 
     def table(self, section: str) -> dict:

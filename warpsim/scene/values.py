@@ -62,7 +62,8 @@ def parse_vary(text: str, count: int | None, flag: str = "--vary") -> tuple[str,
         values = tomllib.loads(f"v = {raw if raw.startswith('[') else f'[{raw}]'}")["v"]
     except tomllib.TOMLDecodeError:
         words = [word.strip() for word in raw.split(",")]
-        if raw.startswith("[") or not all(re.fullmatch(r"[A-Za-z_./~][\w./~+-]*", word) for word in words):
+        # a word with a letter in it: a name or a file (2024.obj), never a number
+        if raw.startswith("[") or not all(re.fullmatch(r"[\w./+-]*[A-Za-z_][\w./+-]*", word) for word in words):
             raise DescriptorError(
                 f"{flag} {text!r}: VALUES must be START:STOP:COUNT or a list like 4,6,8 (or flying,paper, a.obj,b.obj)"
             ) from None

@@ -148,7 +148,7 @@ def _run_owned(
 
 
 def sweep(
-    scene: str | Scene,
+    scene: str | Path | Scene,
     axes: dict | Sequence[str] = (),
     *,
     seconds: float | None = None,
@@ -165,7 +165,8 @@ def sweep(
     """Sweep a scene over every combination of ``axes`` and return one row per case (a pandas DataFrame).
 
     Args:
-        scene: a built-in object name, a scene name or ``.toml`` path, or a :class:`~warpsim.scene.scene.Scene`.
+        scene: a built-in object name, a scene name or ``.toml`` path, or a :class:`~warpsim.scene.scene.Scene`
+            (:meth:`~warpsim.scene.scene.Scene.of`).
         axes: ``{"section.key": [values] or "START:STOP:COUNT"}`` or ``--vary`` texts
             (``"kite.tow_point=0.2:0.5:4"``); added to the scene's ``[sweep]`` table.
         seconds: simulated time of every case [s] (default: the scene's).
@@ -178,12 +179,7 @@ def sweep(
     Raises :class:`SweepError` or :class:`~warpsim.scene.descriptor.DescriptorError` for a sweep that cannot run, and
     ``KeyboardInterrupt`` after keeping the finished rows when interrupted.
     """
-    if isinstance(scene, str):
-        from ..scene.descriptor import resolve
-        from ..scene.dirs import scene_dirs
-
-        descriptor, _, where = resolve(scene, scene_dirs())
-        scene = Scene(descriptor, where)
+    scene = Scene.of(scene)  # a name or path is found as warpsim run finds it
     plan = SweepPlan(scene, parse_axes(scene, axes), seconds, window, metrics)
     outcome = run_sweep(plan, Path(out) if out else None, workers, scheduler, chunk, device, h5_dir, restart)
     if outcome.interrupted:

@@ -125,6 +125,7 @@ class Viewer:
         title: str = "warpsim",
         record: str | Path | None = None,
         where: str = "",
+        *,
         seconds: float | None = None,
         say=None,
     ):

@@ -202,6 +202,29 @@ def test_view_command_on_the_virtual_screen_saves_a_screenshot_and_recording(dis
         assert recording.time[-1] == pytest.approx(1.0, abs=0.04)
 
 
+def _view_recording(env: dict, folder: Path, frames: int = 20) -> subprocess.Popen:
+    """``warpsim view parachute --screenshot s.png --h5 f.h5`` started in ``folder`` on the display of ``env``,
+    returned once its recording holds ``frames`` frames (or it ended, or 120 s went by)."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "warpsim", "view", "parachute", "--size", "320x240"]
+        + ["--screenshot", "s.png", "--h5", "f.h5", "--seconds", "600"],
+        env=env,
+        cwd=folder,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    seen, deadline = 0, time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None and seen < frames:
+        time.sleep(0.2)
+        try:
+            with Recording(folder / "f.h5") as recording:
+                seen = recording.frame_count
+        except Exception:  # noqa: BLE001 - not written yet
+            pass
+    return proc
+
+
 @pytest.mark.display
 def test_sigterm_closes_the_viewer_like_ctrl_c(tmp_path):
     """SIGTERM to `warpsim view --h5 --screenshot` died by the signal (143) with the recording left open (plain h5py
@@ -214,24 +237,7 @@ def test_sigterm_closes_the_viewer_like_ctrl_c(tmp_path):
     from warpsim.viewer.xvfb import virtual_display
 
     with virtual_display((640, 480)) as env:
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "warpsim", "view", "parachute", "--size", "320x240"]
-            + ["--screenshot", "s.png", "--h5", "f.h5", "--seconds", "600"],
-            env=env,
-            cwd=tmp_path,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
-        deadline = time.monotonic() + 120
-        frames = 0
-        while time.monotonic() < deadline and proc.poll() is None and frames < 20:
-            time.sleep(0.2)
-            try:
-                with Recording(tmp_path / "f.h5") as recording:
-                    frames = recording.frame_count
-            except Exception:  # noqa: BLE001 - not written yet
-                pass
+        proc = _view_recording(env, tmp_path)
         proc.send_signal(signal.SIGTERM)
         out, err = proc.communicate(timeout=60)
     assert proc.returncode == 0 and "Traceback" not in err, (out, err)
@@ -271,23 +277,7 @@ def test_the_display_going_away_keeps_the_recording_and_screenshot(tmp_path):
 
     with virtual_display((656, 496)) as env:  # a size of its own, to tell its server from others
         server = _our_xvfb("656x496x24")
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "warpsim", "view", "parachute", "--size", "320x240"]
-            + ["--screenshot", "s.png", "--h5", "f.h5", "--seconds", "600"],
-            env=env,
-            cwd=tmp_path,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
-        frames, deadline = 0, time.monotonic() + 120
-        while time.monotonic() < deadline and proc.poll() is None and frames < 20:
-            time.sleep(0.2)
-            try:
-                with Recording(tmp_path / "f.h5") as recording:
-                    frames = recording.frame_count
-            except Exception:  # noqa: BLE001 - not written yet
-                pass
+        proc = _view_recording(env, tmp_path)
         os.kill(server, signal.SIGKILL)
         out, err = proc.communicate(timeout=60)
     lines = [line for line in err.splitlines() if line.strip() and not line.startswith("recording to")]

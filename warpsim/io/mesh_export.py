@@ -99,19 +99,18 @@ def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]
     compliance = np.asarray(model.stick_compliance, dtype=np.float64) * weight
     cloth_sticks = np.isin(sticks, cloth).all(axis=1)
     rope, heavy, virtual, light = _off_cloth(record, cloth, sticks, mass)
-    area = 0.5 * float(
-        np.linalg.norm(np.cross(q0[tris[:, 1]] - q0[tris[:, 0]], q0[tris[:, 2]] - q0[tris[:, 0]]), axis=1).sum()
-    )
+    corner = _corner_area(model, tris, q0)
+    area = float(corner.sum())
     cloth_mass = float(mass[cloth].sum() + mass[virtual].sum())
     # the design's cloth gets its mass by area and its nails then hold theirs: spread the free mass over the free
     # cloth's area so that the total comes back (a flag, nailed along its hoist, came back 3 % light)
     nailed = np.intersect1d(np.asarray(model.nail_particles, dtype=np.int64), cloth)
-    free_area = area - float(_corner_area(model, tris, q0)[nailed].sum())
+    free_area = area - float(corner[nailed].sum())
     left_out: list[str] = []
     parts = _nail_and_spar_parts(model, sticks, weight, cloth_sticks, local, virtual, vertices_of)
     parts += _line_part(model, record, sticks, weight, mass, rope, local, origin, vertices_of, left_out)
     parts += _mass_parts(model, record, sticks, mass, heavy, rope, light, local, origin, vertices_of, left_out)
-    left_out += _left_out_of_model(model, tris, q0, cloth, mass, cloth_mass, free_area)
+    left_out += _left_out_of_model(model, corner, cloth, mass, cloth_mass, free_area)
 
     compliances = compliance[cloth_sticks & (weight <= 1.0)]
     mesh = {
@@ -303,17 +302,17 @@ def _corner_area(model, tris, q0) -> np.ndarray:
     return out
 
 
-def _left_out_of_model(model, tris, q0, cloth, mass, cloth_mass: float, area: float) -> list[str]:
+def _left_out_of_model(model, corner: np.ndarray, cloth, mass, cloth_mass: float, area: float) -> list[str]:
     """What of the model the export cannot carry: its bending hinges, a whole-canopy air law, and free particle
     masses [kg] off by more than 1 % of the heaviest from the cloth's ``cloth_mass`` [kg] spread by ``area`` [m^2]
-    (the free cloth's)."""
+    (the free cloth's) over each particle's share ``corner`` [m^2] (:func:`_corner_area`)."""
     left_out = []
     if model.hinge_count:
         left_out.append("its bending hinges (mesh.bending_stiffness is 0)")
     if model.canopy_count:
         left_out.append("its whole-canopy air law (each triangle takes the scene's air.model)")
     free = mass[cloth] > 0.0  # a nailed particle holds no free mass
-    by_area = _corner_area(model, tris, q0)[cloth] * cloth_mass / area
+    by_area = corner[cloth] * cloth_mass / area
     if np.abs(by_area - mass[cloth])[free].max(initial=0.0) > 0.01 * mass[cloth].max():
         left_out.append("its particles' own masses (the export's cloth has them by area, its frame's folded in)")
     return left_out

@@ -224,15 +224,23 @@ def checked_output(check, value: str | None, flag: str) -> Path | None:
         raise UsageError(f"{flag} {err}") from None
 
 
-def same_file_check(scene: str, outputs: dict, what: str = "the scene file") -> None:
-    """Refuse an output that would overwrite the scene file being run."""
+def same_file_check(sources, outputs: dict, what: str = "the scene file") -> None:
+    """Refuse an output that would overwrite what the command reads: ``sources``, a path or a list of paths (see
+    :func:`scene_sources`), each that exists against each output (``{flag: path}``) that exists."""
     from ..io import same_file
 
-    if not Path(scene).is_file():
-        return
-    for flag, path in outputs.items():
-        if path is not None and Path(path).exists() and same_file(scene, path):
-            raise UsageError(f"{flag} {path} is {what} itself; choose another output name")
+    for source in [sources] if isinstance(sources, str | Path) else sources:
+        if not Path(source).is_file():
+            continue
+        for flag, path in outputs.items():
+            if path is not None and Path(path).exists() and same_file(source, path):
+                raise UsageError(f"{flag} {path} is {what} itself ({source}); choose another output name")
+
+
+def scene_sources(scene) -> list[str]:
+    """The files a :class:`~warpsim.scene.scene.Scene` was read from and reads: its own file (found by path or by
+    name) and its meshes and terrain, in any world (:meth:`~warpsim.scene.scene.Scene.files`)."""
+    return [scene.where, *scene.files()]
 
 
 def plural(n: int, noun: str) -> str:

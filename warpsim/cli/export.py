@@ -35,29 +35,22 @@ def command(args) -> int:
 
 
 def _check_outputs(out, scene, force: bool) -> None:
-    """Refuse, before anything is written, to write over what the export reads (the scene's file, its meshes or
-    terrain, in any world) at all, over a folder, and over other files or links that exist unless ``force`` (a link
-    is then removed, never written through): an export once replaced a hand-written design it was asked to export."""
-    import os
-    from pathlib import Path
+    """Refuse, before anything is written, to write over what the export reads (:func:`~.common.same_file_check`:
+    the scene's file, found by name or path, its meshes or terrain, in any world) at all, over a folder, and over
+    other files or links that exist unless ``force`` (a link is then removed, never written through): an export once
+    replaced a hand-written design it was asked to export."""
+    from .common import same_file_check, scene_sources
 
-    written = [out, out.with_suffix(".toml")]
-    read = [Path(scene.where)] if Path(scene.where).is_file() else []  # the scene's own file, found by name or path
-    read += [Path(name) for name in scene.files()]
-    for path in written:
-        for other in read:
-            same = os.path.abspath(path) == os.path.abspath(other) or os.path.realpath(path) == os.path.realpath(other)
-            if same:
-                raise UsageError(
-                    f"{path}: is what the export reads ({scene.where}); write the export under another name"
-                )
+    written = {"mesh": out, "scene": out.with_suffix(".toml")}
+    same_file_check(scene_sources(scene), written, "what the export reads")
+    for path in written.values():
         if path.is_dir():
             raise UsageError(f"{path}: is a folder; give the export another name")
-    existing = [str(p) for p in written if p.exists() or p.is_symlink()]
+    existing = [str(p) for p in written.values() if p.exists() or p.is_symlink()]
     if existing and not force:
         verb = "exists" if len(existing) == 1 else "exist"
         raise UsageError(f"{' and '.join(existing)} {verb} already: give --force to replace, or another name")
-    for path in written:
+    for path in written.values():
         if path.is_symlink():  # replaced, not written through
             path.unlink()
 

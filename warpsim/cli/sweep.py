@@ -18,6 +18,7 @@ from .common import (
     one_line,
     plural,
     same_file_check,
+    scene_sources,
     window_type,
     world_count_type,
 )
@@ -75,7 +76,7 @@ def command(args) -> int:
         raise UsageError("--resume keeps the rows --out holds and --restart forgets them: give one")
     if args.resume and not (out.exists() or out.with_name(out.name + ".partial").exists()):
         raise UsageError(f"--resume: {out} holds no rows yet (run without --resume to start the sweep)")
-    same_file_check(args.scene, {"--out": out})
+    same_file_check(scene_sources(scene), {"--out": out}, "what the scene reads")
     if args.device != "cpu":
         check_device(args.device)
     axes = sweeps.parse_axes(scene, args.vary)

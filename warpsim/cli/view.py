@@ -17,6 +17,7 @@ from .common import (
     load_scene,
     number_type,
     same_file_check,
+    scene_sources,
     size_type,
 )
 
@@ -102,7 +103,7 @@ def command(args) -> int:
     device = check_device(args.device)
     scene, _ = load_scene(args)
     where = scene.where
-    same_file_check(args.scene, {"--h5": h5_path, "--screenshot": shot})
+    same_file_check(scene_sources(scene), {"--h5": h5_path, "--screenshot": shot}, "what the scene reads")
     if browser:
         port = 8765 if args.port is None else args.port
         options = {"host": args.host or "127.0.0.1", "port": port, "size": args.size}

@@ -183,7 +183,7 @@ def load_scene(args, worlds_from_vary: bool = True):
     for (section, key, flag), value in overrides.items():
         if value is not None:  # checked against the scene's bounds like any other value
             scene = scene.with_values({section: {key: value}}, f"{flag} {value:g}")
-    return Scene(scene.descriptor(), where), text
+    return scene, text
 
 
 def world_count_type(text: str) -> int:

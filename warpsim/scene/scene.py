@@ -131,11 +131,11 @@ class Scene:
         """World ``index`` alone (its ``[worlds]`` values in place, one world)."""
         return Scene(world_descriptor(self._tables, index), self.where)
 
-    def with_values(self, override: dict, where: str | None = None) -> Scene:
-        """This scene with ``override``'s sections merged in and checked (raises
-        :class:`~warpsim.scene.values.DescriptorError`)."""
-        where = self.where if where is None else where
-        return Scene(merge(where, self._tables, override), where)
+    def with_values(self, override: dict, origin: str | None = None) -> Scene:
+        """This scene, from where it came, with ``override``'s sections merged in and checked: raises
+        :class:`~warpsim.scene.values.DescriptorError` naming ``origin`` (default: :attr:`where`), e.g. ``--set
+        kite.tow_point=0.3``."""
+        return Scene(merge(self.where if origin is None else origin, self._tables, override), self.where)
 
     # ------------------------------------------------------------------ a sweep's scenes
     def for_sweep(self, seconds: float) -> Scene:

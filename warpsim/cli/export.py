@@ -41,7 +41,7 @@ def _check_outputs(out, scene, force: bool) -> None:
     replaced a hand-written design it was asked to export."""
     from .common import same_file_check, scene_sources
 
-    written = {"mesh": out, "scene": out.with_suffix(".toml")}
+    written = {"export": out, "its scene": out.with_suffix(".toml")}
     same_file_check(scene_sources(scene), written, "what the export reads")
     for path in written.values():
         if path.is_dir():

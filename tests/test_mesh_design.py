@@ -281,9 +281,10 @@ def test_the_cross_canopy_inflates_and_descends_at_a_steady_rate():
 
 # ---------------------------------------------------------------------------------------------------------- export
 @pytest.mark.parametrize("suffix", [".obj", ".glb"])
-def test_export_writes_the_cloth_and_a_scene_that_builds_it_again(tmp_path, capsys, suffix):
+def test_export_as_parts_writes_the_cloth_and_a_scene_that_builds_it_again(tmp_path, capsys, suffix):
+    """``--parts``: the model read off as [[mesh.parts]], a design to edit, which says what it leaves out."""
     out = tmp_path / f"kite{suffix}"
-    assert main(["export", "kite", str(out)]) == 0
+    assert main(["export", "kite", str(out), "--parts"]) == 0
     said = capsys.readouterr().out
     assert "kite.toml" in said and "left out" in said
     # what the written scene, built again, lacks is said too (the kite's tuned air: why it lands)
@@ -306,6 +307,7 @@ def test_export_writes_the_cloth_and_a_scene_that_builds_it_again(tmp_path, caps
     np.testing.assert_allclose(again.particle_q0[record.parts["rope"][0]], first, atol=1e-5)
     total = built.particle_free_mass.sum()
     assert again.particle_free_mass.sum() == pytest.approx(total, rel=0.02)
+    assert not (tmp_path / "kite.structure.toml").exists()
     for name in ("x.dxf", "nowhere/x.obj"):
         line = _one_error(capsys, ["export", "kite", str(tmp_path / name)])
         assert "x." in line
@@ -484,7 +486,7 @@ def test_export_never_writes_over_what_it_reads_and_asks_before_replacing(tmp_pa
 def test_an_exported_nailed_flag_keeps_its_free_mass(tmp_path):
     """The design's cloth takes its mass by area and its nails then hold theirs: the export spreads the free mass
     over the free cloth (the flag, nailed along its hoist, came back 3.1 % light)."""
-    assert main(["export", "flag", str(tmp_path / "f.obj")]) == 0
+    assert main(["export", "flag", str(tmp_path / "f.obj"), "--parts"]) == 0
     built = build_model(descriptor.defaults("flag"))
     again = build_model(descriptor.resolve(str(tmp_path / "f.toml"))[0])
     assert again.particle_free_mass.sum() == pytest.approx(built.particle_free_mass.sum(), rel=0.002)

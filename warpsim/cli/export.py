@@ -13,7 +13,7 @@ def command(args) -> int:
     """Export the scene's object as a mesh file and a mesh scene."""
     from pathlib import Path
 
-    from ..io.mesh_export import export_design
+    from ..io.mesh_export import export_design, structure_path
     from .common import load_scene
 
     out = Path(args.output)
@@ -22,26 +22,31 @@ def command(args) -> int:
     if not out.parent.is_dir():
         raise UsageError(f"{out}: its folder {out.parent} does not exist")
     scene, _ = load_scene(args, worlds_from_vary=False)
-    _check_outputs(out, scene, args.force)
+    _check_outputs(out, scene, args.force, args.parts)
     interruptible()  # the files are written next
     try:
-        mesh, scene, left_out = export_design(scene, out)
+        mesh, scene, left_out = export_design(scene, out, parts=args.parts)
     except ValueError as err:
         raise UsageError(str(err)) from None
-    print(f"{args.scene} -> {mesh} and {scene}")
+    structure = structure_path(mesh)
+    also = f", {structure}" if not args.parts and structure.exists() else ""
+    print(f"{args.scene} -> {mesh}{also} and {scene}")
     for item in left_out:
         print(f"  left out: {item}")
     return 0
 
 
-def _check_outputs(out, scene, force: bool) -> None:
+def _check_outputs(out, scene, force: bool, parts: bool) -> None:
     """Refuse, before anything is written, to write over what the export reads (:func:`~.common.same_file_check`:
     the scene's file, found by name or path, its meshes or terrain, in any world) at all, over a folder, and over
     other files or links that exist unless ``force`` (a link is then removed, never written through): an export once
-    replaced a hand-written design it was asked to export."""
+    replaced a hand-written design it was asked to export. ``parts``: no structure file is written."""
+    from ..io.mesh_export import structure_path
     from .common import same_file_check, scene_sources
 
     written = {"export": out, "its scene": out.with_suffix(".toml")}
+    if not parts:
+        written["its structure"] = structure_path(out)
     same_file_check(scene_sources(scene), written, "what the export reads")
     for path in written.values():
         if path.is_dir():
@@ -64,13 +69,21 @@ def add_parser(sub) -> None:
         help="write a scene's cloth as a mesh file and a scene that flies it",
         description="Write the object of SCENE (its first world, as built) as a mesh file (OBJ with its parts as "
         "groups, glTF/GLB with a node per part, or STL) and, beside it, OUT.toml: a scene of your own design "
-        "(scene.object = 'mesh') with the cloth's density and compliance and its nails, spars, line and point masses "
-        "as [[mesh.parts]]. Edit the mesh in any CAD tool and fly it with `warpsim run OUT.toml`. The export says "
-        "what it leaves out (a whole-canopy air law, bending hinges, particles' own masses).",
+        "(scene.object = 'mesh') that flies it. A built-in object's whole model beyond its triangles (its particles "
+        "off the cloth, every stick, mass and per-triangle air, a canopy's air, nails) goes into OUT.structure.toml, "
+        "so that it flies from the files as it flies built in; move or reshape the mesh's vertices in any CAD tool and "
+        "fly it with `warpsim run OUT.toml`. With --parts the model is read off as [[mesh.parts]] instead (nails, "
+        "spars, a line, point masses): a design to edit freely, which keeps the shape but not every setting. The "
+        "export says what it leaves out.",
     )
     export.add_argument("scene", metavar="SCENE")
     export.add_argument("output", metavar="OUT.obj|.glb|.gltf|.stl")
     export.add_argument(
         "--force", action="store_true", help="replace OUT and OUT.toml where they exist (never the scene exported)"
+    )
+    export.add_argument(
+        "--parts",
+        action="store_true",
+        help="write the model as [[mesh.parts]] (nails, spars, a line, point masses) to edit, not as a structure file",
     )
     add_scene_options(export, worlds=False)

@@ -69,9 +69,15 @@ def _export_own(own: Scene, record, tris: np.ndarray, out: Path) -> tuple[Path, 
     return out, scene_path, []
 
 
-def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]:
+def export_design(scene: Scene, out: str | Path, parts: bool = False) -> tuple[Path, Path, list[str]]:
     """Write world 0 of ``scene``'s object as the mesh file ``out`` (.obj, .glb, .gltf or .stl) and a scene
-    ``out`` with ``.toml`` that flies it; returns (mesh path, scene path, what the export left out)."""
+    ``out`` with ``.toml`` that flies it; returns (mesh path, scene path, what the export left out).
+
+    A built-in object (or a design flown from a structure) is written with its whole model in a structure file
+    ``out`` with ``.structure.toml`` (:mod:`warpsim.objects.mesh_structure`), so that it flies from the files as
+    built; with ``parts`` its model is read off as ``[[mesh.parts]]`` instead (nails, spars, a line, point masses:
+    a design to edit, which keeps its shape but not its every setting). A design of one's own from parts is written
+    back as it was read."""
     out = Path(out)
     single = scene.world(0)  # world 0 with its own [worlds] values
     model = single.build_model("cpu", "export")
@@ -79,8 +85,11 @@ def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]
     tris = np.asarray(model.tri_indices_np, dtype=np.int64)
     if len(tris) == 0:
         raise ValueError(f"the {record.kind} has no triangles to export")
-    if record.kind == MESH:
+    structured = record.kind == MESH and bool(single.table(section(MESH)).get("structure"))
+    if record.kind == MESH and not structured:
         return _export_own(single, record, tris, out)
+    if not parts:
+        return _export_structure(single, model, record, tris, out)
     cloth = np.unique(tris)
     local = {int(p): k for k, p in enumerate(cloth)}
     q0 = np.asarray(model.particle_q0, dtype=np.float64)
@@ -128,6 +137,210 @@ def export_design(scene: Scene, out: str | Path) -> tuple[Path, Path, list[str]]
         left_out += found
         scene_path = _write_scene(single, record, out, mesh, left_out)
     return out, scene_path, left_out
+
+
+STRUCTURE_SUFFIX = ".structure.toml"
+"""What the structure file beside an exported mesh ``kite.obj`` is called: ``kite.structure.toml``."""
+
+
+def structure_path(out: Path) -> Path:
+    """The structure file an export to the mesh file ``out`` writes beside it."""
+    return out.with_name(out.stem + STRUCTURE_SUFFIX)
+
+
+def _export_structure(single: Scene, model, record, tris: np.ndarray, out: Path) -> tuple[Path, Path, list[str]]:
+    """Write the object's cloth as the mesh file ``out`` (its triangle parts as groups), its whole model beyond the
+    triangles as the structure file beside it (:func:`structure_path`) in the numbering the mesh reads back with, and
+    the scene that flies the two; returns (mesh path, scene path, what is left out: the controls a structure does not
+    carry)."""
+    from ..objects import registry
+    from ..objects.mesh_file import read_mesh
+    from ..objects.mesh_structure import Structure, structure_text
+
+    cloth = np.unique(tris)
+    q0 = np.asarray(model.particle_q0, dtype=np.float64)
+    origin = q0[cloth].mean(axis=0)  # the design's origin at its cloth's centre, placed that high above the ground
+    height = float(origin[2] - model.terrain.height(origin[0], origin[1]))
+    local = {int(p): k for k, p in enumerate(cloth)}
+    _write_cloth(out, record, tris, local, q0[cloth] - origin)
+    back = read_mesh(out)
+    if len(back.vertices) != len(cloth) or len(back.triangles) != len(tris):
+        raise ValueError(f"{out}: read back with {len(back.vertices)} vertices for the cloth's {len(cloth)}")
+    # every particle's index in the design: the cloth's as the mesh reads back, then the rest in their order
+    new = np.full(model.particle_count, -1, dtype=np.int64)
+    new[cloth] = _nearest(back.vertices, q0[cloth] - origin)
+    off = np.setdiff1d(np.asarray(record.particles, dtype=np.int64), cloth)
+    new[off] = len(cloth) + np.arange(len(off))
+    order = np.argsort(new[np.concatenate([cloth, off])])
+    every = np.concatenate([cloth, off])[order]  # the object's particles in the design's order
+    tri_new = _triangle_order(back.triangles, new[tris])
+
+    def per_triangle(values: np.ndarray) -> np.ndarray:
+        out_values = np.empty_like(values)
+        out_values[tri_new] = values
+        return out_values
+
+    weight = model.stick_weight.numpy().astype(np.float64)
+    sticks = np.asarray(model.stick_particles_np, dtype=np.int64)
+    span = model.tri_span.numpy().astype(np.int64)
+    span = np.where(span >= 0, new[np.maximum(span, 0)], -1)
+    mass = np.asarray(model.particle_free_mass, dtype=np.float64)
+    drag = model.drag_particles.numpy().astype(np.int64)
+    nails = np.asarray(model.nail_particles, dtype=np.int64)
+    heavy = [int(p) for p in off if mass[p] > HEAVY_SHARE * mass[record.particles].sum()]
+    anchor = int(getattr(record, "anchor_nail", -1))
+    structure = Structure(
+        vertices=len(cloth),
+        triangles=len(tris),
+        points=q0[off] - origin,
+        velocity=np.asarray(model.particle_qd0, dtype=np.float64)[every],
+        mass=mass[every],
+        nails=new[nails],
+        nail_targets=np.asarray(model.nail_target0, dtype=np.float64) - origin,
+        drag=new[drag],
+        drag_area=model.drag_area.numpy().astype(np.float64),
+        sticks=new[sticks],
+        rest=model.stick_rest.numpy().astype(np.float64) / _lengths(q0, sticks),
+        weight=weight,
+        compliance=np.asarray(model.stick_compliance, dtype=np.float64) * weight,  # per stick of weight 1
+        pretension=np.asarray(model.stick_pretension, dtype=np.float64),
+        sail=per_triangle(model.tri_sail.numpy().astype(np.float64)),
+        leading_edge=per_triangle(span),
+        loading=per_triangle(model.tri_loading.numpy().astype(np.float64)),
+        canopies=_canopies(model, q0, tri_new),
+        surfaces=[(tri_new[t], new[e]) for t, e in _lifting_surfaces(model)],
+        hinges=new[np.asarray(model.hinge_particles_np, dtype=np.int64)],
+        hinge_weights=np.asarray(model.hinge_weights_np, dtype=np.float64),
+        hinge_stiffness=model.hinge_stiffness.numpy()[: model.hinge_count].astype(np.float64),
+        tow=int(new[record.tow]) if anchor >= 0 else -1,
+        anchor_nail=anchor,
+        chain=new[np.asarray(getattr(record, "sag_chain", []), dtype=np.int64)] if anchor >= 0 else np.zeros(0),
+        line_drag=bool(getattr(record, "line_drag", False)),
+        payload=int(new[max(heavy, key=lambda p: mass[p])]) if heavy else -1,
+        parts={k: new[np.asarray(v, dtype=np.int64)] for k, v in record.parts.items()},
+        stick_groups={k: np.asarray(v, dtype=np.int64) for k, v in record.stick_groups.items()},
+        curves={k: [[int(new[i]) for i in c] for c in v] for k, v in record.curves.items()},
+    )
+    structure.control_sticks, structure.control_grid, structure.control_rest = _control_table(model, record, q0)
+    where = structure_path(out)
+    header = (
+        f"# The whole model of the {record.kind} beyond its mesh's triangles, written by warpsim export beside "
+        f"{out.name}.\n# Particles 0..{len(cloth) - 1} are the mesh's vertices as warpsim reads it, the rest the "
+        "points below; per-triangle lists follow the mesh's triangles.\n"
+    )
+    where.write_text(structure_text(structure, header), encoding="utf-8")
+    kept = ({"anchor"} if anchor >= 0 else set()) | ({"pitch", "roll"} if len(structure.control_sticks) else set())
+    lost = [c for c in registry.OBJECTS[record.kind].controls if c not in kept]
+    left_out = [f"its controls {', '.join(lost)} (a structure carries pitch, roll and a line's anchor)"] if lost else []
+    mesh = {"file": out.name, "structure": where.name, "position": [float(origin[0]), float(origin[1]), height]}
+    scene_path = _write_scene(single, record, out, mesh, left_out)
+    return out, scene_path, left_out
+
+
+CONTROL_GRID = np.linspace(-1.0, 1.0, 17)
+"""The pitch and roll values an export tables its object's controlled sticks at (read between bilinearly)."""
+
+
+def _control_table(model, record, q0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The sticks the object's ``pitch`` and ``roll`` controls set, :data:`CONTROL_GRID` and their rest lengths over
+    their lengths as built ``[C, G, G]`` at each (pitch, roll) of it, from the object's own controls (empty for an
+    object without those controls)."""
+    from ..objects import registry
+
+    spec = registry.OBJECTS[record.kind]
+    if spec.apply_controls is None or not {"pitch", "roll"} <= set(spec.controls):
+        return np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros((0, 0, 0))
+    sticks = np.asarray(record.controlled_sticks(), dtype=np.int64)
+    base = {
+        "stick_rest": model.stick_rest.numpy().astype(np.float64),
+        "nail_target": np.asarray(model.nail_target0, dtype=np.float64).copy(),
+        "terrain": model.terrain,
+    }
+    g = len(CONTROL_GRID)
+    table = np.zeros((len(sticks), g, g))
+    for i, pitch in enumerate(CONTROL_GRID):
+        for j, roll in enumerate(CONTROL_GRID):
+            targets = {k: v.copy() if isinstance(v, np.ndarray) else v for k, v in base.items()}
+            spec.apply_controls(record, targets, {"pitch": float(pitch), "roll": float(roll)})
+            table[:, i, j] = targets["stick_rest"][sticks]
+    ends = np.asarray(model.stick_particles_np, dtype=np.int64)[sticks]
+    return sticks, CONTROL_GRID.copy(), table / _lengths(q0, ends)[:, None, None]
+
+
+def _lengths(q: np.ndarray, sticks: np.ndarray) -> np.ndarray:
+    """The lengths [m] of ``sticks`` ``[S, 2]`` between the points ``q`` [m]; ``ValueError`` when one is 0 (a rest
+    length is written over it)."""
+    length = np.linalg.norm(q[sticks[:, 1]] - q[sticks[:, 0]], axis=1)
+    if not (length > 0.0).all():
+        raise ValueError(f"stick {int(np.argmin(length))} joins two particles in one place: its rest has no ratio")
+    return length
+
+
+def _nearest(found: np.ndarray, wanted: np.ndarray) -> np.ndarray:
+    """For each point of ``wanted`` ``[n, 3]`` [m], the index of the nearest point of ``found`` ``[n, 3]`` (a mesh
+    read back: OBJ's nine digits, glTF's float32); ``ValueError`` when the matching is not one to one."""
+    index = np.empty(len(wanted), dtype=np.int64)
+    for start in range(0, len(wanted), 512):
+        block = wanted[start : start + 512]
+        index[start : start + len(block)] = np.argmin(
+            ((block[:, None, :] - found[None, :, :]) ** 2).sum(axis=2), axis=1
+        )
+    if len(np.unique(index)) != len(wanted):
+        raise ValueError("the mesh read back does not hold the cloth's vertices one to one")
+    return index
+
+
+def _triangle_order(found: np.ndarray, wanted: np.ndarray) -> np.ndarray:
+    """For each triangle of ``wanted`` ``[T, 3]`` (vertex indices), the index of the same triangle, corners in the
+    same cyclic order, in ``found``; ``ValueError`` when one is missing or turned over."""
+
+    def key(t: np.ndarray) -> np.ndarray:  # each triangle from its smallest corner, in its own cyclic order
+        start = np.argmin(t, axis=1)
+        return np.stack([t[np.arange(len(t)), (start + k) % 3] for k in range(3)], axis=1)
+
+    found_keys = {tuple(k): i for i, k in enumerate(key(found).tolist())}
+    try:
+        return np.array([found_keys[tuple(k)] for k in key(wanted).tolist()], dtype=np.int64)
+    except KeyError:
+        raise ValueError("the mesh read back lost or turned over one of the cloth's triangles") from None
+
+
+def _canopies(model, q0: np.ndarray, tri_new: np.ndarray) -> list:
+    """Each canopy of ``model`` as ``(triangles in the design's order, table [rows, 2], axis [3], wake lag)``; the axis
+    is its area vector, signed as the canopy's mouth-to-apex orientation."""
+    if not model.canopy_count:
+        return []
+    start = model.canopy_tri_start.numpy()
+    ids = model.canopy_tri_ids.numpy()
+    table = model.canopy_table.numpy().astype(np.float64)
+    params = model.canopy_params.numpy().astype(np.float64)
+    rows = len(table) // model.canopy_count
+    tris = np.asarray(model.tri_indices_np, dtype=np.int64)
+    out = []
+    for c in range(model.canopy_count):
+        chosen = ids[start[c] : start[c + 1]]
+        a, b, d = q0[tris[chosen, 0]], q0[tris[chosen, 1]], q0[tris[chosen, 2]]
+        area = 0.5 * np.cross(b - a, d - b).sum(axis=0)
+        out.append((tri_new[chosen], table[c * rows : (c + 1) * rows], params[c, 2] * area, float(params[c, 3])))
+    return out
+
+
+def _lifting_surfaces(model) -> list:
+    """Each lifting surface of ``model`` as ``(triangles, trailing edges [k, 2] particle pairs)``."""
+    lattice = model.lattice
+    tris = np.asarray(model.tri_indices_np, dtype=np.int64)
+    out = []
+    for s in range(lattice.surface_count):
+        panels = range(int(lattice.surface_start[s]), int(lattice.surface_start[s + 1]))
+        chosen = np.array([int(lattice.panel_tri[k]) for k in panels], dtype=np.int64)
+        trailing = [
+            (int(tris[t][e]), int(tris[t][(e + 1) % 3]))
+            for k, t in zip(panels, chosen, strict=True)
+            for e in range(3)
+            if int(lattice.panel_trailing[k]) >> e & 1
+        ]
+        out.append((chosen, np.asarray(trailing, dtype=np.int64).reshape(-1, 2)))
+    return out
 
 
 def _left_out_by_flying(model, record, scene_path: Path) -> list[str]:

@@ -22,6 +22,7 @@ from ..physics.terrain import Heightfield
 from .kite import anchor_pull, line_elevation
 from .mesh_file import SurfaceMesh, mesh_edges, read_mesh
 from .mesh_parts import LINE_DRAG_COEFFICIENT, Part, parse_parts, parts_schema, select, select_edges
+from .mesh_structure import fits, read_structure
 
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254, "ft": 0.3048, "file": float("nan")}
 """Metres per unit of each ``mesh.units`` (``file``: the file's own, USD's ``metersPerUnit``)."""
@@ -59,6 +60,10 @@ class MeshConfig(Checked):
         lattice: make the cloth one lifting surface of the ``vortex`` law, its wake shed from the boundary edges
             that face aft (-x in the design's axes).
         parts: the design's parts (``[[mesh.parts]]``, :mod:`.mesh_parts`).
+        structure: a structure file (:mod:`.mesh_structure`, relative to the scene file's folder) holding the whole
+            model beyond the mesh's triangles: its particles off the cloth, every stick, mass and per-triangle air
+            (what ``warpsim export`` writes for a built-in object). With one, the cloth keys above and ``parts`` do
+            not apply and are refused.
     """
 
     file: str = ""
@@ -73,6 +78,11 @@ class MeshConfig(Checked):
     aspect_ratio: float = number(0.0, Bounds(0.0, 50.0))
     lattice: bool = False
     parts: tuple = _parts_field()
+    structure: str = ""
+
+
+STRUCTURE_HOLDS = ("velocity", "mass_per_area", "cloth_compliance", "bending_stiffness", "aspect_ratio", "lattice")
+"""The ``[mesh]`` keys a structure file holds for itself: refused beside ``mesh.structure``."""
 
 
 @dataclass(kw_only=True)
@@ -90,6 +100,8 @@ class MeshRecord(ObjectRecord):
         design: the cloth's vertices in the design's own coordinates ``[V, 3]`` [m] (units and scale applied), in the
             order of ``parts["cloth"]``: what ``warpsim export`` writes back. selections: each part's chosen vertices
             (indices into ``design``).
+        control_sticks, control_grid, control_rest: a structure's controlled sticks, the pitch and roll values
+            ``[G]`` they are tabled at and their rest lengths there ``[C, G, G]`` [m] (:mod:`.mesh_structure`).
     """
 
     tow: int = -1
@@ -105,10 +117,14 @@ class MeshRecord(ObjectRecord):
     shift_roll: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     design: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     selections: list = field(default_factory=list)
+    control_sticks: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
+    control_grid: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    control_rest: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 0)))
 
     def controlled_sticks(self) -> np.ndarray:
-        """The point masses' hanging sticks, whose rest lengths ``pitch`` and ``roll`` set."""
-        return np.asarray(self.shift_sticks, dtype=np.int32)
+        """The point masses' hanging sticks and a structure's control sticks, whose rest lengths ``pitch`` and
+        ``roll`` set."""
+        return np.concatenate([np.asarray(self.shift_sticks), np.asarray(self.control_sticks)]).astype(np.int32)
 
     def controlled_nails(self) -> np.ndarray:
         """The line's anchor, which the ``anchor`` control walks."""
@@ -161,6 +177,10 @@ def load_design(cfg: MeshConfig) -> tuple[SurfaceMesh, np.ndarray]:
 
 def build_mesh(builder: ModelBuilder, cfg: MeshConfig, terrain: Heightfield) -> MeshRecord:
     """Add the design of ``cfg`` (its cloth and parts) standing above ``terrain``; returns its record."""
+    if cfg.structure:
+        _refuse_beside_structure(cfg)
+        mesh, design = load_design(cfg)
+        return _build_structured(builder, cfg, terrain, mesh, design)
     mesh, design = load_design(cfg)
     parts = [p if isinstance(p, Part) else None for p in cfg.parts]
     if None in parts:
@@ -216,6 +236,86 @@ def build_mesh(builder: ModelBuilder, cfg: MeshConfig, terrain: Heightfield) -> 
         record.shift_sticks = np.asarray(shift["sticks"], dtype=np.int32)
         for key in ("ends", "mass", "pitch", "roll"):
             setattr(record, f"shift_{key}", np.asarray(shift[key], dtype=np.float64).reshape(-1, 3))
+    return builder.add_object(record)
+
+
+def _refuse_beside_structure(cfg: MeshConfig) -> None:
+    """``ValueError`` (one line) for ``[mesh]`` keys a structure holds for itself (:data:`STRUCTURE_HOLDS`),
+    ``parts``, or units and a scale other than metres (a structure's lengths are metres), set beside
+    ``mesh.structure``."""
+    defaults = MeshConfig()
+    clash = [k for k in STRUCTURE_HOLDS if getattr(cfg, k) != getattr(defaults, k)]
+    if cfg.parts:
+        clash.insert(0, "parts")
+    if clash or cfg.units != "m" or cfg.scale != 1.0:
+        what = f"mesh.{clash[0]}" if clash else "mesh.units and mesh.scale (a structure's lengths are metres)"
+        raise ValueError(
+            f"{what} cannot be set beside mesh.structure, which holds the whole model ({cfg.structure}); remove it, or "
+            "remove mesh.structure and describe the design with [[mesh.parts]]"
+        )
+
+
+def _build_structured(builder: ModelBuilder, cfg: MeshConfig, terrain: Heightfield, mesh, design) -> MeshRecord:
+    """Add the design of ``cfg`` from its mesh and its structure file (:mod:`.mesh_structure`): the mesh's vertices
+    and the structure's points as particles, its sticks, masses, nails, drag bodies, per-triangle air, canopies,
+    lifting surfaces and hinges, turned by ``mesh.rotation`` and placed at ``mesh.position`` above ``terrain``."""
+    s = read_structure(cfg.structure)
+    tris = mesh.triangles
+    fits(s, len(design), len(tris), cfg.structure)
+    rot, place, world = _placement(cfg, terrain, design)
+    positions = np.concatenate([world, place(s.points).reshape(-1, 3)])
+    p0 = builder.particle_count
+    for x, m, v in zip(positions, s.mass, s.velocity @ rot.T, strict=True):
+        builder.add_particle(x, m if m > 0.0 else 1.0, v)  # a nailed particle's mass is never used
+    ids = np.arange(p0, builder.particle_count)
+    s0 = builder.stick_count
+    for (a, b), rest, weight, compliance, share in zip(
+        s.sticks, s.rest, s.weight, s.compliance, s.pretension, strict=True
+    ):
+        length = float(np.linalg.norm(positions[b] - positions[a]))
+        if not length > 0.0:
+            raise ValueError(f"{cfg.structure}: stick ({a}, {b}) joins two particles in one place")
+        k = builder.add_stick(int(ids[a]), int(ids[b]), rest=float(rest) * length, weight=float(weight))
+        builder.set_compliance([k], float(compliance))
+        builder.stick_pretension[k] = float(share)
+    t0 = builder.tri_count
+    for (a, b, c), loading in zip(tris, s.loading, strict=True):
+        builder.add_triangle(int(ids[a]), int(ids[b]), int(ids[c]), loading=float(loading))
+    tri_ids = np.arange(t0, builder.tri_count)
+    for t, coefficients, edge in zip(tri_ids, s.sail, s.leading_edge, strict=True):
+        builder.set_triangle_sail([t], coefficients)
+        if edge[0] >= 0:
+            builder.set_triangle_span([t], ids[edge])
+    for particle, area in zip(s.drag, s.drag_area, strict=True):
+        builder.set_drag_area(int(ids[particle]), float(area))
+    for chosen, table, axis, lag in s.canopies:
+        builder.add_canopy(tri_ids[chosen], table, rot @ axis, lag)
+    for chosen, trailing in s.surfaces:
+        builder.add_lifting_surface(tri_ids[chosen], ids[trailing])
+    for particles, weights, stiffness in zip(s.hinges, s.hinge_weights, s.hinge_stiffness, strict=True):
+        builder._add_stencil(tuple(int(i) for i in ids[particles]), weights, float(stiffness), "bending hinge")
+    n0 = len(builder.nail_particles)
+    for particle, target in zip(s.nails, place(s.nail_targets).reshape(-1, 3), strict=True):
+        builder.add_nail(int(ids[particle]), target)
+
+    record = MeshRecord(name="mesh", kind="mesh", design=design)
+    if s.tow >= 0 and s.anchor_nail >= 0:
+        record.tow, record.anchor_nail = int(ids[s.tow]), n0 + s.anchor_nail
+        record.anchor_particle = int(ids[s.nails[s.anchor_nail]])
+        record.sag_chain = ids[s.chain].astype(np.int64)
+        record.line_drag = s.line_drag
+    record.payload = int(ids[s.payload]) if s.payload >= 0 else -1
+    record.particles = ids
+    record.parts = {**{k: ids[v] for k, v in s.parts.items()}, "cloth": ids[: len(design)]}
+    record.tri_parts = {"cloth": tri_ids, **{f"group:{n}": tri_ids[t] for n, t in mesh.groups.items()}}
+    record.stick_groups = {k: s0 + v for k, v in s.stick_groups.items()}
+    record.curves = {k: [[int(ids[i]) for i in c] for c in chains] for k, chains in s.curves.items()}
+    if len(s.control_sticks):
+        record.control_sticks = (s0 + s.control_sticks).astype(np.int32)
+        ends = s.sticks[s.control_sticks]
+        placed = np.linalg.norm(positions[ends[:, 1]] - positions[ends[:, 0]], axis=1)
+        record.control_grid = s.control_grid
+        record.control_rest = s.control_rest * placed[:, None, None]
     return builder.add_object(record)
 
 
@@ -485,9 +585,30 @@ def apply_controls(record: MeshRecord, targets: dict, values: dict) -> None:
         pitch, roll = float(values.get("pitch", 0.0)), float(values.get("roll", 0.0))
         at = record.shift_mass + pitch * record.shift_pitch + roll * record.shift_roll
         targets["stick_rest"][record.shift_sticks] = np.linalg.norm(record.shift_ends - at, axis=1)
+    if len(record.control_sticks) and ("pitch" in values or "roll" in values):
+        rest = _bilinear(record.control_grid, record.control_rest, values.get("pitch", 0.0), values.get("roll", 0.0))
+        targets["stick_rest"][record.control_sticks] = rest
     if "anchor" in values and record.anchor_nail >= 0:
         x, y = values["anchor"]
         targets["nail_target"][record.anchor_nail] = (x, y, float(targets["terrain"].height(x, y)))
+
+
+def _bilinear(grid: np.ndarray, table: np.ndarray, pitch: float, roll: float) -> np.ndarray:
+    """The values ``table`` ``[C, G, G]`` tabled at (pitch, roll) on ``grid`` ``[G]``, read at ``pitch`` and
+    ``roll`` (clipped to the grid) by bilinear interpolation: ``[C]``."""
+
+    def cell(x: float) -> tuple[int, float]:
+        x = float(np.clip(x, grid[0], grid[-1]))
+        k = int(np.clip(np.searchsorted(grid, x) - 1, 0, len(grid) - 2))
+        return k, (x - grid[k]) / (grid[k + 1] - grid[k])
+
+    (i, u), (j, v) = cell(pitch), cell(roll)
+    return (
+        (1 - u) * (1 - v) * table[:, i, j]
+        + u * (1 - v) * table[:, i + 1, j]
+        + (1 - u) * v * table[:, i, j + 1]
+        + u * v * table[:, i + 1, j + 1]
+    )
 
 
 MESH_FIGURES = {

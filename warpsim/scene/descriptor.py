@@ -440,10 +440,15 @@ def resolve(scene: str, search_dirs: list[Path] | None = None) -> tuple[dict, st
     )
 
 
+FILE_KEYS = ("file", "structure")
+"""The keys of a section that name a file read beside the scene (``terrain.file``, ``mesh.file``,
+``mesh.structure``)."""
+
+
 def _files_beside(descriptor: dict, scene: Path) -> dict:
-    """``descriptor`` read from the file ``scene`` with a relative ``terrain.file`` or ``mesh.file`` made absolute
-    against the scene file's folder (where its author put it), not the current directory, so that the scene runs from
-    anywhere."""
+    """``descriptor`` read from the file ``scene`` with a relative ``terrain.file``, ``mesh.file`` or
+    ``mesh.structure`` made absolute against the scene file's folder (where its author put it), not the current
+    directory, so that the scene runs from anywhere."""
     import os
 
     folder = os.path.dirname(os.path.abspath(scene))
@@ -456,12 +461,13 @@ def _files_beside(descriptor: dict, scene: Path) -> dict:
         )
 
     for section in ("terrain", *(registry.section(kind) for kind in registry.OBJECTS)):  # the sections naming a file
-        if descriptor.get(section, {}).get("file"):
-            descriptor[section]["file"] = beside(descriptor[section]["file"])
-        for table in ("worlds", "sweep"):  # a file per world or per case
-            values = descriptor.get(table, {}).get(section, {}).get("file")
-            if isinstance(values, list):
-                descriptor[table][section]["file"] = [beside(v) for v in values]
+        for key in FILE_KEYS:
+            if descriptor.get(section, {}).get(key):
+                descriptor[section][key] = beside(descriptor[section][key])
+            for table in ("worlds", "sweep"):  # a file per world or per case
+                values = descriptor.get(table, {}).get(section, {}).get(key)
+                if isinstance(values, list):
+                    descriptor[table][section][key] = [beside(v) for v in values]
     return descriptor
 
 

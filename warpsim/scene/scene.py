@@ -9,6 +9,7 @@ write or merge them (TOML, a recording, a sweep's chunk). Nothing outside ``scen
 from __future__ import annotations
 
 import copy
+import itertools
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,7 +17,7 @@ from pathlib import Path
 from ..objects import registry
 from ..physics.config import WindConfig, from_section
 from .build import Settings, build_model, settings
-from .descriptor import check_axis, merge, one_of_batch, resolve, to_toml, world_descriptor
+from .descriptor import FILE_KEYS, check_axis, merge, one_of_batch, resolve, to_toml, world_descriptor
 
 LAUNCH_SECTIONS = ("solver", "air", "terrain", "ground")
 """The sections one launch of the kernels cannot vary between worlds: scenes that differ in them step apart."""
@@ -183,14 +184,14 @@ class Scene:
         return to_toml(out)
 
     def files(self) -> list[str]:
-        """The files the scene reads besides its own (a terrain's heights, a design's mesh, in any world or sweep
-        case; absolute where the scene came from a file), each once."""
+        """The files the scene reads besides its own (a terrain's heights, a design's mesh and structure, in any world
+        or sweep case; absolute where the scene came from a file), each once."""
         names: list[str] = []
         for section in ("terrain", *(registry.section(kind) for kind in registry.OBJECTS)):
             tables = [self._tables.get(section, {})]
             tables += [self._tables.get(t, {}).get(section, {}) for t in ("worlds", "sweep")]
-            for table in tables:
-                found = table.get("file") if isinstance(table, dict) else None
+            for table, key in itertools.product(tables, FILE_KEYS):
+                found = table.get(key) if isinstance(table, dict) else None
                 for name in found if isinstance(found, list) else [found]:
                     if isinstance(name, str) and name and name not in names:
                         names.append(name)

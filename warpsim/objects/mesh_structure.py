@@ -1,0 +1,394 @@
+"""A mesh design's whole model beyond its triangles (``mesh.structure``): what ``warpsim export`` writes beside a
+built-in object's mesh so that the object flies from the files as it flies built in.
+
+A mesh file holds triangles and their groups. A built-in object is more than its cloth: particles off it (a pilot, a
+control bar, a rope, suspension lines, a rigid frame's virtual particles), sticks of their own weights, compliances,
+pretensions and rest lengths, each particle's own mass, each triangle's ``sail`` coefficients, leading edge and
+loading, drag bodies, a canopy's whole-canopy air, lifting surfaces, bending hinges and nails. The structure file is
+a TOML file that lists all of them, by particle:
+
+* particles ``0 .. V-1`` are the mesh's vertices as warpsim reads it (the numbering ``[[mesh.parts]]`` ``vertices``
+  use), and ``V ..`` the structure's own ``points``, in the design's own coordinates [m];
+* per-triangle lists follow the mesh's triangles as warpsim reads them;
+* a stick's rest length is given over its length as placed, so that a mesh whose vertices were moved in a CAD tool
+  (the same vertices and triangles, reshaped) is at rest in its new shape; each particle keeps its mass as written.
+
+With a structure, the design's cloth gets no stick, mass or air of its own from ``[mesh]``: the structure holds each.
+It is checked against the mesh when the scene is built: a mesh whose vertex or triangle count changed since the
+export (edited in a CAD tool) is refused in one line, since the structure's lists would no longer fit it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import tomllib
+
+FORMAT = 1
+"""The structure file's format version (``format`` in it)."""
+
+
+class StructureError(ValueError):
+    """A structure file that does not fit its mesh or holds a bad value; the message is one line naming the file."""
+
+
+@dataclass
+class Structure:
+    """A design's model beyond its triangles, as read from a structure file (``P`` particles: the mesh's ``V``
+    vertices, then ``points``; ``S`` sticks; ``T`` triangles).
+
+    Attributes:
+        vertices, triangles: the mesh's vertex and triangle counts it was written for.
+        points: ``[P - V, 3]`` the particles off the mesh, in the design's coordinates [m].
+        velocity: ``[P, 3]`` every particle's velocity at the start [m/s], in the design's axes.
+        mass: ``[P]`` every particle's mass [kg] (0 for a nailed particle: it does not move).
+        nails: ``[N]`` the nailed particles; nail_targets: ``[N, 3]`` where each is held (design coordinates) [m].
+        drag: ``[D]`` the drag bodies' particles; drag_area: ``[D]`` their ``C_D A`` [m^2].
+        sticks: ``[S, 2]`` particle pairs; rest (each stick's rest length over its length as placed: 1 for a stick
+            at rest as built, less for a pretensioned one, so that a mesh reshaped in a CAD tool is at rest in its new
+            shape), weight, compliance [m/N at weight 1], pretension (the share the stick was shortened by as built,
+            as it is reported): ``[S]`` each.
+        sail: ``[T, 4]`` the ``sail`` law's coefficients (lift slope [1/rad], induced-drag factor, profile drag, stall
+            angle [rad]); leading_edge: ``[T, 2]`` the particles of the leading edge each triangle sits behind (-1:
+            none); loading: ``[T]`` the chordwise loading factors.
+        canopies: each ``(triangles, table [37, 2], axis [3], wake_lag)``: a whole-canopy air law.
+        surfaces: each ``(triangles, trailing [k, 2] particle pairs)``: a lifting surface of the ``vortex`` law.
+        hinges: ``[H, 4]`` particles, hinge_weights ``[H, 4]``, hinge_stiffness ``[H]`` [N/m]: bending stencils.
+        tow: the particle the line hangs from (-1: no line); anchor_nail: its ground end's nail (-1); chain: the
+            line's particles from the anchor up; line_drag: the line has drag. payload: the swing's point mass (-1).
+        parts, stick_groups, curves: the object's named particle, stick and line sets, for outputs and ``info``.
+        control_sticks: ``[C]`` the sticks the ``pitch`` and ``roll`` controls set (a pilot's arms); control_grid:
+            ``[G]`` the control values both are sampled at (from -1 to 1); control_rest: ``[C, G, G]`` each stick's
+            rest length over its length as placed at (pitch, roll) on the grid, read between by bilinear
+            interpolation.
+    """
+
+    vertices: int
+    triangles: int
+    points: np.ndarray
+    velocity: np.ndarray
+    mass: np.ndarray
+    nails: np.ndarray
+    nail_targets: np.ndarray
+    drag: np.ndarray
+    drag_area: np.ndarray
+    sticks: np.ndarray
+    rest: np.ndarray
+    weight: np.ndarray
+    compliance: np.ndarray
+    pretension: np.ndarray
+    sail: np.ndarray
+    leading_edge: np.ndarray
+    loading: np.ndarray
+    canopies: list = field(default_factory=list)
+    surfaces: list = field(default_factory=list)
+    hinges: np.ndarray = field(default_factory=lambda: np.zeros((0, 4), dtype=np.int64))
+    hinge_weights: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
+    hinge_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    tow: int = -1
+    anchor_nail: int = -1
+    chain: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    line_drag: bool = False
+    payload: int = -1
+    parts: dict = field(default_factory=dict)
+    stick_groups: dict = field(default_factory=dict)
+    curves: dict = field(default_factory=dict)
+    control_sticks: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    control_grid: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    control_rest: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 0)))
+
+    @property
+    def particle_count(self) -> int:
+        return self.vertices + len(self.points)
+
+    def as_toml(self) -> dict:
+        """The structure as the plain tables of its file (:func:`read_structure` reads them back)."""
+
+        def plain(a):
+            return np.asarray(a).tolist()
+
+        out = {
+            "format": FORMAT,
+            "vertices": self.vertices,
+            "triangles": self.triangles,
+            "points": {"position": plain(self.points)},
+            "particles": {"mass": plain(self.mass), "velocity": plain(self.velocity)},
+            "nails": {"particles": plain(self.nails), "targets": plain(self.nail_targets)},
+            "drag": {"particles": plain(self.drag), "areas": plain(self.drag_area)},
+            "sticks": {
+                "ends": plain(self.sticks),
+                "rest": plain(self.rest),
+                "weight": plain(self.weight),
+                "compliance": plain(self.compliance),
+                "pretension": plain(self.pretension),
+            },
+            "air": {"sail": plain(self.sail), "leading_edge": plain(self.leading_edge), "loading": plain(self.loading)},
+            "canopies": [
+                {"triangles": plain(t), "table": plain(tab), "axis": plain(ax), "wake_lag": float(lag)}
+                for t, tab, ax, lag in self.canopies
+            ],
+            "lifting_surfaces": [{"triangles": plain(t), "trailing": plain(tr)} for t, tr in self.surfaces],
+            "hinges": {
+                "particles": plain(self.hinges),
+                "weights": plain(self.hinge_weights),
+                "stiffness": plain(self.hinge_stiffness),
+            },
+            "line": {
+                "tow": int(self.tow),
+                "anchor_nail": int(self.anchor_nail),
+                "chain": plain(self.chain),
+                "drag": bool(self.line_drag),
+            },
+            "payload": int(self.payload),
+            "parts": {k: plain(v) for k, v in self.parts.items()},
+            "stick_groups": {k: plain(v) for k, v in self.stick_groups.items()},
+            "curves": {k: [plain(c) for c in v] for k, v in self.curves.items()},
+        }
+        if len(self.control_sticks):
+            g = len(self.control_grid)
+            out["controls"] = {
+                "sticks": plain(self.control_sticks),
+                "grid": plain(self.control_grid),
+                "rest": plain(np.asarray(self.control_rest).reshape(-1, g)),  # stick after stick, a row per pitch
+            }
+        return out
+
+
+_COMMENTS = {
+    "points": "the particles off the mesh, numbered after its vertices: positions in the design's coordinates [m]",
+    "particles": "every particle (the mesh's vertices, then the points): mass [kg] (0: nailed), velocity [m/s]",
+    "nails": "the nailed particles and where each is held [m]",
+    "drag": "the drag bodies: particle and C_D A [m^2]",
+    "sticks": "particle pairs; rest: rest length over the length as placed; weight; compliance [m/N] at weight 1; "
+    "pretension: the share shortened as built",
+    "air": "per triangle: sail law (lift slope [1/rad], induced-drag factor, profile drag, stall [rad]), leading "
+    "edge (particles, -1: none), chordwise loading",
+    "canopies": "whole-canopy air laws: triangles, table (C_T, C_N at 0, 5, ... 180 deg), axis, wake lag",
+    "lifting_surfaces": "the vortex law's surfaces: triangles and trailing edges (particle pairs)",
+    "hinges": "bending stencils: four particles, their weights and a stiffness [N/m]",
+    "line": "the line: the particle it hangs from, its anchor's nail, its particles from the anchor up, its drag",
+    "parts": "named particle sets (for outputs and warpsim info)",
+    "stick_groups": "named stick sets",
+    "curves": "chains of particles drawn as lines",
+    "controls": "the sticks pitch and roll set: their rest over their length as placed, a row of roll values per "
+    "pitch value of the grid, stick after stick",
+}
+
+
+def _value(v) -> str:
+    """One TOML value: a number, a bool, a string or a list of them (one line)."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, (float, np.floating)):
+        return f"{float(v):.12g}"  # 12 digits: a picometre in a kilometre, a rest ratio to 1e-12
+    if isinstance(v, str):
+        import tomli_w
+
+        return tomli_w.dumps({"x": v})[4:].strip()
+    return "[" + ", ".join(_value(x) for x in v) + "]"
+
+
+def _key_lines(key: str, v) -> list[str]:
+    """``key = v``, a list of lists one row per line, a long flat list wrapped."""
+    if isinstance(v, list) and v and isinstance(v[0], list):
+        return [f"{key} = ["] + [f"    {_value(row)}," for row in v] + ["]"]
+    text = f"{key} = {_value(v)}"
+    if len(text) <= 118 or not isinstance(v, list):
+        return [text]
+    lines, line = [f"{key} = ["], "   "
+    for x in v:
+        word = f" {_value(x)},"
+        if len(line) + len(word) > 118:
+            lines.append(line)
+            line = "   "
+        line += word
+    return [*lines, line, "]"]
+
+
+def structure_text(structure: Structure, header: str = "") -> str:
+    """The structure file's text (TOML, read back by :func:`read_structure`): its tables with a comment each, lists
+    of rows one row per line; ``header`` (comment lines) first."""
+    tables = structure.as_toml()
+    lines = [header.rstrip("\n")] if header else []
+    lines += [f"{k} = {_value(v)}" for k, v in tables.items() if not isinstance(v, (dict, list))]
+    for name, table in tables.items():
+        if isinstance(table, dict):
+            lines += ["", f"# {_COMMENTS[name]}", f"[{name}]"]
+            for key, v in table.items():
+                lines += _key_lines(key, v)
+        elif isinstance(table, list):
+            lines += ["", f"# {_COMMENTS[name]}"]
+            if not table:
+                lines.append(f"{name} = []")
+            for entry in table:
+                lines.append(f"[[{name}]]")
+                for key, v in entry.items():
+                    lines += _key_lines(key, v)
+    return "\n".join(lines) + "\n"
+
+
+def read_structure(path: str | Path) -> Structure:
+    """Read and check the structure file ``path``; :class:`StructureError` with one line naming the file and key on
+    a missing file, bad TOML, a list of the wrong length or an index out of range."""
+    path = Path(path)
+    if not path.is_file():
+        raise StructureError(f"{path}: structure file not found (mesh.structure)")
+    try:
+        with open(path, "rb") as f:
+            data = tomllib.load(f)
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raise StructureError(f"{path}: not a structure file: {str(err).splitlines()[0]}") from None
+    if data.get("format") != FORMAT:
+        raise StructureError(f"{path}: format = {data.get('format')!r}; this warpsim reads structure format {FORMAT}")
+    try:
+        return _structure_of(data)
+    except (KeyError, TypeError, ValueError) as err:
+        text = str(err).strip("'\"") if not isinstance(err, KeyError) else f"it has no {err.args[0]!r}"
+        raise StructureError(f"{path}: {text}") from None
+
+
+def _array(table: dict, key: str, dtype, shape: tuple, name: str) -> np.ndarray:
+    """``table[key]`` (the file's ``name.key``) as an array of ``dtype`` with ``shape`` (``-1``: any length); an
+    empty list fits any."""
+    values = table.get(key, [])
+    want = "a list of shape (" + ", ".join("any" if n == -1 else str(n) for n in shape) + ")"
+    try:
+        a = np.asarray(values, dtype=dtype)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}.{key} must be {want} of numbers") from None
+    if a.size == 0:
+        return np.zeros((0, *shape[1:]), dtype=dtype)
+    if a.ndim != len(shape) or any(s not in (-1, n) for s, n in zip(shape, a.shape, strict=True)):
+        raise ValueError(f"{name}.{key} must be {want}, got {a.shape}")
+    if not np.isfinite(a).all():
+        raise ValueError(f"{name}.{key} holds a value that is not finite")
+    return a
+
+
+def _structure_of(data: dict) -> Structure:
+    """The :class:`Structure` of a structure file's tables ``data``, its lengths and indices checked."""
+    v, t = int(data["vertices"]), int(data["triangles"])
+    points = _array(data["points"], "position", np.float64, (-1, 3), "points")
+    p = v + len(points)
+    particles, sticks, air = data["particles"], data["sticks"], data["air"]
+    s = Structure(
+        vertices=v,
+        triangles=t,
+        points=points,
+        velocity=_array(particles, "velocity", np.float64, (p, 3), "particles"),
+        mass=_array(particles, "mass", np.float64, (p,), "particles"),
+        nails=_array(data["nails"], "particles", np.int64, (-1,), "nails"),
+        nail_targets=_array(data["nails"], "targets", np.float64, (-1, 3), "nails"),
+        drag=_array(data["drag"], "particles", np.int64, (-1,), "drag"),
+        drag_area=_array(data["drag"], "areas", np.float64, (-1,), "drag"),
+        sticks=_array(sticks, "ends", np.int64, (-1, 2), "sticks"),
+        rest=_array(sticks, "rest", np.float64, (-1,), "sticks"),
+        weight=_array(sticks, "weight", np.float64, (-1,), "sticks"),
+        compliance=_array(sticks, "compliance", np.float64, (-1,), "sticks"),
+        pretension=_array(sticks, "pretension", np.float64, (-1,), "sticks"),
+        sail=_array(air, "sail", np.float64, (t, 4), "air"),
+        leading_edge=_array(air, "leading_edge", np.int64, (t, 2), "air"),
+        loading=_array(air, "loading", np.float64, (t,), "air"),
+    )
+    for c in data.get("canopies", []):
+        s.canopies.append(
+            (
+                _array(c, "triangles", np.int64, (-1,), "canopies"),
+                _array(c, "table", np.float64, (-1, 2), "canopies"),
+                _array(c, "axis", np.float64, (3,), "canopies"),
+                float(c.get("wake_lag", 0.0)),
+            )
+        )
+    for surface in data.get("lifting_surfaces", []):
+        s.surfaces.append(
+            (
+                _array(surface, "triangles", np.int64, (-1,), "lifting_surfaces"),
+                _array(surface, "trailing", np.int64, (-1, 2), "lifting_surfaces"),
+            )
+        )
+    hinges = data.get("hinges", {})
+    s.hinges = _array(hinges, "particles", np.int64, (-1, 4), "hinges")
+    s.hinge_weights = _array(hinges, "weights", np.float64, (len(s.hinges), 4), "hinges")
+    s.hinge_stiffness = _array(hinges, "stiffness", np.float64, (len(s.hinges),), "hinges")
+    line = data.get("line", {})
+    s.tow, s.anchor_nail = int(line.get("tow", -1)), int(line.get("anchor_nail", -1))
+    s.chain = _array(line, "chain", np.int64, (-1,), "line")
+    s.line_drag = bool(line.get("drag", False))
+    s.payload = int(data.get("payload", -1))
+    s.parts = {str(k): np.asarray(val, dtype=np.int64) for k, val in data.get("parts", {}).items()}
+    s.stick_groups = {str(k): np.asarray(val, dtype=np.int64) for k, val in data.get("stick_groups", {}).items()}
+    s.curves = {str(k): [[int(i) for i in c] for c in val] for k, val in data.get("curves", {}).items()}
+    controls = data.get("controls", {})
+    s.control_sticks = _array(controls, "sticks", np.int64, (-1,), "controls")
+    s.control_grid = _array(controls, "grid", np.float64, (-1,), "controls")
+    g = len(s.control_grid)
+    s.control_rest = (
+        _array(controls, "rest", np.float64, (len(s.control_sticks) * g, g), "controls").reshape(-1, g, g)
+        if g
+        else s.control_rest
+    )
+    if len(s.control_sticks) and (g < 2 or s.control_grid[0] != -1.0 or s.control_grid[-1] != 1.0):
+        raise ValueError("controls.grid must run from -1 to 1 in two values or more")
+    if len(s.control_sticks) and (np.diff(s.control_grid) <= 0).any():
+        raise ValueError("controls.grid must increase")
+    if len(s.control_sticks) and (s.control_sticks.min() < 0 or s.control_sticks.max() >= len(s.sticks)):
+        raise ValueError(f"controls.sticks must name sticks among 0..{len(s.sticks) - 1}")
+    if (s.control_rest <= 0).any():
+        raise ValueError("controls.rest must be positive")
+    _check(s)
+    return s
+
+
+def _check(s: Structure) -> None:
+    """Refuse lists of unequal lengths and particle or triangle indices out of range (``ValueError``, one line)."""
+    n_sticks = len(s.sticks)
+    for key in ("rest", "weight", "compliance", "pretension"):
+        if len(getattr(s, key)) != n_sticks:
+            raise ValueError(f"sticks.{key} has {len(getattr(s, key))} values for {n_sticks} sticks")
+    if len(s.nail_targets) != len(s.nails) or len(s.drag_area) != len(s.drag):
+        raise ValueError("nails.targets and drag.areas must have one entry per nailed particle and drag body")
+    p = s.particle_count
+    particle_lists = {
+        "sticks.ends": s.sticks,
+        "nails.particles": s.nails,
+        "drag.particles": s.drag,
+        "hinges.particles": s.hinges,
+        "line.chain": s.chain,
+        "air.leading_edge": s.leading_edge[s.leading_edge[:, 0] >= 0] if len(s.leading_edge) else s.leading_edge,
+        **{f"parts.{k}": v for k, v in s.parts.items()},
+        **{f"lifting_surfaces.trailing ({k + 1})": tr for k, (_, tr) in enumerate(s.surfaces)},
+    }
+    for key, ids in particle_lists.items():
+        if len(ids) and (ids.min() < 0 or ids.max() >= p):
+            raise ValueError(
+                f"{key} names particle {int(ids.max() if ids.max() >= p else ids.min())}, not among 0..{p - 1}"
+            )
+    for key, ids in {
+        **{f"canopies ({k + 1}).triangles": c[0] for k, c in enumerate(s.canopies)},
+        **{f"lifting_surfaces ({k + 1}).triangles": f[0] for k, f in enumerate(s.surfaces)},
+    }.items():
+        if len(ids) == 0 or ids.min() < 0 or ids.max() >= s.triangles:
+            raise ValueError(f"{key} must name triangles among 0..{s.triangles - 1}")
+    for key, value in (("line.tow", s.tow), ("payload", s.payload)):
+        if not -1 <= value < p:
+            raise ValueError(f"{key} = {value} is not a particle among 0..{p - 1} (or -1: none)")
+    if not -1 <= s.anchor_nail < len(s.nails):
+        raise ValueError(f"line.anchor_nail = {s.anchor_nail} is not one of the {len(s.nails)} nails (or -1: none)")
+    if (s.mass < 0).any() or (np.delete(s.mass, s.nails) <= 0).any():
+        raise ValueError("particles.mass must be positive for every particle that is not nailed")
+    if (s.rest <= 0).any() or (s.weight <= 0).any() or (s.compliance < 0).any():
+        raise ValueError("sticks need positive rest ratios and weights, and compliances >= 0")
+
+
+def fits(structure: Structure, vertices: int, triangles: int, where: str) -> None:
+    """Refuse (``StructureError``, one line) a structure written for a mesh of other vertex or triangle counts."""
+    if (structure.vertices, structure.triangles) != (vertices, triangles):
+        raise StructureError(
+            f"{where}: written for a mesh of {structure.vertices} vertices and {structure.triangles} triangles, but "
+            f"the mesh has {vertices} and {triangles} (edited since its export?); re-export it, or remove "
+            "mesh.structure and describe the design with [[mesh.parts]]"
+        )

@@ -536,8 +536,13 @@ def _write_scene(single: Scene, record, out: Path, mesh: dict, left_out: list[st
     ``.toml``), its header naming the object and what was ``left_out``; returns its path."""
     text = single.as_mesh_design(mesh)
     scene_path = out.with_suffix(".toml")
+    holds = (
+        f"its cloth, and its whole model beyond the cloth's triangles in {mesh['structure']}"
+        if mesh.get("structure")
+        else "its cloth and its parts as a design of its own"
+    )
     header = [
-        f"# {record.kind} exported by warpsim export to {out.name}: its cloth and its parts as a design of its own.",
+        f"# {record.kind} exported by warpsim export to {out.name}: {holds}.",
         "# Run: warpsim run " + scene_path.name,
     ]
     if left_out:

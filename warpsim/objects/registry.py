@@ -163,7 +163,7 @@ OBJECTS: dict[str, ObjectSpec] = {
         measure_figures=mesh.mesh_figures,
         hud=mesh.mesh_hud,
         keys=(
-            *weight_shift_keys("your design's point masses", active=lambda record: len(record.shift_sticks) > 0),
+            *weight_shift_keys("your design's weight shift", active=lambda record: len(record.controlled_sticks()) > 0),
             line_walk_keys("your design", "cloth"),
         ),
         wind_limit=12.0,

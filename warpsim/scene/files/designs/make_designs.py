@@ -1,8 +1,10 @@
 """Write the mesh files of the shipped designs that are not built in: ``diamond_kite.obj`` (a two-stick diamond kite
-with a bowed spreader) and ``cross_canopy.glb`` (a flat cross parachute canopy). Run it from anywhere:
-``python warpsim/scene/files/designs/make_designs.py`` writes the shipped files beside itself, which the scenes
-``diamond_kite.toml`` and ``cross_canopy.toml`` beside the shipped scenes fly; ``--out DIR`` writes them to ``DIR``
-instead (a design of your own drawn from these: leave the shipped ones as they are).
+with a bowed spreader) and ``cross_canopy.glb`` (a flat cross parachute canopy), and the built-in kite, glider and
+parachute exported by ``warpsim export`` (``exported_kite.obj`` and ``exported_kite.structure.toml``, and so on).
+Run it from anywhere: ``python warpsim/scene/files/designs/make_designs.py`` writes the shipped files beside itself,
+which the scenes ``diamond_kite.toml``, ``cross_canopy.toml`` and ``exported_kite.toml``, ``exported_hang_glider.toml``
+and ``exported_parachute.toml`` beside the shipped scenes fly; ``--out DIR`` writes them all to ``DIR`` instead (a
+design of your own drawn from these: leave the shipped ones as they are).
 
 Both are drawn in a design's own axes (x forward, y left, z up, metres) and written by warpsim's own mesh writer, so
 that the files and their vertex numbering are the same on every machine (the scenes name vertices by index).
@@ -118,6 +120,32 @@ def arm_tip_corners(vertices: np.ndarray) -> np.ndarray:
     return np.flatnonzero(tip)
 
 
+EXPORTED = ("kite", "hang_glider", "parachute")
+"""The shipped scenes whose objects are shipped exported (``exported_<name>.toml``): issue 58's round trips."""
+
+
+def export_builtins(out: Path) -> list[Path]:
+    """Export the shipped scenes :data:`EXPORTED` into ``out`` (``exported_<name>.obj`` and its structure file); their
+    scenes go to ``out``'s parent, naming the files in ``out`` by their folder's name, when ``out`` is this script's
+    folder (the shipped scenes), else beside them. Returns the scenes written."""
+    from warpsim.io.mesh_export import export_design, structure_path
+    from warpsim.scene.scene import Scene
+
+    written = []
+    for name in EXPORTED:
+        mesh = out / f"exported_{name}.obj"
+        _, scene, _ = export_design(Scene.load(str(HERE.parent / f"{name}.toml")), mesh)
+        if out.resolve() == HERE:
+            text = scene.read_text(encoding="utf-8")
+            for path in (mesh, structure_path(mesh)):
+                text = text.replace(f'"{path.name}"', f'"{HERE.name}/{path.name}"')
+            scene.unlink()
+            scene = HERE.parent / scene.name
+            scene.write_text(text, encoding="utf-8")
+        written.append(scene)
+    return written
+
+
 def main(argv: list[str] | None = None) -> None:
     """Write both files (beside this script, or to ``--out DIR``) and print the vertex indices the scenes name."""
     import argparse
@@ -133,6 +161,8 @@ def main(argv: list[str] | None = None) -> None:
     v, t, g = cross_canopy()
     write_mesh(out / "cross_canopy.glb", v, t, g)
     print(f"cross_canopy.glb: {len(v)} vertices, {len(t)} triangles; arm-tip corners {arm_tip_corners(v).tolist()}")
+    for scene in export_builtins(out):
+        print(f"{scene.name}: flies {scene.stem.removeprefix('exported_')}.toml's object from its exported files")
 
 
 if __name__ == "__main__":

@@ -199,3 +199,21 @@ def test_the_exported_glider_flies_with_the_keys_in_the_viewer():
         assert viewer.sim.controls.get("roll", 0.0) == 0.0
     assert abs(headings[0]) > 10.0  # it turned
     assert headings[1] == pytest.approx(headings[0], abs=1.0)
+
+
+def test_the_exported_flag_keeps_its_hinges_and_nails_and_flaps_as_built(tmp_path):
+    """The flag's bending hinges and its nailed hoist go into the structure: its fly's flapping (the far corner's
+    height over 3-6 s) is the built-in's."""
+    scene = Scene.load(str(_export(tmp_path, "flag.toml", ".obj")))
+    flaps = []
+    for s in (Scene.load(str(ROOT / "scenes" / "flag.toml")), scene):
+        sim = Simulation(s)
+        q0 = sim.model.particle_q0
+        corner = int(np.argmax(q0[:, 0] + 1e-3 * q0[:, 2]))  # the fly's top corner
+        heights = []
+        sim.run(3.0)
+        sim.run(3.0, on_frame=lambda f, h=heights, c=corner: h.append(f.positions[c, 2]))
+        assert sim.model.hinge_count > 0 and sim.model.nail_count > 0
+        flaps.append(np.std(heights))
+    assert flaps[0] > 0.02  # it flaps
+    assert flaps[1] == pytest.approx(flaps[0], rel=0.01)

@@ -229,8 +229,14 @@ def _export_structure(single: Scene, model, record, tris: np.ndarray, out: Path)
         "points below; per-triangle lists follow the mesh's triangles.\n"
     )
     where.write_text(structure_text(structure, header), encoding="utf-8")
+    # a control that moves no stick or nail of the object steers nothing to lose (a glider's anchor, a kite's pitch)
+    steers = {
+        "pitch": len(record.controlled_sticks()) > 0,
+        "roll": len(record.controlled_sticks()) > 0,
+        "anchor": len(record.controlled_nails()) > 0,
+    }
     kept = ({"anchor"} if anchor >= 0 else set()) | ({"pitch", "roll"} if len(structure.control_sticks) else set())
-    lost = [c for c in registry.OBJECTS[record.kind].controls if c not in kept]
+    lost = [c for c in registry.OBJECTS[record.kind].controls if c not in kept and steers.get(c, True)]
     left_out = [f"its controls {', '.join(lost)} (a structure carries pitch, roll and a line's anchor)"] if lost else []
     mesh = {"file": out.name, "structure": where.name, "position": [float(origin[0]), float(origin[1]), height]}
     scene_path = _write_scene(single, record, out, mesh, left_out)

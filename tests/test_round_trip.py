@@ -158,8 +158,8 @@ def test_the_shipped_exports_are_the_builtins_as_they_are_built_now():
     from warpsim.scene.files.designs.make_designs import EXPORTED
 
     for name in EXPORTED:
-        shipped = Scene.load(f"exported_{name}").build_model("cpu", "test")
-        built = Scene.load(str(ROOT / "scenes" / f"{name}.toml")).build_model("cpu", "test")
+        shipped = Scene.load(f"exported_{Path(name).stem}").build_model("cpu", "test")
+        built = Scene.load(str(ROOT / "scenes" / name)).build_model("cpu", "test")
         assert (shipped.particle_count, shipped.stick_count, shipped.tri_count) == (
             built.particle_count,
             built.stick_count,

@@ -120,24 +120,27 @@ def arm_tip_corners(vertices: np.ndarray) -> np.ndarray:
     return np.flatnonzero(tip)
 
 
-EXPORTED = ("kite", "hang_glider", "parachute")
-"""The shipped scenes whose objects are shipped exported (``exported_<name>.toml``): issue 58's round trips."""
+EXPORTED = ("kite.toml", "hang_glider.toml", "parachute.toml")
+"""The shipped scenes whose objects are shipped exported (``exported_kite.toml``, ...): issue 58's round trips."""
 
 
 def export_builtins(out: Path) -> list[Path]:
-    """Export the shipped scenes :data:`EXPORTED` into ``out`` (``exported_<name>.obj`` and its structure file); their
-    scenes go to ``out``'s parent, naming the files in ``out`` by their folder's name, when ``out`` is this script's
-    folder (the shipped scenes), else beside them. Returns the scenes written."""
-    from warpsim.io.mesh_export import export_design, structure_path
-    from warpsim.scene.scene import Scene
+    """Export the shipped scenes :data:`EXPORTED` with ``warpsim export`` into ``out`` (``exported_kite.obj`` and
+    its structure file, ...); their scenes go to ``out``'s parent, naming the files in ``out`` by their folder's
+    name, when ``out`` is this script's folder (the shipped scenes), else beside them. Returns the scenes written.
+    (The command is run, not imported: this script sits in the scene layer, below the exporter.)"""
+    import subprocess
+    import sys
 
     written = []
     for name in EXPORTED:
-        mesh = out / f"exported_{name}.obj"
-        _, scene, _ = export_design(Scene.load(str(HERE.parent / f"{name}.toml")), mesh)
+        mesh = out / f"exported_{Path(name).stem}.obj"
+        command = [sys.executable, "-m", "warpsim", "export", str(HERE.parent / name), str(mesh), "--force"]
+        subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+        scene = mesh.with_suffix(".toml")
         if out.resolve() == HERE:
             text = scene.read_text(encoding="utf-8")
-            for path in (mesh, structure_path(mesh)):
+            for path in (mesh, mesh.with_name(mesh.stem + ".structure.toml")):
                 text = text.replace(f'"{path.name}"', f'"{HERE.name}/{path.name}"')
             scene.unlink()
             scene = HERE.parent / scene.name

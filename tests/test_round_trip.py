@@ -217,3 +217,62 @@ def test_the_exported_flag_keeps_its_hinges_and_nails_and_flaps_as_built(tmp_pat
         flaps.append(np.std(heights))
     assert flaps[0] > 0.02  # it flaps
     assert flaps[1] == pytest.approx(flaps[0], rel=0.01)
+
+
+def _first(table: dict) -> str:
+    return next(iter(table))
+
+
+@pytest.mark.parametrize(
+    ("edit", "said"),
+    [
+        (lambda d: d["particles"].pop("mass"), "particles has no 'mass'"),
+        (lambda d: d["curves"][_first(d["curves"])][0].__setitem__(0, 99999), "curves."),
+        (lambda d: d.pop("line"), "it has no 'line'"),
+        (lambda d: d.pop("canopies"), "it has no 'canopies'"),
+        (lambda d: d.__setitem__("payload", "x"), "payload must be a whole number"),
+        (lambda d: d.__setitem__("foo", 3), "unknown table or key 'foo'"),
+        (lambda d: d["sticks"].__setitem__("weigth", d["sticks"].pop("weight")), "did you mean 'weight'"),
+        (lambda d: d.__setitem__("vertices", d["vertices"] + 1), "written for a mesh of"),
+        (lambda d: d.__setitem__("format", "1"), "(the integer)"),
+        (lambda d: d["canopies"][0].__setitem__("axis", [0.0, 0.0, 0.0]), "axis"),
+        (lambda d: d["stick_groups"].__setitem__("extra", [99999]), "stick_groups.extra"),
+        (lambda d: d["sticks"]["ends"].__setitem__(0, [0.5, 1]), "whole numbers"),
+        (lambda d: d["line"].__setitem__("drag", "yes"), "line.drag"),
+        (lambda d: d["sticks"]["pretension"].__setitem__(0, -5.0), "pretension"),
+        (lambda d: d["canopies"][0].__setitem__("wake_lag", -1.0), "wake_lag"),
+    ],
+)
+def test_a_structure_with_a_missing_table_or_a_bad_value_gets_one_line(tmp_path, capsys, edit, said):
+    """A newcomer's trial: a bad curve index and a missing mass list gave tracebacks, missing tables ([line],
+    [[canopies]], [controls]...) were accepted and changed the flight without a word, and Python's own words
+    ("zip() argument 2 is shorter") stood for the message."""
+    import tomli_w
+    import tomllib
+
+    scene_path = _export(tmp_path, "parachute.toml", ".obj")
+    structure = tmp_path / "design.structure.toml"
+    data = tomllib.loads(structure.read_text())
+    edit(data)
+    structure.write_text(tomli_w.dumps(data))
+    assert main(["run", str(scene_path), "--seconds", "0.1"]) == EXIT_USAGE
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and said in err[0], err
+
+
+def test_a_renumbered_mesh_and_a_structure_turned_into_the_ground_get_one_line(tmp_path, capsys):
+    scene_path = _export(tmp_path, "kite.toml", ".obj")
+    mesh_path = tmp_path / "design.obj"
+    mesh = read_mesh(mesh_path)
+    order = np.arange(len(mesh.vertices))[::-1]  # a CAD tool's own vertex order: the same vertices, renumbered
+    where = np.argsort(order)
+    write_mesh(mesh_path, mesh.vertices[order], where[mesh.triangles], {"cloth": np.arange(len(mesh.triangles))})
+    assert main(["run", str(scene_path), "--seconds", "0.1"]) == EXIT_USAGE
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "renumbered" in err[0], err
+    (tmp_path / "again").mkdir()
+    scene_path = _export(tmp_path / "again", "kite.toml", ".obj")
+    # pitched 10 deg about the kite's centre, its anchor 30 m away goes 5 m into the ground
+    assert main(["run", str(scene_path), "--seconds", "0.1", "--set", "mesh.rotation=[0, -10, 0]"]) == EXIT_USAGE
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "below the terrain" in err[0], err

@@ -79,7 +79,9 @@ def add_parser(sub) -> None:
     export.add_argument("scene", metavar="SCENE")
     export.add_argument("output", metavar="OUT.obj|.glb|.gltf|.stl")
     export.add_argument(
-        "--force", action="store_true", help="replace OUT and OUT.toml where they exist (never the scene exported)"
+        "--force",
+        action="store_true",
+        help="replace OUT, OUT.toml and OUT.structure.toml where they exist (never what the export reads)",
     )
     export.add_argument(
         "--parts",

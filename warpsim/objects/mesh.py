@@ -22,7 +22,7 @@ from ..physics.terrain import Heightfield
 from .kite import anchor_pull, line_elevation
 from .mesh_file import SurfaceMesh, mesh_edges, read_mesh
 from .mesh_parts import LINE_DRAG_COEFFICIENT, Part, parse_parts, parts_schema, select, select_edges
-from .mesh_structure import fits, read_structure
+from .mesh_structure import check_numbering, read_structure
 
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254, "ft": 0.3048, "file": float("nan")}
 """Metres per unit of each ``mesh.units`` (``file``: the file's own, USD's ``metersPerUnit``)."""
@@ -168,9 +168,14 @@ def load_design(cfg: MeshConfig) -> tuple[SurfaceMesh, np.ndarray]:
     low, high = SIZE_RANGE
     if not low <= size <= high:
         hint = "mm" if size > high else "m"
+        fix = (
+            "its structure file is in metres: write the mesh in metres (warpsim export writes it so)"
+            if cfg.structure
+            else f"is its unit {hint!r}? (mesh.units, mesh.scale)"
+        )
         raise ValueError(
             f"{cfg.file}: the design spans {size:,.3g} m with units = {cfg.units!r} and scale = {cfg.scale:g}, outside "
-            f"{low:g}-{high:g} m; is its unit {hint!r}? (mesh.units, mesh.scale)"
+            f"{low:g}-{high:g} m; {fix}"
         )
     return mesh, design
 
@@ -259,11 +264,19 @@ def _build_structured(builder: ModelBuilder, cfg: MeshConfig, terrain: Heightfie
     """Add the design of ``cfg`` from its mesh and its structure file (:mod:`.mesh_structure`): the mesh's vertices
     and the structure's points as particles, its sticks, masses, nails, drag bodies, per-triangle air, canopies,
     lifting surfaces and hinges, turned by ``mesh.rotation`` and placed at ``mesh.position`` above ``terrain``."""
-    s = read_structure(cfg.structure)
     tris = mesh.triangles
-    fits(s, len(design), len(tris), cfg.structure)
+    s = read_structure(cfg.structure, len(design), len(tris))
+    check_numbering(s, tris, cfg.structure)
     rot, place, world = _placement(cfg, terrain, design)
-    positions = np.concatenate([world, place(s.points).reshape(-1, 3)])
+    points = place(s.points).reshape(-1, 3)
+    ground = np.asarray(terrain.height(points[:, 0], points[:, 1]), dtype=np.float64).reshape(-1)
+    if len(points) and (points[:, 2] < ground - 1e-6).any():
+        raise ValueError(
+            f"the design's structure is placed {float((ground - points[:, 2]).max()):.3g} m below the terrain at its "
+            "lowest (its line's anchor, a payload): mesh.rotation turns it about the design's origin; raise "
+            "mesh.position's height or turn it less"
+        )
+    positions = np.concatenate([world, points])
     p0 = builder.particle_count
     for x, m, v in zip(positions, s.mass, s.velocity @ rot.T, strict=True):
         builder.add_particle(x, m if m > 0.0 else 1.0, v)  # a nailed particle's mass is never used

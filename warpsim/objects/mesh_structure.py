@@ -165,7 +165,9 @@ _COMMENTS = {
     "pretension: the share shortened as built",
     "air": "per triangle: sail law (lift slope [1/rad], induced-drag factor, profile drag, stall [rad]), leading "
     "edge (particles, -1: none), chordwise loading",
-    "canopies": "whole-canopy air laws: triangles, table (C_T, C_N at 0, 5, ... 180 deg), axis, wake lag",
+    "canopies": "whole-canopy air laws: triangles, table (C_T, C_N on the nominal area at 0, 5, ... 180 deg), axis "
+    "(any length: the direction from the canopy's mouth to its apex, in the design's axes), wake lag (the side "
+    "force's lag, in canopy diameters travelled)",
     "lifting_surfaces": "the vortex law's surfaces: triangles and trailing edges (particle pairs)",
     "hinges": "bending stencils: four particles, their weights and a stiffness [N/m]",
     "line": "the line: the particle it hangs from, its anchor's nail, its particles from the anchor up, its drag",
@@ -214,16 +216,20 @@ def structure_text(structure: Structure, header: str = "") -> str:
     of rows one row per line; ``header`` (comment lines) first."""
     tables = structure.as_toml()
     lines = [header.rstrip("\n")] if header else []
-    lines += [f"{k} = {_value(v)}" for k, v in tables.items() if not isinstance(v, (dict, list))]
+    lines += [
+        "# vertices, triangles: the mesh this was written for; payload: the particle whose swing is measured (-1: none)"
+    ]
+    # plain keys and empty lists of tables first: a key written after a [table] header would belong to that table
+    lines += [f"{k} = {_value(v)}" for k, v in tables.items() if not isinstance(v, (dict, list)) or v == []]
     for name, table in tables.items():
         if isinstance(table, dict):
             lines += ["", f"# {_COMMENTS[name]}", f"[{name}]"]
             for key, v in table.items():
                 lines += _key_lines(key, v)
         elif isinstance(table, list):
-            lines += ["", f"# {_COMMENTS[name]}"]
             if not table:
-                lines.append(f"{name} = []")
+                continue
+            lines += ["", f"# {_COMMENTS[name]}"]
             for entry in table:
                 lines.append(f"[[{name}]]")
                 for key, v in entry.items():
@@ -231,9 +237,37 @@ def structure_text(structure: Structure, header: str = "") -> str:
     return "\n".join(lines) + "\n"
 
 
-def read_structure(path: str | Path) -> Structure:
-    """Read and check the structure file ``path``; :class:`StructureError` with one line naming the file and key on
-    a missing file, bad TOML, a list of the wrong length or an index out of range."""
+_TABLES = {
+    "points": ("position",),
+    "particles": ("mass", "velocity"),
+    "nails": ("particles", "targets"),
+    "drag": ("particles", "areas"),
+    "sticks": ("ends", "rest", "weight", "compliance", "pretension"),
+    "air": ("sail", "leading_edge", "loading"),
+    "hinges": ("particles", "weights", "stiffness"),
+    "line": ("tow", "anchor_nail", "chain", "drag"),
+    "controls": ("sticks", "grid", "rest"),
+    "parts": None,  # names of the file's choosing
+    "stick_groups": None,
+    "curves": None,
+}
+"""Each table of a structure file and its keys (None: keys named by the file)."""
+
+_LISTS = {"canopies": ("triangles", "table", "axis", "wake_lag"), "lifting_surfaces": ("triangles", "trailing")}
+"""Each list of tables (``[[canopies]]``) and its entries' keys."""
+
+_TOP = ("format", "vertices", "triangles", "payload")
+"""The file's plain top-level keys."""
+
+_OPTIONAL = ("controls",)
+"""What a file may leave out (an object without pitch and roll has no control table)."""
+
+
+def read_structure(path: str | Path, vertices: int | None = None, triangles: int | None = None) -> Structure:
+    """Read and check the structure file ``path``, written for a mesh of ``vertices`` and ``triangles`` (when given:
+    :func:`fits`); :class:`StructureError` with one line naming the file and key on a missing file, bad TOML, a
+    missing or unknown table or key, a value of the wrong type, a list of the wrong length or an index out of
+    range."""
     path = Path(path)
     if not path.is_file():
         raise StructureError(f"{path}: structure file not found (mesh.structure)")
@@ -242,24 +276,84 @@ def read_structure(path: str | Path) -> Structure:
             data = tomllib.load(f)
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
         raise StructureError(f"{path}: not a structure file: {str(err).splitlines()[0]}") from None
-    if data.get("format") != FORMAT:
-        raise StructureError(f"{path}: format = {data.get('format')!r}; this warpsim reads structure format {FORMAT}")
+    if "format" not in data:
+        raise StructureError(f"{path}: no format = {FORMAT} line; is it a structure file written by warpsim export?")
+    if type(data["format"]) is not int or data["format"] != FORMAT:
+        raise StructureError(
+            f"{path}: format = {data['format']!r}; this warpsim reads structure format {FORMAT} (the integer)"
+        )
     try:
+        _check_layout(data)
+        if vertices is not None and triangles is not None:
+            written = (_integer(data["vertices"], "vertices", 3), _integer(data["triangles"], "triangles", 1))
+            fits(written, vertices, triangles, str(path))
         return _structure_of(data)
-    except (KeyError, TypeError, ValueError) as err:
-        text = str(err).strip("'\"") if not isinstance(err, KeyError) else f"it has no {err.args[0]!r}"
-        raise StructureError(f"{path}: {text}") from None
+    except StructureError:
+        raise
+    except (TypeError, ValueError) as err:
+        raise StructureError(f"{path}: {str(err).strip()}") from None
+
+
+def _check_layout(data: dict) -> None:
+    """Refuse (``ValueError``, one line) a missing or unknown table or key, with the closest name."""
+    import difflib
+
+    known = set(_TABLES) | set(_LISTS) | set(_TOP)
+    for key in data:
+        if key not in known:
+            close = difflib.get_close_matches(key, sorted(known), n=1)
+            raise ValueError(f"unknown table or key {key!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
+    for key in (*_TOP, *_TABLES, *_LISTS):
+        if key not in data and key not in _OPTIONAL:
+            raise ValueError(f"it has no {key!r} (the export writes every table; re-export the design)")
+    for name, keys in _TABLES.items():
+        if name not in data:
+            continue
+        if not isinstance(data[name], dict):
+            raise ValueError(f"{name} must be a table ([{name}])")
+        if keys is not None:
+            _check_keys(name, data[name], keys)
+    for name, keys in _LISTS.items():
+        if not isinstance(data[name], list) or not all(isinstance(e, dict) for e in data[name]):
+            raise ValueError(f"{name} must be a list of tables ([[{name}]])")
+        for k, entry in enumerate(data[name]):
+            _check_keys(f"{name} ({k + 1})", entry, keys)
+
+
+def _check_keys(name: str, table: dict, keys: tuple) -> None:
+    import difflib
+
+    for key in table:
+        if key not in keys:
+            close = difflib.get_close_matches(key, keys, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ValueError(f"{name}: unknown key {key!r}{hint}; its keys are {', '.join(keys)}")
+    for key in keys:
+        if key not in table:
+            raise ValueError(f"{name} has no {key!r}")
+
+
+def _integer(value, name: str, low: int = -1) -> int:
+    """``value`` as an int of at least ``low``; ``ValueError`` naming ``name`` otherwise."""
+    if type(value) is not int or value < low:
+        raise ValueError(f"{name} must be a whole number of at least {low}, got {value!r}")
+    return value
 
 
 def _array(table: dict, key: str, dtype, shape: tuple, name: str) -> np.ndarray:
-    """``table[key]`` (the file's ``name.key``) as an array of ``dtype`` with ``shape`` (``-1``: any length); an
-    empty list fits any."""
-    values = table.get(key, [])
+    """``table[key]`` (the file's ``name.key``) as an array of ``dtype`` (whole numbers for an integer one) with
+    ``shape`` (``-1``: any length); an empty list fits any."""
+    values = table[key]
+    integer = np.issubdtype(dtype, np.integer)
     want = "a list of shape (" + ", ".join("any" if n == -1 else str(n) for n in shape) + ")"
+    kind = "whole numbers" if integer else "numbers"
     try:
-        a = np.asarray(values, dtype=dtype)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}.{key} must be {want} of numbers") from None
+        raw = np.asarray(values)
+    except ValueError:
+        raise ValueError(f"{name}.{key} must be {want} of {kind}") from None
+    if raw.size and (raw.dtype.kind not in ("iu" if integer else "iuf")):
+        raise ValueError(f"{name}.{key} must be {want} of {kind}")
+    a = raw.astype(dtype)
     if a.size == 0:
         return np.zeros((0, *shape[1:]), dtype=dtype)
     if a.ndim != len(shape) or any(s not in (-1, n) for s, n in zip(shape, a.shape, strict=True)):
@@ -270,8 +364,9 @@ def _array(table: dict, key: str, dtype, shape: tuple, name: str) -> np.ndarray:
 
 
 def _structure_of(data: dict) -> Structure:
-    """The :class:`Structure` of a structure file's tables ``data``, its lengths and indices checked."""
-    v, t = int(data["vertices"]), int(data["triangles"])
+    """The :class:`Structure` of a structure file's tables ``data`` (their layout checked by :func:`_check_layout`),
+    its types, lengths and indices checked."""
+    v, t = _integer(data["vertices"], "vertices", 3), _integer(data["triangles"], "triangles", 1)
     points = _array(data["points"], "position", np.float64, (-1, 3), "points")
     p = v + len(points)
     particles, sticks, air = data["particles"], data["sticks"], data["air"]
@@ -294,35 +389,53 @@ def _structure_of(data: dict) -> Structure:
         leading_edge=_array(air, "leading_edge", np.int64, (t, 2), "air"),
         loading=_array(air, "loading", np.float64, (t,), "air"),
     )
-    for c in data.get("canopies", []):
-        s.canopies.append(
-            (
-                _array(c, "triangles", np.int64, (-1,), "canopies"),
-                _array(c, "table", np.float64, (-1, 2), "canopies"),
-                _array(c, "axis", np.float64, (3,), "canopies"),
-                float(c.get("wake_lag", 0.0)),
-            )
-        )
-    for surface in data.get("lifting_surfaces", []):
+    if len(s.mass) != p or len(s.velocity) != p:
+        raise ValueError(f"particles.mass and particles.velocity need one entry for each of the {p} particles")
+    if len(s.sail) != t or len(s.leading_edge) != t or len(s.loading) != t:
+        raise ValueError(f"air.sail, air.leading_edge and air.loading need one entry for each of the {t} triangles")
+    from ..physics.kernels.canopy import TABLE_ROWS
+
+    for k, c in enumerate(data["canopies"]):
+        axis = _array(c, "axis", np.float64, (3,), f"canopies ({k + 1})")
+        lag = c["wake_lag"]
+        if type(lag) not in (int, float) or not 0.0 <= lag < 100.0:
+            raise ValueError(f"canopies ({k + 1}).wake_lag must be a number from 0 to 100, got {lag!r}")
+        if not np.linalg.norm(axis) > 0.0:
+            raise ValueError(f"canopies ({k + 1}).axis must point from the canopy's mouth to its apex, not be 0")
+        table = _array(c, "table", np.float64, (TABLE_ROWS, 2), f"canopies ({k + 1})")
+        s.canopies.append((_array(c, "triangles", np.int64, (-1,), f"canopies ({k + 1})"), table, axis, float(lag)))
+    for k, surface in enumerate(data["lifting_surfaces"]):
         s.surfaces.append(
             (
-                _array(surface, "triangles", np.int64, (-1,), "lifting_surfaces"),
-                _array(surface, "trailing", np.int64, (-1, 2), "lifting_surfaces"),
+                _array(surface, "triangles", np.int64, (-1,), f"lifting_surfaces ({k + 1})"),
+                _array(surface, "trailing", np.int64, (-1, 2), f"lifting_surfaces ({k + 1})"),
             )
         )
-    hinges = data.get("hinges", {})
+    hinges = data["hinges"]
     s.hinges = _array(hinges, "particles", np.int64, (-1, 4), "hinges")
     s.hinge_weights = _array(hinges, "weights", np.float64, (len(s.hinges), 4), "hinges")
     s.hinge_stiffness = _array(hinges, "stiffness", np.float64, (len(s.hinges),), "hinges")
-    line = data.get("line", {})
-    s.tow, s.anchor_nail = int(line.get("tow", -1)), int(line.get("anchor_nail", -1))
+    line = data["line"]
+    s.tow, s.anchor_nail = _integer(line["tow"], "line.tow"), _integer(line["anchor_nail"], "line.anchor_nail")
     s.chain = _array(line, "chain", np.int64, (-1,), "line")
-    s.line_drag = bool(line.get("drag", False))
-    s.payload = int(data.get("payload", -1))
-    s.parts = {str(k): np.asarray(val, dtype=np.int64) for k, val in data.get("parts", {}).items()}
-    s.stick_groups = {str(k): np.asarray(val, dtype=np.int64) for k, val in data.get("stick_groups", {}).items()}
-    s.curves = {str(k): [[int(i) for i in c] for c in val] for k, val in data.get("curves", {}).items()}
-    controls = data.get("controls", {})
+    if type(line["drag"]) is not bool:
+        raise ValueError(f"line.drag must be true or false, got {line['drag']!r}")
+    s.line_drag = line["drag"]
+    if (s.tow >= 0) != (s.anchor_nail >= 0) or (s.tow >= 0 and len(s.chain) < 2):
+        raise ValueError(
+            "a line needs its tow, its anchor_nail and a chain of two particles or more (all -1/empty: none)"
+        )
+    s.payload = _integer(data["payload"], "payload")
+    s.parts = {str(k): _array(data["parts"], k, np.int64, (-1,), "parts") for k in data["parts"]}
+    s.stick_groups = {
+        str(k): _array(data["stick_groups"], k, np.int64, (-1,), "stick_groups") for k in data["stick_groups"]
+    }
+    s.curves = {}
+    for k, chains in data["curves"].items():
+        if not isinstance(chains, list):
+            raise ValueError(f"curves.{k} must be a list of particle lists")
+        s.curves[str(k)] = [_array({k: c}, k, np.int64, (-1,), "curves").tolist() for c in chains]
+    controls = data.get("controls", {"sticks": [], "grid": [], "rest": []})
     s.control_sticks = _array(controls, "sticks", np.int64, (-1,), "controls")
     s.control_grid = _array(controls, "grid", np.float64, (-1,), "controls")
     g = len(s.control_grid)
@@ -331,6 +444,8 @@ def _structure_of(data: dict) -> Structure:
         if g
         else s.control_rest
     )
+    if len(s.control_rest) != len(s.control_sticks):
+        raise ValueError("controls.rest needs a grid of rows for each of controls.sticks")
     if len(s.control_sticks) and (g < 2 or s.control_grid[0] != -1.0 or s.control_grid[-1] != 1.0):
         raise ValueError("controls.grid must run from -1 to 1 in two values or more")
     if len(s.control_sticks) and (np.diff(s.control_grid) <= 0).any():
@@ -360,6 +475,7 @@ def _check(s: Structure) -> None:
         "line.chain": s.chain,
         "air.leading_edge": s.leading_edge[s.leading_edge[:, 0] >= 0] if len(s.leading_edge) else s.leading_edge,
         **{f"parts.{k}": v for k, v in s.parts.items()},
+        **{f"curves.{k}": np.asarray([i for c in v for i in c], dtype=np.int64) for k, v in s.curves.items()},
         **{f"lifting_surfaces.trailing ({k + 1})": tr for k, (_, tr) in enumerate(s.surfaces)},
     }
     for key, ids in particle_lists.items():
@@ -382,13 +498,33 @@ def _check(s: Structure) -> None:
         raise ValueError("particles.mass must be positive for every particle that is not nailed")
     if (s.rest <= 0).any() or (s.weight <= 0).any() or (s.compliance < 0).any():
         raise ValueError("sticks need positive rest ratios and weights, and compliances >= 0")
+    if (np.abs(s.pretension) >= 1.0).any():
+        raise ValueError("sticks.pretension must lie between -1 and 1 (the share a stick was shortened by)")
+    for k, ids in s.stick_groups.items():
+        if len(ids) and (ids.min() < 0 or ids.max() >= len(s.sticks)):
+            raise ValueError(f"stick_groups.{k} names a stick outside 0..{len(s.sticks) - 1}")
 
 
-def fits(structure: Structure, vertices: int, triangles: int, where: str) -> None:
-    """Refuse (``StructureError``, one line) a structure written for a mesh of other vertex or triangle counts."""
-    if (structure.vertices, structure.triangles) != (vertices, triangles):
+def fits(written: tuple[int, int], vertices: int, triangles: int, where: str) -> None:
+    """Refuse (``StructureError``, one line) a structure ``written`` for a mesh of (vertices, triangles) other than
+    ``vertices`` and ``triangles``."""
+    if tuple(written) != (vertices, triangles):
         raise StructureError(
-            f"{where}: written for a mesh of {structure.vertices} vertices and {structure.triangles} triangles, but "
+            f"{where}: written for a mesh of {written[0]} vertices and {written[1]} triangles, but "
             f"the mesh has {vertices} and {triangles} (edited since its export?); re-export it, or remove "
             "mesh.structure and describe the design with [[mesh.parts]]"
+        )
+
+
+def check_numbering(structure: Structure, triangles: np.ndarray, where: str) -> None:
+    """Refuse (``StructureError``, one line) a mesh whose triangles' edges are not the structure's sticks: its
+    vertices renumbered since the export (a CAD tool may reorder them), so that the structure's lists name other
+    vertices. A cloth has a stick on most of its edges; fewer than half found is taken for a renumbering."""
+    sticks = {(int(min(a, b)), int(max(a, b))) for a, b in structure.sticks}
+    edges = {(int(min(a, b)), int(max(a, b))) for t in triangles for a, b in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
+    if len(edges & sticks) < 0.5 * len(edges):
+        raise StructureError(
+            f"{where}: only {len(edges & sticks)} of the mesh's {len(edges)} edges are sticks of the structure: its "
+            "vertices were renumbered since the export (the same count, another order); re-export the design, or "
+            "keep the file's vertex order"
         )

@@ -74,6 +74,7 @@ def test_bad_atmosphere_settings_are_one_line(setting, message, capsys):
     assert code == 2 and message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
 
 
+@pytest.mark.slow
 def test_a_run_says_the_air_its_figures_depend_on(capsys):
     """The figures of a run in the standard atmosphere and in turbulence say so (the paper's constant air, the
     default, adds nothing)."""

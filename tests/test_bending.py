@@ -100,6 +100,7 @@ def test_a_bend_and_a_saddle_cost_what_a_plate_does():
     assert energy(lambda x, y: 0.5 * a * x**2) == pytest.approx(0.9 * 0.5 * bending * a**2 * area, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_a_cantilever_sags_as_euler_bernoulli_says():
     """A 1 m plate of 0.15 kg/m^2 and B = 5 N m, clamped (its first two columns nailed: zero slope halfway between
     them) and loaded by its weight alone, sags at its tip q L^4 / (8 B) (Euler-Bernoulli; q = mu g the load per
@@ -196,6 +197,7 @@ def _droop(shear_compliance: float) -> float:
     return float(np.mean([np.mean(q0[edge, 2] - p[edge, 2]) for _, p in flag_samples(sim, 5.0, after=1.0)]))
 
 
+@pytest.mark.slow
 def test_shear_compliance_is_the_woven_cloths_shear_stiffness():
     """flag.shear_compliance gives each cell's two diagonals their own compliance, so that the cloth's shear
     stiffness is G t = 1 / shear_compliance [N/m] whatever its threads' (each diagonal of stiffness k stretches

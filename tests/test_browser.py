@@ -320,6 +320,7 @@ def test_a_hundred_connects_and_disconnects_leave_the_flight_and_memory_unchange
     assert grown < 2_000_000, f"{grown} bytes more held after 100 pages came and went"
 
 
+@pytest.mark.slow
 def test_while_no_page_is_connected_the_flight_waits():
     """The server's flight stands still while nobody watches (it flew on to the end of --seconds unseen), and
     goes on when a page comes back; what was printed says so."""

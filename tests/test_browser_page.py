@@ -69,6 +69,7 @@ def _replayed(scene: str, log, frames: int) -> Viewer:
     return viewer
 
 
+@pytest.mark.slow
 def test_arrow_right_held_3_s_in_the_page_banks_the_glider_as_the_null_backend_does(chromium):
     from warpsim.objects.hang_glider import bank
 
@@ -115,6 +116,7 @@ def _held_seconds(viewer, backend, key: str) -> float:
     return (log[k + 1][0] - log[k][0]) * viewer.frame_interval
 
 
+@pytest.mark.slow
 def test_plus_held_in_the_page_ramps_the_wind_and_never_blows_the_kite_up(chromium):
     """+ held 1.5 s, then 3 s more: the wind rises at WIND_RATE while held, ends 1 to 2 m/s above where it was at
     the release (WIND_LEAD), never past the kite's limit; then + held 6 s stops at the limit (12 m/s)."""
@@ -174,6 +176,7 @@ def test_the_pages_keys_are_the_physical_keys_once_each_and_let_go_on_blur(chrom
     assert flown[-1] == () and ("W",) in flown and "anchor" in viewer.sim.controls
 
 
+@pytest.mark.slow
 def test_a_second_tab_watches_and_the_pilot_hands_over(chromium):
     viewer, backend = _browser_viewer("hang-glider")
     with _Flying(viewer):

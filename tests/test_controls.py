@@ -205,6 +205,7 @@ GLIDE = [{"time": 0.13, "pitch": 0.0}, {"time": 0.61, "pitch": 1.0, "ramp": True
         ("scenes/hang_glider_dive.toml", {"controls": GLIDE}, {"controls": GLIDE[:1] + [{**GLIDE[1], "time": 0.6}]}),
     ],
 )
+@pytest.mark.slow
 def test_a_flight_is_the_same_bit_for_bit_at_any_frame_rate_and_in_the_viewer(scene, overrides, other):
     """Gusts step with the solver and the schedule acts on the step grid (an entry at 0.13 s and a ramp, neither on
     a frame boundary of 10, 30 or 60 fps): the recorder's and the viewer's frame rates do not change the flight,

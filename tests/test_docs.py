@@ -48,6 +48,7 @@ def test_the_readme_stays_short():
     assert lines <= 250, f"README.md has {lines} lines; the manual's prose belongs in docs/"
 
 
+@pytest.mark.slow
 def test_the_manual_builds_without_warnings_and_renders_the_api(tmp_path):
     pytest.importorskip("sphinx")
     pytest.importorskip("myst_parser")

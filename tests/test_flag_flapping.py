@@ -5,6 +5,7 @@ import pytest
 from benchmarks.validation.flag_rows import FLAG_ITERATIONS_PER_RESOLUTION, flag_flapping
 
 
+@pytest.mark.slow
 def test_fine_flag_sticks_hold_with_iterations_in_proportion_to_resolution():
     """Resolution 33 with 28 iterations per particle along the flag (924) and Chebyshev 0.995: every stick within 2 %
     while it flaps (23 % at the paper's 55 iterations, 8.4 % at 220, 2.0-2.4 % at 440-800)."""

@@ -199,6 +199,7 @@ def _pitch_figures(fine: bool) -> dict:
 
 
 @pytest.mark.parametrize("fine", [False, True], ids=["dt0.01", "dt0.005"])
+@pytest.mark.slow
 def test_glider_dive_and_phugoid_misses_are_one_pitch_damping_lag(fine):
     """The glider's phugoid period gives its lag c = (T / T_L)^2 - 1 (measured 0.86 / 0.78); the point mass with that
     lag predicts the dive recovery (35.5 / 32.3 m against 37.4 / 35.3 m measured). A rigid tailless delta at the

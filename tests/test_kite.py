@@ -158,6 +158,7 @@ def launched():
 
 
 @pytest.mark.parametrize("dt", [0.005, 0.0025])
+@pytest.mark.slow
 def test_sail_trims_at_a_real_angle_of_attack_and_lifts_as_a_delta(launched, dt):
     # single-line deltas fly their sail at 10-25 deg with C_L about 0.6-1.0 (Hosking; issue 35); with the load
     # spread evenly over the sail (centre of pressure at the area centroid at every angle) it sat at ~5 deg with
@@ -173,6 +174,7 @@ def test_sail_trims_at_a_real_angle_of_attack_and_lifts_as_a_delta(launched, dt)
 # ms/220" and "kite in 3 m/s, beyond the ladder" track the light-wind trim (16.3 / 16.1 deg); see also the slow test
 # below
 @pytest.mark.parametrize("dt, wind", [(dt, wind) for dt in (0.005, 0.0025) for wind in (3.0, 6.0, 10.0)])
+@pytest.mark.slow
 def test_kite_launched_in_its_wind_flies_high_and_steady(launched, wind, dt):
     # line 40-70 deg, steady within 5 deg, less than 5 m to the side (issue 35's band), at the defaults and at dt
     # halved with the iterations doubled. Measured (5 ms/55, 2.5 ms/110): 52.4-53.1 / 54.2-54.7 deg and 0.1 / 0.0 m in

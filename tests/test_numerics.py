@@ -37,6 +37,7 @@ def _glide(overrides: dict, seconds: float = 60.0) -> tuple[float, float, float]
     return ratio, float(np.mean([s["airspeed"] for s in flown])), float(states[-1]["bank_deg"])
 
 
+@pytest.mark.slow
 def test_hands_off_glide_is_the_same_anywhere():
     """float64 positions: the glide 10 km from the origin or 3 km up is the one at the origin (with float32
     world coordinates it was 8.2 here and 10.3-18.5 five km away)."""

@@ -175,6 +175,7 @@ def _end_time(stage: str) -> float:
     return float(re.search(r"endTimeCode = ([0-9.e+-]+)", stage).group(1))
 
 
+@pytest.mark.slow
 def test_corrupted_recordings_fail_within_seconds_or_read_exactly(tmp_path):
     """Byte flips all over the file and cuts: ``convert`` ends with exit 2 and one line, or (a flip in unused
     bytes) writes exactly the stage of the pristine file; none waits in HDF5's retries."""

@@ -74,6 +74,7 @@ def _figures(scene: Scene, seconds: float) -> dict[str, float]:
         ("parachute.toml", ".obj", 40.0, ("sink", "swing")),
     ],
 )
+@pytest.mark.slow
 def test_a_builtin_exported_flies_its_figures_from_the_files(tmp_path, scene, suffix, seconds, figures):
     built = Scene.load(str(ROOT / "scenes" / scene))
     again = Scene.load(str(_export(tmp_path, scene, suffix)))
@@ -201,6 +202,7 @@ def test_the_exported_glider_flies_with_the_keys_in_the_viewer():
     assert headings[1] == pytest.approx(headings[0], abs=1.0)
 
 
+@pytest.mark.slow
 def test_the_exported_flag_keeps_its_hinges_and_nails_and_flaps_as_built(tmp_path):
     """The flag's bending hinges and its nailed hoist go into the structure: its fly's flapping (the far corner's
     height over 3-6 s) is the built-in's."""

@@ -401,6 +401,7 @@ except Exception as err:
 """
 
 
+@pytest.mark.slow
 def test_the_local_cluster_cannot_be_joined_by_another_process():
     """The default LocalCluster listened on 127.0.0.1 without TLS or authentication, and another local process ran
     its own function on a worker. Now every connection is mutual TLS with credentials made for this cluster: a

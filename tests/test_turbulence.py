@@ -26,6 +26,7 @@ def _kite(overrides: dict | None = None, **kwargs) -> Simulation:
     return Simulation(descriptor.merge("test", d, overrides or {}), **kwargs)
 
 
+@pytest.mark.slow
 def test_the_field_is_von_karmans_where_the_grid_holds_it():
     """The rows of docs/validation.md, sampled as the kernels sample (trilinearly, between the nodes): variance per
     component, integral length scale and every band of the one-point spectrum within 10 %, the two-point correlations

@@ -88,6 +88,7 @@ def test_lattice_glider_rows_at_both_time_steps():
     assert rows["keel never tail first"].ok and rows["phugoid period"].ok
 
 
+@pytest.mark.slow
 def test_kite_rows_pass_with_no_model_limit():
     rows = _rows("kite-angle")
     assert len(rows) == 2 and all(r.ok and not r.model_limit for r in rows.values()), list(rows.values())

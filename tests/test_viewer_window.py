@@ -165,6 +165,7 @@ def test_window_flight_replays_headless_bit_for_bit(glider_flight, tmp_path):
 
 
 @pytest.mark.display
+@pytest.mark.slow
 def test_window_counts_every_typed_plus_minus_and_question_mark(display, tmp_path):
     """'+' is typed as shift+=; pyglet on X reported only the first of three in a row (it took the key's release,
     reported unshifted as '=', for another key's), so the wind rose 1 m/s instead of 3. The window now reads

@@ -384,6 +384,7 @@ def test_bad_wake_settings_are_one_line(capsys):
         assert code == 2 and words in err and "\n" not in err, (setting, err)
 
 
+@pytest.mark.slow
 def test_a_shed_wake_flight_resumes_bit_for_bit_and_a_blow_up_starts_its_wake_afresh():
     """The checkpoint keeps the shed wake's rows, rings, rates and circulations: a lattice glider with a shed wake,
     checkpointed at 777 steps (between two sheddings and two factorisations) and restored, flies on exactly, also

@@ -1,9 +1,13 @@
-"""Any scene's cloth written as a mesh file, with a scene beside it that flies it as a design of its own
+"""Any scene's object written as a mesh file, with a scene beside it that flies it as a design of its own
 (``scene.object = "mesh"``): the way to take a built-in object to a CAD tool and back (``warpsim export``).
 
-The mesh holds the object's triangles (its parts as named groups); the scene holds what a mesh cannot: the cloth's
-areal density and stick compliance, and the parts read off the model (:mod:`warpsim.objects.mesh_parts`), each
-naming its vertices by the written file's own numbering (:func:`~warpsim.objects.mesh_file.file_numbering`):
+The mesh holds the object's triangles (its triangle parts as named groups). By default the rest of the model goes
+into a structure file beside it (:mod:`warpsim.objects.mesh_structure`): its particles off the cloth, every stick,
+mass and per-triangle air, canopies, lifting surfaces, hinges, nails, the line and the pitch/roll controls, numbered
+as the written mesh reads back, so that the object flies from the files as it flies built in.
+
+With ``parts`` the model is read off as ``[[mesh.parts]]`` instead (:mod:`warpsim.objects.mesh_parts`), each naming
+its vertices by the written file's own numbering (:func:`~warpsim.objects.mesh_file.file_numbering`):
 
 * the nailed cloth particles -> a ``nail``;
 * cloth sticks stiffer than the cloth's (weight > 1) -> a ``spar`` (not rigid), and the cloth particles tied to a
@@ -13,9 +17,8 @@ naming its vertices by the written file's own numbering (:func:`~warpsim.objects
   cloth particles its sticks reach through lighter particles (lines, straps, a control bar), with its drag area and,
   for a glider, the pilot's travel as its ``shift``.
 
-What the export leaves out is said in the scene file's header (a whole-canopy air law, bending hinges, the masses of
-lines and frames folded into the cloth's): a design flown from the export is the built-in's shape, not its every
-setting.
+That form says what it leaves out in the scene file's header (a whole-canopy air law, bending hinges, the masses of
+lines and frames folded into the cloth's): a design flown from it is the built-in's shape, not its every setting.
 """
 
 from __future__ import annotations

@@ -156,7 +156,8 @@ OBJECTS: dict[str, ObjectSpec] = {
             "solver": {"mass_splitting": True},
             "air": {"model": "sail"},
         },
-        summary="your own design from a mesh file (mesh.file) with its parts: spars, nails, a line, point masses",
+        summary="your own design from a mesh file (mesh.file) with its parts (spars, nails, a line, point masses) or "
+        "an export's structure file (mesh.structure)",
         controls=("pitch", "roll", "anchor"),
         apply_controls=mesh.apply_controls,
         figures=mesh.MESH_FIGURES,

@@ -140,6 +140,11 @@ def export_builtins(out: Path) -> list[Path]:
         scene = mesh.with_suffix(".toml")
         if out.resolve() == HERE:
             text = scene.read_text(encoding="utf-8")
+            title = (
+                f"# The {Path(name).stem} scene flown from its export (designs/{mesh.name} and its structure file): "
+                "issue 58's round trip, the built-in's figures from the files.\n"
+            )
+            text = title + text
             for path in (mesh, mesh.with_name(mesh.stem + ".structure.toml")):
                 text = text.replace(f'"{path.name}"', f'"{HERE.name}/{path.name}"')
             scene.unlink()

@@ -4,6 +4,7 @@ particles; and a structure that no longer fits its mesh, or a bad one, is refuse
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +13,7 @@ import pytest
 from warpsim.cli.main import EXIT_USAGE, main
 from warpsim.objects.kite import anchor_pull
 from warpsim.objects.mesh_file import read_mesh, write_mesh
+from warpsim.objects.mesh_structure import FORMAT, read_structure, structure_text
 from warpsim.run.simulation import Simulation
 from warpsim.scene.scene import Scene
 
@@ -126,11 +128,15 @@ def test_a_reshaped_mesh_is_at_rest_in_its_new_shape_and_an_edited_one_is_refuse
 @pytest.mark.parametrize(
     ("edit", "said"),
     [
-        (lambda t: t.replace("format = 1", "format = 9"), "structure format 1"),
+        (lambda t: t.replace(f"format = {FORMAT}", "format = 9"), f"structure format {FORMAT}"),
         (lambda t: t.replace("[sticks]", "[sticks\n"), "not a structure file"),
         (lambda t: t.replace("payload = ", "payload = 9999 #"), "payload = 9999"),
-        (lambda t: t.replace("ends = [\n    [", "ends = [\n    [99999, "), "sticks.ends"),
-        (lambda t: t.replace("[particles]\nmass = [", "[particles]\nmass = [-1.0, "), "particles.mass"),
+        # the first stick's first end out of range, and a row of three ends
+        (lambda t: re.sub(r"(ends = \[\n    \[)\d+", r"\g<1>99999", t, count=1), "sticks.ends names particle 99999"),
+        (lambda t: t.replace("ends = [\n    [", "ends = [\n    [7, "), "sticks.ends must be a list of shape (any, 2)"),
+        # the first particle's mass negative, and one mass too many
+        (lambda t: re.sub(r"(\[particles\]\nmass = \[)[^,]+", r"\g<1>-1.0", t), "particles.mass must be positive"),
+        (lambda t: t.replace("[particles]\nmass = [", "[particles]\nmass = [1.0, "), "particles.mass must be a list"),
     ],
 )
 def test_a_bad_structure_file_gets_one_line(tmp_path, capsys, edit, said):
@@ -243,6 +249,13 @@ def _first(table: dict) -> str:
         (lambda d: d["line"].__setitem__("drag", "yes"), "line.drag"),
         (lambda d: d["sticks"]["pretension"].__setitem__(0, -5.0), "pretension"),
         (lambda d: d["canopies"][0].__setitem__("wake_lag", -1.0), "wake_lag"),
+        # empty lists where the structure sets the length (they slipped past the shape check)
+        (lambda d: d["canopies"][0].__setitem__("table", []), "canopies (1).table must be a list of shape (37, 2)"),
+        (lambda d: d["faces"].__setitem__("corners", []), "faces.corners must be a list of shape"),
+        (lambda d: d["air"].__setitem__("loading", []), "air.loading must be a list of shape"),
+        (lambda d: d.pop("controls"), "it has no 'controls'"),
+        (lambda d: d.pop("faces"), "it has no 'faces'"),
+        (lambda d: d["air"]["leading_edge"].__setitem__(0, [-1, 3]), "air.leading_edge"),
     ],
 )
 def test_a_structure_with_a_missing_table_or_a_bad_value_gets_one_line(tmp_path, capsys, edit, said):
@@ -260,6 +273,81 @@ def test_a_structure_with_a_missing_table_or_a_bad_value_gets_one_line(tmp_path,
     assert main(["run", str(scene_path), "--seconds", "0.1"]) == EXIT_USAGE
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and said in err[0], err
+
+
+def test_hinge_weights_of_the_wrong_length_get_one_line(tmp_path, capsys):
+    """The flag's structure with its hinges' weights emptied: one line, not zip()'s words."""
+    import tomli_w
+    import tomllib
+
+    scene_path = _export(tmp_path, "flag.toml", ".obj")
+    structure = tmp_path / "design.structure.toml"
+    data = tomllib.loads(structure.read_text())
+    assert len(data["hinges"]["particles"]) > 0
+    data["hinges"]["weights"] = []
+    structure.write_text(tomli_w.dumps(data))
+    assert main(["run", str(scene_path), "--seconds", "0.1"]) == EXIT_USAGE
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "hinges.weights must be a list of shape" in err[0], err
+
+
+@pytest.mark.parametrize(
+    ("change", "said"),
+    [
+        (lambda t: t[::-1], "reordered"),  # a CAD tool's own face order: the same triangles
+        (lambda t: np.concatenate([t[:1, ::-1], t[1:]]), "turned over"),
+        (lambda t: np.roll(t, 1, axis=1), None),  # each triangle's corners rotated: the same triangles
+    ],
+)
+def test_reordered_or_turned_triangles_are_refused_and_rotated_corners_fly(tmp_path, capsys, change, said):
+    """The structure's per-triangle air follows the triangles as written: a mesh whose faces come back in another
+    order (the vertices untouched) was built with other triangles' air without a word."""
+    scene_path = _export(tmp_path, "kite.toml", ".obj")
+    mesh_path = tmp_path / "design.obj"
+    mesh = read_mesh(mesh_path)
+    write_mesh(mesh_path, mesh.vertices, change(mesh.triangles), {"cloth": np.arange(len(mesh.triangles))})
+    code = main(["run", str(scene_path), "--seconds", "0.1"])
+    err = capsys.readouterr().err.strip().splitlines()
+    if said is None:
+        assert code == 0, err
+        return
+    assert code == EXIT_USAGE
+    assert len(err) == 1 and said in err[0] and "re-export" in err[0], err
+
+
+def test_names_with_spaces_and_dots_are_written_and_read_back(tmp_path):
+    """Part, stick-group and curve names are the file's own keys: quoted where TOML needs it."""
+    shipped = ROOT / "warpsim" / "scene" / "files" / "designs" / "exported_kite.structure.toml"
+    s = read_structure(shipped)
+    s.parts["left tip"] = s.parts[_first(s.parts)]
+    s.stick_groups["spar.1"] = np.arange(3)
+    s.curves['a "quoted" line'] = [[0, 1, 2]]
+    path = tmp_path / "s.structure.toml"
+    path.write_text(structure_text(s))
+    again = read_structure(path)
+    np.testing.assert_array_equal(again.parts["left tip"], s.parts["left tip"])
+    np.testing.assert_array_equal(again.stick_groups["spar.1"], [0, 1, 2])
+    assert again.curves['a "quoted" line'] == [[0, 1, 2]]
+
+
+def test_parts_export_of_a_structured_glider_says_it_drops_the_weight_shift(tmp_path, capsys):
+    out = tmp_path / "parts.obj"
+    assert main(["export", "exported_hang_glider", str(out), "--parts"]) == 0
+    said = capsys.readouterr().out
+    assert "left out: its pitch and roll" in said, said
+    assert not (tmp_path / "parts.structure.toml").exists()
+
+
+def test_a_stale_structure_beside_an_own_design_export_is_left_alone(tmp_path, capsys):
+    """An own design from [[mesh.parts]] is written back without a structure: a structure file of that name
+    already there is neither a reason to refuse nor reported as written."""
+    out = tmp_path / "k.obj"
+    stale = tmp_path / "k.structure.toml"
+    stale.write_text("# stale\n")
+    assert main(["export", str(ROOT / "scenes" / "diamond_kite.toml"), str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "k.structure.toml" not in said, said
+    assert stale.read_text() == "# stale\n"
 
 
 def test_a_renumbered_mesh_and_a_structure_turned_into_the_ground_get_one_line(tmp_path, capsys):

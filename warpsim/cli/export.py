@@ -13,7 +13,7 @@ def command(args) -> int:
     """Export the scene's object as a mesh file and a mesh scene."""
     from pathlib import Path
 
-    from ..io.mesh_export import export_design, structure_path
+    from ..io.mesh_export import export_design, structure_path, writes_structure
     from .common import load_scene
 
     out = Path(args.output)
@@ -22,30 +22,30 @@ def command(args) -> int:
     if not out.parent.is_dir():
         raise UsageError(f"{out}: its folder {out.parent} does not exist")
     scene, _ = load_scene(args, worlds_from_vary=False)
-    _check_outputs(out, scene, args.force, args.parts)
+    structured = writes_structure(scene, args.parts)
+    _check_outputs(out, scene, args.force, structured)
     interruptible()  # the files are written next
     try:
         mesh, scene, left_out = export_design(scene, out, parts=args.parts)
     except ValueError as err:
         raise UsageError(str(err)) from None
-    structure = structure_path(mesh)
-    also = f", {structure}" if not args.parts and structure.exists() else ""
+    also = f", {structure_path(mesh)}" if structured else ""
     print(f"{args.scene} -> {mesh}{also} and {scene}")
     for item in left_out:
         print(f"  left out: {item}")
     return 0
 
 
-def _check_outputs(out, scene, force: bool, parts: bool) -> None:
+def _check_outputs(out, scene, force: bool, structured: bool) -> None:
     """Refuse, before anything is written, to write over what the export reads (:func:`~.common.same_file_check`:
     the scene's file, found by name or path, its meshes or terrain, in any world) at all, over a folder, and over
     other files or links that exist unless ``force`` (a link is then removed, never written through): an export once
-    replaced a hand-written design it was asked to export. ``parts``: no structure file is written."""
+    replaced a hand-written design it was asked to export. ``structured``: a structure file is written too."""
     from ..io.mesh_export import structure_path
     from .common import same_file_check, scene_sources
 
     written = {"export": out, "its scene": out.with_suffix(".toml")}
-    if not parts:
+    if structured:
         written["its structure"] = structure_path(out)
     same_file_check(scene_sources(scene), written, "what the export reads")
     for path in written.values():

@@ -151,6 +151,15 @@ def structure_path(out: Path) -> Path:
     return out.with_name(out.stem + STRUCTURE_SUFFIX)
 
 
+def writes_structure(scene: Scene, parts: bool = False) -> bool:
+    """Whether :func:`export_design` of ``scene`` (with ``parts``) writes a structure file: it does for a built-in
+    object and for a design flown from a structure, unless ``parts``; a design of one's own from ``[[mesh.parts]]``
+    is written back as it was read, without one."""
+    if parts:
+        return False
+    return scene.kind != MESH or bool(scene.table(section(MESH)).get("structure"))
+
+
 def _export_structure(single: Scene, model, record, tris: np.ndarray, out: Path) -> tuple[Path, Path, list[str]]:
     """Write the object's cloth as the mesh file ``out`` (its triangle parts as groups), its whole model beyond the
     triangles as the structure file beside it (:func:`structure_path`) in the numbering the mesh reads back with, and
@@ -195,6 +204,7 @@ def _export_structure(single: Scene, model, record, tris: np.ndarray, out: Path)
     structure = Structure(
         vertices=len(cloth),
         triangles=len(tris),
+        corners=np.asarray(back.triangles, dtype=np.int64),
         points=q0[off] - origin,
         velocity=np.asarray(model.particle_qd0, dtype=np.float64)[every],
         mass=mass[every],
@@ -302,14 +312,11 @@ def _nearest(found: np.ndarray, wanted: np.ndarray) -> np.ndarray:
 def _triangle_order(found: np.ndarray, wanted: np.ndarray) -> np.ndarray:
     """For each triangle of ``wanted`` ``[T, 3]`` (vertex indices), the index of the same triangle, corners in the
     same cyclic order, in ``found``; ``ValueError`` when one is missing or turned over."""
+    from ..objects.mesh_structure import _cyclic
 
-    def key(t: np.ndarray) -> np.ndarray:  # each triangle from its smallest corner, in its own cyclic order
-        start = np.argmin(t, axis=1)
-        return np.stack([t[np.arange(len(t)), (start + k) % 3] for k in range(3)], axis=1)
-
-    found_keys = {tuple(k): i for i, k in enumerate(key(found).tolist())}
+    found_keys = {tuple(k): i for i, k in enumerate(_cyclic(found).tolist())}
     try:
-        return np.array([found_keys[tuple(k)] for k in key(wanted).tolist()], dtype=np.int64)
+        return np.array([found_keys[tuple(k)] for k in _cyclic(wanted).tolist()], dtype=np.int64)
     except KeyError:
         raise ValueError("the mesh read back lost or turned over one of the cloth's triangles") from None
 
@@ -387,6 +394,8 @@ def _left_out_by_flying(model, record, scene_path: Path) -> list[str]:
     lost = [c for c in registry.OBJECTS[record.kind].controls if c not in kept]
     if lost:
         out.append(f"its controls {', '.join(lost)} (a design has {', '.join(sorted(kept))})")
+    if len(record.controlled_sticks()) and not len(again.objects[0].controlled_sticks()):
+        out.append("its pitch and roll (no mass of the written parts shifts: give one a shift)")
     return out
 
 

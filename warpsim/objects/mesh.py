@@ -22,7 +22,7 @@ from ..physics.terrain import Heightfield
 from .kite import anchor_pull, line_elevation
 from .mesh_file import SurfaceMesh, mesh_edges, read_mesh
 from .mesh_parts import LINE_DRAG_COEFFICIENT, Part, parse_parts, parts_schema, select, select_edges
-from .mesh_structure import check_numbering, read_structure
+from .mesh_structure import check_faces, read_structure
 
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254, "ft": 0.3048, "file": float("nan")}
 """Metres per unit of each ``mesh.units`` (``file``: the file's own, USD's ``metersPerUnit``)."""
@@ -266,7 +266,7 @@ def _build_structured(builder: ModelBuilder, cfg: MeshConfig, terrain: Heightfie
     lifting surfaces and hinges, turned by ``mesh.rotation`` and placed at ``mesh.position`` above ``terrain``."""
     tris = mesh.triangles
     s = read_structure(cfg.structure, len(design), len(tris))
-    check_numbering(s, tris, cfg.structure)
+    check_faces(s, tris, cfg.structure)
     rot, place, world = _placement(cfg, terrain, design)
     points = place(s.points).reshape(-1, 3)
     ground = np.asarray(terrain.height(points[:, 0], points[:, 1]), dtype=np.float64).reshape(-1)

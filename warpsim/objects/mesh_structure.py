@@ -20,14 +20,15 @@ export (edited in a CAD tool) is refused in one line, since the structure's list
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import tomllib
 
-FORMAT = 1
-"""The structure file's format version (``format`` in it)."""
+FORMAT = 2
+"""The structure file's format version (``format`` in it; 2 added ``[faces]``, the mesh's triangles as written)."""
 
 
 class StructureError(ValueError):
@@ -41,6 +42,9 @@ class Structure:
 
     Attributes:
         vertices, triangles: the mesh's vertex and triangle counts it was written for.
+        corners: ``[T, 3]`` each triangle's vertices as the mesh was written and reads back, so that a mesh whose
+            triangles were reordered or renumbered since (a CAD tool may) is refused rather than given other
+            triangles' air.
         points: ``[P - V, 3]`` the particles off the mesh, in the design's coordinates [m].
         velocity: ``[P, 3]`` every particle's velocity at the start [m/s], in the design's axes.
         mass: ``[P]`` every particle's mass [kg] (0 for a nailed particle: it does not move).
@@ -67,6 +71,7 @@ class Structure:
 
     vertices: int
     triangles: int
+    corners: np.ndarray
     points: np.ndarray
     velocity: np.ndarray
     mass: np.ndarray
@@ -113,6 +118,7 @@ class Structure:
             "format": FORMAT,
             "vertices": self.vertices,
             "triangles": self.triangles,
+            "faces": {"corners": plain(self.corners)},
             "points": {"position": plain(self.points)},
             "particles": {"mass": plain(self.mass), "velocity": plain(self.velocity)},
             "nails": {"particles": plain(self.nails), "targets": plain(self.nail_targets)},
@@ -146,17 +152,17 @@ class Structure:
             "stick_groups": {k: plain(v) for k, v in self.stick_groups.items()},
             "curves": {k: [plain(c) for c in v] for k, v in self.curves.items()},
         }
-        if len(self.control_sticks):
-            g = len(self.control_grid)
-            out["controls"] = {
-                "sticks": plain(self.control_sticks),
-                "grid": plain(self.control_grid),
-                "rest": plain(np.asarray(self.control_rest).reshape(-1, g)),  # stick after stick, a row per pitch
-            }
+        g = len(self.control_grid)
+        out["controls"] = {  # written empty for an object without pitch and roll, so that a lost table is refused
+            "sticks": plain(self.control_sticks),
+            "grid": plain(self.control_grid),
+            "rest": plain(np.asarray(self.control_rest).reshape(-1, g)) if g else [],  # a row per pitch, per stick
+        }
         return out
 
 
 _COMMENTS = {
+    "faces": "each triangle's three vertices, as the mesh was written (checked against the mesh when it is read)",
     "points": "the particles off the mesh, numbered after its vertices: positions in the design's coordinates [m]",
     "particles": "every particle (the mesh's vertices, then the points): mass [kg] (0: nailed), velocity [m/s]",
     "nails": "the nailed particles and where each is held [m]",
@@ -194,8 +200,17 @@ def _value(v) -> str:
     return "[" + ", ".join(_value(x) for x in v) + "]"
 
 
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+
+
+def _key(name: str) -> str:
+    """``name`` as a TOML key: bare when it can be, quoted otherwise (a part called ``left tip`` or ``a.b``)."""
+    return name if _BARE_KEY.fullmatch(name) else _value(str(name))
+
+
 def _key_lines(key: str, v) -> list[str]:
     """``key = v``, a list of lists one row per line, a long flat list wrapped."""
+    key = _key(key)
     if isinstance(v, list) and v and isinstance(v[0], list):
         return [f"{key} = ["] + [f"    {_value(row)}," for row in v] + ["]"]
     text = f"{key} = {_value(v)}"
@@ -238,6 +253,7 @@ def structure_text(structure: Structure, header: str = "") -> str:
 
 
 _TABLES = {
+    "faces": ("corners",),
     "points": ("position",),
     "particles": ("mass", "velocity"),
     "nails": ("particles", "targets"),
@@ -259,9 +275,6 @@ _LISTS = {"canopies": ("triangles", "table", "axis", "wake_lag"), "lifting_surfa
 _TOP = ("format", "vertices", "triangles", "payload")
 """The file's plain top-level keys."""
 
-_OPTIONAL = ("controls",)
-"""What a file may leave out (an object without pitch and roll has no control table)."""
-
 
 def read_structure(path: str | Path, vertices: int | None = None, triangles: int | None = None) -> Structure:
     """Read and check the structure file ``path``, written for a mesh of ``vertices`` and ``triangles`` (when given:
@@ -269,6 +282,8 @@ def read_structure(path: str | Path, vertices: int | None = None, triangles: int
     missing or unknown table or key, a value of the wrong type, a list of the wrong length or an index out of
     range."""
     path = Path(path)
+    if path.is_dir():
+        raise StructureError(f"{path}: is a folder, not a structure file (mesh.structure)")
     if not path.is_file():
         raise StructureError(f"{path}: structure file not found (mesh.structure)")
     try:
@@ -276,6 +291,8 @@ def read_structure(path: str | Path, vertices: int | None = None, triangles: int
             data = tomllib.load(f)
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
         raise StructureError(f"{path}: not a structure file: {str(err).splitlines()[0]}") from None
+    except OSError as err:
+        raise StructureError(f"{path}: cannot be read: {err.strerror or err}") from None
     if "format" not in data:
         raise StructureError(f"{path}: no format = {FORMAT} line; is it a structure file written by warpsim export?")
     if type(data["format"]) is not int or data["format"] != FORMAT:
@@ -304,7 +321,7 @@ def _check_layout(data: dict) -> None:
             close = difflib.get_close_matches(key, sorted(known), n=1)
             raise ValueError(f"unknown table or key {key!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
     for key in (*_TOP, *_TABLES, *_LISTS):
-        if key not in data and key not in _OPTIONAL:
+        if key not in data:
             raise ValueError(f"it has no {key!r} (the export writes every table; re-export the design)")
     for name, keys in _TABLES.items():
         if name not in data:
@@ -354,7 +371,9 @@ def _array(table: dict, key: str, dtype, shape: tuple, name: str) -> np.ndarray:
     if raw.size and (raw.dtype.kind not in ("iu" if integer else "iuf")):
         raise ValueError(f"{name}.{key} must be {want} of {kind}")
     a = raw.astype(dtype)
-    if a.size == 0:
+    if a.size == 0 and a.shape[:1] == (0,):  # an empty list: no rows, which a list of a set length must allow
+        if shape[0] not in (-1, 0):
+            raise ValueError(f"{name}.{key} must be {want}, got an empty list")
         return np.zeros((0, *shape[1:]), dtype=dtype)
     if a.ndim != len(shape) or any(s not in (-1, n) for s, n in zip(shape, a.shape, strict=True)):
         raise ValueError(f"{name}.{key} must be {want}, got {a.shape}")
@@ -373,6 +392,7 @@ def _structure_of(data: dict) -> Structure:
     s = Structure(
         vertices=v,
         triangles=t,
+        corners=_array(data["faces"], "corners", np.int64, (t, 3), "faces"),
         points=points,
         velocity=_array(particles, "velocity", np.float64, (p, 3), "particles"),
         mass=_array(particles, "mass", np.float64, (p,), "particles"),
@@ -435,7 +455,7 @@ def _structure_of(data: dict) -> Structure:
         if not isinstance(chains, list):
             raise ValueError(f"curves.{k} must be a list of particle lists")
         s.curves[str(k)] = [_array({k: c}, k, np.int64, (-1,), "curves").tolist() for c in chains]
-    controls = data.get("controls", {"sticks": [], "grid": [], "rest": []})
+    controls = data["controls"]
     s.control_sticks = _array(controls, "sticks", np.int64, (-1,), "controls")
     s.control_grid = _array(controls, "grid", np.float64, (-1,), "controls")
     g = len(s.control_grid)
@@ -489,6 +509,10 @@ def _check(s: Structure) -> None:
     }.items():
         if len(ids) == 0 or ids.min() < 0 or ids.max() >= s.triangles:
             raise ValueError(f"{key} must name triangles among 0..{s.triangles - 1}")
+    if len(s.corners) and (s.corners.min() < 0 or s.corners.max() >= s.vertices):
+        raise ValueError(f"faces.corners must name vertices among 0..{s.vertices - 1}")
+    if len(s.leading_edge) and ((s.leading_edge[:, 0] < 0) != (s.leading_edge[:, 1] < 0)).any():
+        raise ValueError("air.leading_edge: each row names two particles, or is [-1, -1] (no leading edge)")
     for key, value in (("line.tow", s.tow), ("payload", s.payload)):
         if not -1 <= value < p:
             raise ValueError(f"{key} = {value} is not a particle among 0..{p - 1} (or -1: none)")
@@ -516,15 +540,31 @@ def fits(written: tuple[int, int], vertices: int, triangles: int, where: str) ->
         )
 
 
-def check_numbering(structure: Structure, triangles: np.ndarray, where: str) -> None:
-    """Refuse (``StructureError``, one line) a mesh whose triangles' edges are not the structure's sticks: its
-    vertices renumbered since the export (a CAD tool may reorder them), so that the structure's lists name other
-    vertices. A cloth has a stick on most of its edges; fewer than half found is taken for a renumbering."""
-    sticks = {(int(min(a, b)), int(max(a, b))) for a, b in structure.sticks}
-    edges = {(int(min(a, b)), int(max(a, b))) for t in triangles for a, b in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
-    if len(edges & sticks) < 0.5 * len(edges):
-        raise StructureError(
-            f"{where}: only {len(edges & sticks)} of the mesh's {len(edges)} edges are sticks of the structure: its "
-            "vertices were renumbered since the export (the same count, another order); re-export the design, or "
-            "keep the file's vertex order"
-        )
+def _cyclic(t: np.ndarray) -> np.ndarray:
+    """Each triangle of ``t`` ``[T, 3]`` from its smallest corner, in its own cyclic order (a triangle read with its
+    corners rotated, as a format conversion may, is the same triangle)."""
+    start = np.argmin(t, axis=1)
+    return np.stack([t[np.arange(len(t)), (start + k) % 3] for k in range(3)], axis=1)
+
+
+def check_faces(structure: Structure, triangles: np.ndarray, where: str) -> None:
+    """Refuse (``StructureError``, one line) a mesh whose triangles ``[T, 3]`` are not the structure's ``corners``
+    (each up to a rotation of its corners): reordered since the export, turned over, or on renumbered vertices (a
+    CAD tool may do any of these), since the structure's per-triangle and per-particle lists would then describe
+    other triangles and vertices."""
+    mesh, written = _cyclic(np.asarray(triangles, dtype=np.int64)), _cyclic(structure.corners)
+    differ = np.flatnonzero((mesh != written).any(axis=1))
+    if not len(differ):
+        return
+    k = int(differ[0])
+    first = f"triangle {k} is {mesh[k].tolist()}, the structure's {written[k].tolist()}"
+    if sorted(map(tuple, mesh.tolist())) == sorted(map(tuple, written.tolist())):
+        why = "its triangles were reordered since the export (the same triangles in another order)"
+    elif sorted(map(tuple, np.sort(mesh, axis=1).tolist())) == sorted(map(tuple, np.sort(written, axis=1).tolist())):
+        why = "some of its triangles were turned over since the export (their corners in the other order)"
+    else:
+        why = "its vertices were renumbered or its triangles edited since the export"
+    raise StructureError(
+        f"{where}: {why}: {len(differ)} of {len(mesh)} triangles differ ({first}); re-export the design, or keep the "
+        "file's vertex and face order"
+    )

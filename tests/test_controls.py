@@ -186,8 +186,10 @@ def _flown(scene: str, fps: int, seconds: float, overrides: dict | None = None, 
         from warpsim.viewer import NullBackend, Viewer
 
         v = Viewer(sim, NullBackend(), say=lambda line: None)
-        while sim.steps_taken < int(round(seconds / sim.dt)):
+        end = int(round(seconds / sim.dt))
+        while sim.steps_taken + sim.steps_per_frame <= end:
             v.advance()
+        sim.step(end - sim.steps_taken)  # the last part of a frame, to the same instant
     else:
         sim.run(seconds)
     return sim.state.positions()

@@ -86,7 +86,7 @@ def test_a_scene_is_one_typed_read_only_value_that_simulation_takes():
     from warpsim.scene.descriptor import DescriptorError
 
     scene = warpsim.Scene.load("kite")
-    assert (scene.kind, scene.section, scene.dt, scene.world_count) == ("kite", "kite", 0.005, 1)
+    assert (scene.kind, scene.section, scene.dt, scene.world_count) == ("kite", "kite", 0.0025, 1)
     assert scene.object_config().tow_point == 0.47 and scene.settings.wind.velocity[0] == 6.0
     tables = scene.descriptor()
     tables["kite"]["tow_point"] = 0.1

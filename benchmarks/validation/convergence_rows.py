@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from warpsim.objects.flag import PRESETS as FLAG_PRESETS
+from warpsim.objects.kite import PRESETS as KITE_PRESETS
 from warpsim.objects.kite import anchor_elevation
 from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
@@ -109,7 +110,13 @@ CONVERGENCE = {
     "glider trim speed": (lambda dt, it: _glide_and_trim(dt, it)[1], 0.01, " m/s", 0.04, 55),
     "glider turn rate, bank held at 20°": (_turn_rate, 0.01, " °/s", 0.10, 55),
     "glider phugoid period": (_phugoid_period, 0.01, " s", 0.10, 55),
-    "kite line angle at the anchor": (_kite_angle, 0.005, "°", 0.05, 55),
+    "kite line angle at the anchor": (
+        _kite_angle,
+        KITE_PRESETS["flying"]["solver"]["dt"],
+        "°",
+        0.05,
+        KITE_PRESETS["flying"]["solver"]["iterations"],
+    ),
     "parachute descent": (_parachute_descent, 0.01, " m/s", 0.05, 55),
     "flag flapping frequency": (
         lambda dt, it: _flag_flap(dt, it)["frequency"],

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.numpy_step import NumpyVerlet
+from warpsim.objects.kite import PRESETS as KITE_PRESETS
 from warpsim.objects.kite import anchor_elevation, anchor_pull
 from warpsim.physics.model import AIR_DENSITY, GRAVITY
 from warpsim.physics.projection import jacobi_equivalent_iterations
@@ -161,14 +162,16 @@ def kite_flight(
 KITE_WINDS = (3.0, 6.0, 10.0)
 """Winds [m/s] the kite is launched in for :func:`kite_flight_rows` (real deltas fly across roughly 3-10 m/s)."""
 
-KITE_STEPS = ((0.005, 55), (0.0025, 110), (0.00125, 220))
-"""(dt [s], iterations) of :func:`kite_flight_rows`: the defaults, dt halved with the iterations doubled, and dt
-quartered with four times the iterations."""
+_DT, _ITERATIONS = (KITE_PRESETS["flying"]["solver"][k] for k in ("dt", "iterations"))  # the flying kite's
+
+KITE_STEPS = ((_DT, _ITERATIONS), (_DT / 2, 2 * _ITERATIONS), (_DT / 4, 4 * _ITERATIONS))
+"""(dt [s], iterations) of :func:`kite_flight_rows`: the defaults (2.5 ms, 45), dt halved with the iterations
+doubled, and dt quartered with four times the iterations."""
 
 KITE_CROSSWIND = 0.05
 """Crosswind [m/s] of :func:`kite_crosswind_offset`'s row: 0.5° off 6 m/s, enough to choose a side."""
 
-KITE_CROSSWIND_STEPS = ((0.005, 55), (0.00125, 220), (0.000625, 220), (0.0003125, 110))
+KITE_CROSSWIND_STEPS = (KITE_STEPS[0], KITE_STEPS[-1], (KITE_STEPS[-1][0] / 2, KITE_STEPS[-1][1]), (0.0003125, 110))
 """(dt [s], iterations) of the crosswind row: the defaults, the ladder's finest rung, and two finer steps."""
 
 

@@ -79,7 +79,8 @@ def test_separate_processes_record_the_same_frames(tmp_path):
         cmd = [sys.executable, "-m", "warpsim", "run", "kite_gusty", "--seconds", "1.5", "--h5", str(path), "--quiet"]
         subprocess.run(cmd, check=True, capture_output=True, timeout=120)
     with h5py.File(paths[0], "r") as a, h5py.File(paths[1], "r") as b:
-        assert a["positions"].shape[0] == 44  # 1.5 s in frames of 35 ms (7 kite steps of 5 ms), and frame 0
+        assert a["positions"].shape[0] == 48  # 1.5 s in frames of 32.5 ms (13 kite steps of 2.5 ms; the last one 2
+        # steps), and frame 0
         np.testing.assert_array_equal(a["positions"][:], b["positions"][:])
     from warpsim.io.recording import Recording
 

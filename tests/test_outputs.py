@@ -321,4 +321,5 @@ def test_a_new_output_is_one_line_of_the_outputs_table(tmp_path, monkeypatch, ca
     out = tmp_path / "a.count"
     assert main(["run", "kite", "--seconds", "0.5", "--count", str(out)]) == 0
     assert f"frame count: {out}" in capsys.readouterr().out
-    assert frames == list(range(16)) and out.read_text() == "16 frames\n"  # 0.5 s at 30 frames a second, and frame 0
+    # 0.5 s in frames of 13 kite steps of 2.5 ms (30 a second, rounded to whole steps; the last one partial), frame 0
+    assert frames == list(range(17)) and out.read_text() == "17 frames\n"

@@ -117,12 +117,12 @@ def test_killed_run_reads_converts_and_resumes_bit_for_bit(seed, tmp_path):
     assert code == 0 and err == []
     stage = Usd.Stage.Open(str(tmp_path / "k.usda"))
     assert len(UsdGeom.Mesh(stage.GetPrimAtPath("/World/kite/sail")).GetPointsAttr().GetTimeSamples()) == frames
-    # the kite's frames are 35 ms apart (7 steps of 5 ms): 0.35 s is 10 more frames
-    assert main(["run", "--resume", str(rec), "--seconds", "0.35", "--quiet"]) == 0
+    # the kite's frames are 32.5 ms apart (13 steps of 2.5 ms): 0.325 s is 10 more frames
+    assert main(["run", "--resume", str(rec), "--seconds", "0.325", "--quiet"]) == 0
     with h5py.File(rec, "r") as f:  # the resume cleared the flags
         resumed = f["positions"][:]
     assert resumed.shape[0] == frames + 10
-    np.testing.assert_array_equal(resumed, _reference_positions(t + 0.35, tmp_path))
+    np.testing.assert_array_equal(resumed, _reference_positions(t + 0.325, tmp_path))
 
 
 def test_stale_temporaries_of_a_killed_export_are_removed(tmp_path):

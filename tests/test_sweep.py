@@ -50,7 +50,7 @@ def test_plan_is_the_cartesian_product_and_chunks_group_shared_keys():
     assert [t.cases for t in tasks] == [[0, 1], [2, 3]]
     assert [(t.scene.table("air")["model"], t.scene.dt) for t in tasks] == [
         ("paper", 0.01),
-        ("sail", 0.005),
+        ("sail", 0.0025),
     ]
     assert designs.case_scene(0).object_config().tow_point == 0.35
 
@@ -136,13 +136,14 @@ def test_ctrl_c_keeps_the_finished_rows_and_a_rerun_runs_only_the_rest(tmp_path,
 
 def test_a_case_that_blows_up_is_a_row_and_leaves_its_chunk_mates_alone():
     d = desc_mod.defaults("kite")
-    plan = sweeps.SweepPlan(Scene(d), sweeps.parse_axes(Scene(d), ["wind.speed=6,60"]), 1.0)
+    plan = sweeps.SweepPlan(Scene(d), sweeps.parse_axes(Scene(d), ["wind.speed=6,100"]), 1.0)
     together = sweeps.run_chunk(plan.chunks(2)[0])
     calm, storm = together
     assert not calm["blew_up"] and math.isnan(calm["blowup_time"]) and calm["blowup_reason"] == ""
     assert storm["blew_up"] and 0 < storm["blowup_time"] <= 1.0
     # the storm tears the kite within its first frames: a stick past solver.max_stretch, or, when the first frame
-    # already finds the positions overflowed (60 m/s with the default elastic cloth), a non-finite particle
+    # already finds the positions overflowed (100 m/s with the default elastic cloth), a non-finite particle; at
+    # 60 m/s the kite at its 2.5 ms/45 defaults holds for 1 s, its sticks 47 % stretched
     reason = storm["blowup_reason"]
     assert ("stretched" in reason and "max_stretch" in reason) or "non-finite" in reason, reason
     assert math.isnan(storm["altitude_mean"]) and storm["window_frames"] == 0

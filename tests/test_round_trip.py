@@ -256,6 +256,9 @@ def _first(table: dict) -> str:
         (lambda d: d.pop("controls"), "it has no 'controls'"),
         (lambda d: d.pop("faces"), "it has no 'faces'"),
         (lambda d: d["air"]["leading_edge"].__setitem__(0, [-1, 3]), "air.leading_edge"),
+        (lambda d: d["faces"]["corners"].__setitem__(0, [False, True, 2]), "faces.corners must be a list"),
+        (lambda d: d["controls"].__setitem__("rest", [[1.0, 2.0]]), "controls.rest must be empty"),
+        (lambda d: d.__setitem__("format", 1), "re-export the design"),
     ],
 )
 def test_a_structure_with_a_missing_table_or_a_bad_value_gets_one_line(tmp_path, capsys, edit, said):
@@ -273,6 +276,27 @@ def test_a_structure_with_a_missing_table_or_a_bad_value_gets_one_line(tmp_path,
     assert main(["run", str(scene_path), "--seconds", "0.1"]) == EXIT_USAGE
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and said in err[0], err
+
+
+def test_a_folder_a_deep_nesting_or_an_unreadable_structure_gets_one_line(tmp_path, capsys):
+    import os
+
+    scene_path = _export(tmp_path, "parachute.toml", ".obj")
+    structure = tmp_path / "design.structure.toml"
+    text = structure.read_text()
+    structure.write_text(text.replace("[faces]\ncorners = [", "[faces]\ncorners = " + "[" * 5000 + "]" * 4999 + ", ["))
+    cases = [([], "nested too deep")]
+    cases.append((["--set", f"mesh.structure={tmp_path}"], "is a folder"))
+    for extra, said in cases:
+        assert main(["run", str(scene_path), "--seconds", "0.1", *extra]) == EXIT_USAGE
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and said in err[0], err
+    if os.geteuid() != 0:  # root reads any file
+        structure.write_text(text)
+        structure.chmod(0)
+        assert main(["run", str(scene_path), "--seconds", "0.1"]) == EXIT_USAGE
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "cannot be read" in err[0], err
 
 
 def test_hinge_weights_of_the_wrong_length_get_one_line(tmp_path, capsys):

@@ -55,8 +55,9 @@ TIME_STEPS = (0.02, 0.01, 0.005, 0.0025, 0.00125)
 
 
 def convergence(seconds: float = 4.0) -> dict:
-    """Worst stretch (after the first second) against iterations at the object's default dt (glider 0.01 s,
-    kite 0.005 s) and against dt at 55 iterations, for the hang glider and the kite at their defaults."""
+    """Worst stretch (after the first second) against iterations at the object's default dt (glider 5 ms, kite
+    2.5 ms) and against dt at its default iterations (glider 55, kite 45), for the hang glider and the kite at their
+    defaults."""
     out = {}
     for kind in ("hang-glider", "kite"):
         base = descriptor.defaults(kind)
@@ -87,7 +88,7 @@ def plot_convergence(data: dict, path: Path) -> Path:
                 "series": [(k, v["iterations"], pct(v["by_iterations"])) for k, v in data.items()],
             },
             {
-                "title": "worst stretch vs time step (55 iterations)",
+                "title": "worst stretch vs time step (default iterations)",
                 "xlabel": "dt [s]",
                 "ylabel": "worst stick stretch [%]",
                 "series": [(k, v["dt"], pct(v["by_dt"])) for k, v in data.items()],

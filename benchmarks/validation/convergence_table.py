@@ -65,8 +65,8 @@ def _glider(sim, seconds: float) -> dict:
 
 
 def _parachute(sim, seconds: float) -> dict:
-    descent, swing, _ = descent_and_swing(sim, seconds)
-    return {"descent [m/s]": descent, "largest swing [deg]": swing}
+    descent, swing, rms = descent_and_swing(sim, seconds)
+    return {"descent [m/s]": descent, "largest swing [deg]": swing, "rms swing [deg]": rms}
 
 
 OBJECTS = {

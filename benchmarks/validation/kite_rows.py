@@ -82,27 +82,34 @@ def kite_line(mass_splitting: bool = False) -> list[Row]:
 
 
 def kite_scene(
-    wind: float, dt: float, iterations: int | None = None, crosswind: float = 0.0, overrides: dict | None = None
+    wind: float, dt: float | None, iterations: int | None = None, crosswind: float = 0.0, overrides: dict | None = None
 ) -> dict:
     """The default kite's descriptor in a steady ``wind`` [m/s] along x and ``crosswind`` [m/s] along y, stepping
-    ``dt`` [s] with ``iterations`` constraint iterations (the default's when None), with ``overrides`` (a
+    ``dt`` [s] with ``iterations`` constraint iterations (each the default's when None), with ``overrides`` (a
     descriptor fragment, e.g. ``{"kite": {"frame_mass_fraction": 0.6}}``) merged last."""
     d = descriptor.merge(
         "validation",
         descriptor.defaults("kite"),
         {
             "wind": {"velocity": [float(wind), float(crosswind), 0.0]},
-            "solver": {"dt": float(dt), **({} if iterations is None else {"iterations": int(iterations)})},
+            "solver": {
+                **({} if dt is None else {"dt": float(dt)}),
+                **({} if iterations is None else {"iterations": int(iterations)}),
+            },
         },
     )
     return descriptor.merge("overrides", d, overrides) if overrides else d
 
 
 def kite_flight(
-    wind: float, dt: float = 0.005, seconds: float = 40.0, iterations: int | None = None, overrides: dict | None = None
+    wind: float,
+    dt: float | None = None,
+    seconds: float = 40.0,
+    iterations: int | None = None,
+    overrides: dict | None = None,
 ) -> dict:
     """The default kite (with ``overrides``, a descriptor fragment, merged last) launched in a steady ``wind`` [m/s]
-    at the time step ``dt`` [s] (and ``iterations`` constraint iterations, the default's when None), measured from
+    at the time step ``dt`` [s] and ``iterations`` constraint iterations (each the default's when None), measured from
     the particles
     over the second half of ``seconds``: line elevation at the anchor [deg] (``angle_min``, ``angle_max``), the tow
     point's sideways drift from the anchor's downwind line [m] (``drift``: the largest), the sail's angle of attack
@@ -171,7 +178,12 @@ doubled, and dt quartered with four times the iterations."""
 KITE_CROSSWIND = 0.05
 """Crosswind [m/s] of :func:`kite_crosswind_offset`'s row: 0.5° off 6 m/s, enough to choose a side."""
 
-KITE_CROSSWIND_STEPS = (KITE_STEPS[0], KITE_STEPS[-1], (KITE_STEPS[-1][0] / 2, KITE_STEPS[-1][1]), (0.0003125, 110))
+KITE_CROSSWIND_STEPS = (
+    KITE_STEPS[0],
+    KITE_STEPS[-1],
+    (KITE_STEPS[-1][0] / 2, KITE_STEPS[-1][1]),
+    (KITE_STEPS[-1][0] / 4, KITE_STEPS[-1][1] // 2),
+)
 """(dt [s], iterations) of the crosswind row: the defaults, the ladder's finest rung, and two finer steps."""
 
 
@@ -276,8 +288,9 @@ def kite_flight_rows() -> list[Row]:
     rows.append(
         Row(
             "kite angle of attack",
-            f"sail's mean plane to the wind, 6 m/s, 20-40 s (dt 5 ms/55; 2.5 ms/110: {fine['alpha']:.1f}°; "
-            f"1.25 ms/220: {finest['alpha']:.1f}°)",
+            f"sail's mean plane to the wind, 6 m/s, 20-40 s ({_steps_label(*KITE_STEPS[0])}; "
+            f"{_steps_label(*KITE_STEPS[1])}: {fine['alpha']:.1f}°; {_steps_label(*KITE_STEPS[2])}: "
+            f"{finest['alpha']:.1f}°)",
             "10-25°",
             hosking,
             f"{six['alpha']:.1f}°",
@@ -290,8 +303,9 @@ def kite_flight_rows() -> list[Row]:
     rows.append(
         Row(
             "kite lift coefficient",
-            f"lift across the wind / (q * {0.5 * 1.8 * 0.9:.2f} m²), 6 m/s, 20-40 s (dt 5 ms/55; 2.5 ms/110: "
-            f"{fine['lift']:.2f}; 1.25 ms/220: {finest['lift']:.2f}); C_D {six['drag']:.2f}",
+            f"lift across the wind / (q * {0.5 * 1.8 * 0.9:.2f} m²), 6 m/s, 20-40 s ({_steps_label(*KITE_STEPS[0])}; "
+            f"{_steps_label(*KITE_STEPS[1])}: {fine['lift']:.2f}; {_steps_label(*KITE_STEPS[2])}: "
+            f"{finest['lift']:.2f}); C_D {six['drag']:.2f}",
             "0.6-1.0",
             hosking,
             f"{six['lift']:.2f}",
@@ -330,11 +344,12 @@ def kite_flight_rows() -> list[Row]:
             f"; over the ladder the light-wind trim goes {trims}° (the sail's stall is at {stall:g}°)"
             + (", and here it is over it" if r["alpha"] > stall else f", here {r['alpha']:.1f}°")
             + f". The kite's frame and keel are elastic (kite.frame_compliance, {frame} m/N): with the paper's rigid "
-            "ties the iterations approach a rigid frame as the steps are refined, and the trim rose over the stall "
-            "at this rung (23.9°, line 42.2-51.9°, 8.6 m aside); 1e-5 m/N flies here (17.0°), 5e-6 too (17.2°), "
-            "2e-6 stalls (22.1°). The kite's cloth is elastic too (kite.sail_compliance), with a stiffness its "
-            "sources give to within a factor of two: with this frame, cloth of 2e-5 to 6e-5 m/N flies here at "
-            "15.9-16.7°; with a frame of 1e-5, 2e-5 to 4e-5 stall (docs/objects.md, the kite's limits)",
+            "ties the iterations approach a rigid frame as the steps are refined, and at the former defaults' rung "
+            "0.625 ms/220 (5 ms/55, Chebyshev 0.99, doubled twice and halved three times) the trim rose over the "
+            "stall (23.9°, line 42.2-51.9°, 8.6 m aside); there 1e-5 m/N flew (17.0°), 5e-6 too (17.2°), 2e-6 "
+            "stalled (22.1°). The kite's cloth is elastic too (kite.sail_compliance), with a stiffness its "
+            "sources give to within a factor of two: with this frame, cloth of 2e-5 to 6e-5 m/N flew at that former "
+            "rung at 15.9-16.7°; with a frame of 1e-5, 2e-5 to 4e-5 stalled (docs/objects.md, the kite's limits)",
         )
     )
     # the same flight with the sail's cloth at either end of the stiffness its sources allow (docs/objects.md, the
@@ -358,7 +373,7 @@ def kite_flight_rows() -> list[Row]:
             note="angle of attack "
             + ", ".join(f"{r['alpha']:.1f}°" for r in ends.values())
             + f" (the sail stalls at {stall:g}°); with a frame of 1e-5 m/N instead of the default {frame}, cloth of "
-            "2e-5 to 4e-5 m/N stalled the kite here (docs/objects.md)",
+            "2e-5 to 4e-5 m/N stalled the kite at the former defaults' 0.625 ms/220 (docs/objects.md)",
         )
     )
     side = {step: kite_crosswind_offset(6.0, KITE_CROSSWIND, *step) for step in KITE_CROSSWIND_STEPS}
@@ -382,7 +397,8 @@ def kite_flight_rows() -> list[Row]:
             + ", ".join(f"{r['angles'][-1]:.1f}°" for r in side.values())
             + f". The sail's cloth and the kite's frame are elastic (kite.sail_compliance, {compliance} m/N, and "
             f"kite.frame_compliance, {frame} m/N, by default), so the iterations converge to a kite of that "
-            "stiffness at every step. With the cloth elastic but the frame rigid, the two finest rungs left the "
+            "stiffness at every step. At the former defaults' ladder (5 ms/55, Chebyshev 0.99), with the cloth "
+            "elastic but the frame rigid, the two finest rungs left the "
             "centre after ~15 s for a steady, lopsided flight 1.6-1.9 m to one side (+1.90 m at 0.625 ms/220, "
             "-1.64 m at 0.3125 ms/110), found only by cloth between 4.999e-5 and 5.001e-5 m/N (4.5e-5 and 5.5e-5 "
             "stayed centred). With rigid sticks throughout (both 0, the paper's) it goes to one side at the "

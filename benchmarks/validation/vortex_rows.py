@@ -13,7 +13,7 @@ from warpsim.scene import descriptor
 
 from .common import Row
 from .handling import glide_flight
-from .kite_rows import kite_flight
+from .kite_rows import KITE_STEPS, _steps_label, kite_flight
 from .piloting import body_angles, fly_piloted, scene_descriptor
 from .wings import delta, helmbold, lift_slope, lifting_line, lifting_line_roll, loads, rectangle, tuck
 
@@ -266,11 +266,13 @@ def kite_rows() -> list[Row]:
     """The kite in 6 m/s on the vortex law."""
     rows = []
     kite = {**VORTEX, "kite": {"tow_point": 0.35}}
-    runs = [kite_flight(6.0, dt, iterations=its, overrides=kite) for dt, its in ((0.005, None), (0.0025, 110))]
+    runs = [kite_flight(6.0, dt, iterations=its, overrides=kite) for dt, its in KITE_STEPS[:2]]
     rows.append(
         Row(
             "vortex kite in 6 m/s",
-            "line at the anchor, 20-40 s, tow point 0.35 (dt 5 ms/55; 2.5 ms/110)",
+            "line at the anchor, 20-40 s, tow point 0.35 ("
+            + "; ".join(_steps_label(*step) for step in KITE_STEPS[:2])
+            + ")",
             "line 40-70°, C_L 0.6-1.0",
             "single-line deltas fly high and steady; C_L about 0.6-1.0 (Hosking 1987/1992; issue 35)",
             ", ".join(

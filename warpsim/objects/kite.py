@@ -37,10 +37,12 @@ class KiteConfig(Checked):
     Attributes:
         design: ``flying`` (the default: towed from 47 % of the keel, the keel's edges reinforced, a flat sail
             whose centre of pressure moves with its angle of attack, 25 deg dihedral and a tail, under the ``sail``
-            air model with a 5 ms step, it flies as a real delta does) or ``paper`` (Section 7: a 200 g kite
-            towed from 35 %, 20 deg dihedral, no tail, the paper's air law and 10 ms step). In a scene or with
-            ``--set`` it is a preset (:data:`PRESETS`): it sets those keys, ``air.model`` and ``solver.dt``, and
-            keys given beside it win. The builder itself reads only the individual keys.
+            air model with a 2.5 ms step and 45 over-relaxed, accelerated iterations, it flies as a real delta
+            does) or ``paper`` (Section 7: a 200 g kite towed from 35 %, 20 deg dihedral, no tail, the paper's air
+            law, 10 ms step and plain 55 iterations). In a scene or with ``--set`` it is a preset
+            (:data:`PRESETS`): it sets those keys, ``air.model`` and the solver's ``dt``, ``iterations``,
+            ``relaxation`` and ``chebyshev``, and keys given beside it win. The builder itself reads only the
+            individual keys.
         divisions: main-sail subdivisions per side (paper: 14 particles per side -> 13).
         keel_divisions: keel subdivisions per side (paper: 6 particles per side -> 5); the keel's top
             edge spans ``2 * keel_divisions`` sail rows from row 2, so it must fit in ``divisions``.

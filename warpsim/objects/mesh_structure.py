@@ -293,11 +293,14 @@ def read_structure(path: str | Path, vertices: int | None = None, triangles: int
         raise StructureError(f"{path}: not a structure file: {str(err).splitlines()[0]}") from None
     except OSError as err:
         raise StructureError(f"{path}: cannot be read: {err.strerror or err}") from None
+    except RecursionError:
+        raise StructureError(f"{path}: not a structure file: its lists are nested too deep") from None
     if "format" not in data:
         raise StructureError(f"{path}: no format = {FORMAT} line; is it a structure file written by warpsim export?")
     if type(data["format"]) is not int or data["format"] != FORMAT:
         raise StructureError(
-            f"{path}: format = {data['format']!r}; this warpsim reads structure format {FORMAT} (the integer)"
+            f"{path}: format = {data['format']!r}; this warpsim reads structure format {FORMAT} (the integer): "
+            "re-export the design with warpsim export"
         )
     try:
         _check_layout(data)
@@ -309,6 +312,8 @@ def read_structure(path: str | Path, vertices: int | None = None, triangles: int
         raise
     except (TypeError, ValueError) as err:
         raise StructureError(f"{path}: {str(err).strip()}") from None
+    except RecursionError:
+        raise StructureError(f"{path}: its lists are nested too deep") from None
 
 
 def _check_layout(data: dict) -> None:
@@ -357,6 +362,13 @@ def _integer(value, name: str, low: int = -1) -> int:
     return value
 
 
+def _holds_bool(values) -> bool:
+    """Whether the (nested) list ``values`` holds a ``true`` or ``false`` anywhere."""
+    if isinstance(values, bool):
+        return True
+    return isinstance(values, list) and any(_holds_bool(v) for v in values)
+
+
 def _array(table: dict, key: str, dtype, shape: tuple, name: str) -> np.ndarray:
     """``table[key]`` (the file's ``name.key``) as an array of ``dtype`` (whole numbers for an integer one) with
     ``shape`` (``-1``: any length); an empty list fits any."""
@@ -368,8 +380,8 @@ def _array(table: dict, key: str, dtype, shape: tuple, name: str) -> np.ndarray:
         raw = np.asarray(values)
     except ValueError:
         raise ValueError(f"{name}.{key} must be {want} of {kind}") from None
-    if raw.size and (raw.dtype.kind not in ("iu" if integer else "iuf")):
-        raise ValueError(f"{name}.{key} must be {want} of {kind}")
+    if raw.size and (raw.dtype.kind not in ("iu" if integer else "iuf") or _holds_bool(values)):
+        raise ValueError(f"{name}.{key} must be {want} of {kind}")  # NumPy would read true/false as 1/0
     a = raw.astype(dtype)
     if a.size == 0 and a.shape[:1] == (0,):  # an empty list: no rows, which a list of a set length must allow
         if shape[0] not in (-1, 0):
@@ -459,6 +471,8 @@ def _structure_of(data: dict) -> Structure:
     s.control_sticks = _array(controls, "sticks", np.int64, (-1,), "controls")
     s.control_grid = _array(controls, "grid", np.float64, (-1,), "controls")
     g = len(s.control_grid)
+    if not g and controls["rest"] != []:
+        raise ValueError("controls.rest must be empty when controls.grid is (no controls)")
     s.control_rest = (
         _array(controls, "rest", np.float64, (len(s.control_sticks) * g, g), "controls").reshape(-1, g, g)
         if g

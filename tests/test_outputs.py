@@ -125,7 +125,7 @@ def test_recording_layout_and_round_trip(tmp_path):
         np.testing.assert_array_equal(rec.positions(), np.stack([q for _, _, q in frames]))  # float64, as simulated
         assert f["positions"].compression == "gzip" and f["positions"].chunks[0] == 1
         assert f.attrs["format"] == "warpsim-recording" and f.attrs["warp_version"]
-        assert "[parachute]" in f.attrs["descriptor"] and f.attrs["dt"] == pytest.approx(0.01)
+        assert "[parachute]" in f.attrs["descriptor"] and f.attrs["dt"] == pytest.approx(sim.dt) == 0.0025
         np.testing.assert_array_equal(f["topology/sticks"][:], sim.model.stick_particles_np)
         np.testing.assert_array_equal(f["topology/triangles"][:], sim.model.tri_indices_np)
         parts = list(f["topology"].attrs["parts"])

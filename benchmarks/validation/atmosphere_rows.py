@@ -15,6 +15,7 @@ from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
 
 from .common import Row
+from .parachute_rows import FINE as PARACHUTE_FINE
 
 ISO_2533 = (
     "ISO 2533:1975 Standard Atmosphere (= U.S. Standard Atmosphere 1976 below 32 km), table by geometric altitude: "
@@ -102,7 +103,7 @@ def rows() -> list[Row]:
     return (
         atmosphere_table()
         + canopy_at_altitude()
-        + canopy_at_altitude("dt halved, iterations doubled", {"solver": {"dt": 0.005, "iterations": 110}})
+        + canopy_at_altitude("dt halved, iterations doubled", PARACHUTE_FINE)
         + canopy_at_altitude("10 km out", {"parachute": {"position": [10000.0, 0.0]}})
     )
 

@@ -17,6 +17,7 @@ from .convergence_rows import convergence_figures, flag_convergence
 from .flag_rows import flag, flag_sheet
 from .glider_rows import HALF, flying_glider, hang_glider
 from .kite_rows import kite_angle, kite_flight_rows, kite_line
+from .parachute_rows import FINE as PARACHUTE_FINE
 from .parachute_rows import parachute
 
 CASES: dict[str, Callable[[], list[Row]]] = {
@@ -27,13 +28,9 @@ CASES: dict[str, Callable[[], list[Row]]] = {
     "parachute": lambda: (
         parachute()
         + parachute(label="mass splitting", overrides={"solver": {"mass_splitting": True}})
-        + parachute(label="dt halved, iterations doubled", overrides={"solver": {"dt": 0.005, "iterations": 110}})
+        + parachute(label="dt halved, iterations doubled", overrides=PARACHUTE_FINE)
         + parachute("scenes/parachute_ringslot.toml")
-        + parachute(
-            "scenes/parachute_ringslot.toml",
-            "dt halved, iterations doubled",
-            {"solver": {"dt": 0.005, "iterations": 110}},
-        )
+        + parachute("scenes/parachute_ringslot.toml", "dt halved, iterations doubled", PARACHUTE_FINE)
     ),
     "kite": lambda: kite_line(False) + kite_line(True),
     "flag": flag,

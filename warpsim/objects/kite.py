@@ -155,9 +155,10 @@ class KiteConfig(Checked):
 
 PRESETS = {
     # the sail law pulls the kite about 10 times its weight, and its figures converge with its sticks: a step of
-    # 2.5 ms with 45 iterations over-relaxed by 1.5 and accelerated by Chebyshev at rho 0.995 puts its line angle and
-    # pull within 3 % of their converged values at 1.6 times the work of the former 5 ms, 55 iterations and rho 0.99
-    # (4.8-7.4 % off), and flies it steadily in winds where that crashed (docs/objects.md, "How the kite flies")
+    # 2.5 ms with 45 iterations over-relaxed by 1.5 and accelerated by Chebyshev at rho 0.995 puts its line angle
+    # within 3 % of its converged value (its pull 3.5 %) at 1.6 times the work of the former 5 ms, 55 iterations and
+    # rho 0.99 (4.8-7.3 % off), and flies it steadily in winds where that slid aside or crashed (docs/objects.md,
+    # "How the kite flies")
     "flying": {
         "air": {"model": "sail"},
         "solver": {"dt": 0.0025, "iterations": 45, "relaxation": 1.5, "chebyshev": 0.995},

@@ -142,9 +142,9 @@ OBJECTS: dict[str, ObjectSpec] = {
     "parachute": ObjectSpec(
         config=parachute.ParachuteConfig,
         build=parachute.build_parachute,
-        # 2.5 ms: at the solver's 10 ms the flat canopy's swing is not converged (rms 17.2 deg against 13.2 at 1.25
-        # ms and finer, its largest swing 7.7 % short); at 2.5 ms its descent and swing lie within 2 % of their
-        # converged values at 12-13x real time (docs/validation.md, the shipped defaults)
+        # 2.5 ms: at the solver's 10 ms and 55 iterations the flat canopy's swing is not converged (rms 17.2 deg
+        # against 13.25, its largest swing 7.7 % short; more iterations mend the first, not the second); at 2.5 ms
+        # its descent and swing lie within 2.4 % of their converged values at 12-14x real time (docs/validation.md)
         scene_defaults={"wind": {"velocity": [0.0, 0.0, 0.0]}, "solver": {"dt": 0.0025}},
         summary="round canopy of rings, lines, heavy person; hoop = true keeps it open (paper Section 8)",
         figures=parachute.PARACHUTE_FIGURES,

@@ -72,7 +72,14 @@ def rectangles() -> list[Row]:
 def induced_drag() -> list[Row]:
     """Span efficiency of rectangles of aspect ratio 4 and 8 against the lifting line, and the centre of pressure."""
     rows = []
-    for aspect_ratio, cells in ((4.0, (32, 8)), (4.0, (64, 8)), (8.0, (32, 8)), (8.0, (64, 8))):
+    for aspect_ratio, cells in (
+        (4.0, (32, 8)),
+        (4.0, (64, 8)),
+        (4.0, (256, 8)),
+        (8.0, (32, 8)),
+        (8.0, (64, 8)),
+        (8.0, (256, 8)),
+    ):
         slope, e_ref = lifting_line(aspect_ratio)
         f = loads(rectangle(aspect_ratio, *cells), 5.0)
         e = f["CL"] ** 2 / (math.pi * aspect_ratio * f["CD"])

@@ -312,11 +312,11 @@ def _nearest(found: np.ndarray, wanted: np.ndarray) -> np.ndarray:
 def _triangle_order(found: np.ndarray, wanted: np.ndarray) -> np.ndarray:
     """For each triangle of ``wanted`` ``[T, 3]`` (vertex indices), the index of the same triangle, corners in the
     same cyclic order, in ``found``; ``ValueError`` when one is missing or turned over."""
-    from ..objects.mesh_structure import _cyclic
+    from ..objects.mesh_structure import cyclic_corners
 
-    found_keys = {tuple(k): i for i, k in enumerate(_cyclic(found).tolist())}
+    found_keys = {tuple(k): i for i, k in enumerate(cyclic_corners(found).tolist())}
     try:
-        return np.array([found_keys[tuple(k)] for k in _cyclic(wanted).tolist()], dtype=np.int64)
+        return np.array([found_keys[tuple(k)] for k in cyclic_corners(wanted).tolist()], dtype=np.int64)
     except KeyError:
         raise ValueError("the mesh read back lost or turned over one of the cloth's triangles") from None
 

@@ -554,7 +554,7 @@ def fits(written: tuple[int, int], vertices: int, triangles: int, where: str) ->
         )
 
 
-def _cyclic(t: np.ndarray) -> np.ndarray:
+def cyclic_corners(t: np.ndarray) -> np.ndarray:
     """Each triangle of ``t`` ``[T, 3]`` from its smallest corner, in its own cyclic order (a triangle read with its
     corners rotated, as a format conversion may, is the same triangle)."""
     start = np.argmin(t, axis=1)
@@ -566,7 +566,7 @@ def check_faces(structure: Structure, triangles: np.ndarray, where: str) -> None
     (each up to a rotation of its corners): reordered since the export, turned over, or on renumbered vertices (a
     CAD tool may do any of these), since the structure's per-triangle and per-particle lists would then describe
     other triangles and vertices."""
-    mesh, written = _cyclic(np.asarray(triangles, dtype=np.int64)), _cyclic(structure.corners)
+    mesh, written = cyclic_corners(np.asarray(triangles, dtype=np.int64)), cyclic_corners(structure.corners)
     differ = np.flatnonzero((mesh != written).any(axis=1))
     if not len(differ):
         return

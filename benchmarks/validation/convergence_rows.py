@@ -117,7 +117,7 @@ CONVERGENCE = {
         0.05,
         KITE_PRESETS["flying"]["solver"]["iterations"],
     ),
-    "parachute descent": (_parachute_descent, 0.01, " m/s", 0.05, 55),
+    "parachute descent": (_parachute_descent, descriptor.defaults("parachute")["solver"]["dt"], " m/s", 0.05, 55),
     "flag flapping frequency": (
         lambda dt, it: _flag_flap(dt, it)["frequency"],
         _SHEET_SOLVER["dt"],

@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 
 from warpsim.objects.flag import PRESETS as FLAG_PRESETS
-from warpsim.objects.kite import PRESETS as KITE_PRESETS
 from warpsim.objects.kite import anchor_elevation
 from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
@@ -112,10 +111,10 @@ CONVERGENCE = {
     "glider phugoid period": (_phugoid_period, 0.01, " s", 0.10, 55),
     "kite line angle at the anchor": (
         _kite_angle,
-        KITE_PRESETS["flying"]["solver"]["dt"],
+        descriptor.defaults("kite")["solver"]["dt"],
         "°",
         0.05,
-        KITE_PRESETS["flying"]["solver"]["iterations"],
+        descriptor.defaults("kite")["solver"]["iterations"],
     ),
     "parachute descent": (_parachute_descent, descriptor.defaults("parachute")["solver"]["dt"], " m/s", 0.05, 55),
     "flag flapping frequency": (

@@ -10,7 +10,6 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.numpy_step import NumpyVerlet
-from warpsim.objects.kite import PRESETS as KITE_PRESETS
 from warpsim.objects.kite import anchor_elevation, anchor_pull
 from warpsim.physics.model import AIR_DENSITY, GRAVITY
 from warpsim.physics.projection import jacobi_equivalent_iterations
@@ -169,7 +168,7 @@ def kite_flight(
 KITE_WINDS = (3.0, 6.0, 10.0)
 """Winds [m/s] the kite is launched in for :func:`kite_flight_rows` (real deltas fly across roughly 3-10 m/s)."""
 
-_DT, _ITERATIONS = (KITE_PRESETS["flying"]["solver"][k] for k in ("dt", "iterations"))  # the flying kite's
+_DT, _ITERATIONS = (descriptor.defaults("kite")["solver"][k] for k in ("dt", "iterations"))  # the flying kite's
 
 KITE_STEPS = ((_DT, _ITERATIONS), (_DT / 2, 2 * _ITERATIONS), (_DT / 4, 4 * _ITERATIONS))
 """(dt [s], iterations) of :func:`kite_flight_rows`: the defaults (2.5 ms, 45), dt halved with the iterations

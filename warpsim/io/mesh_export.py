@@ -88,8 +88,7 @@ def export_design(scene: Scene, out: str | Path, parts: bool = False) -> tuple[P
     tris = np.asarray(model.tri_indices_np, dtype=np.int64)
     if len(tris) == 0:
         raise ValueError(f"the {record.kind} has no triangles to export")
-    structured = record.kind == MESH and bool(single.table(section(MESH)).get("structure"))
-    if record.kind == MESH and not structured:
+    if _own_design(single):
         return _export_own(single, record, tris, out)
     if not parts:
         return _export_structure(single, model, record, tris, out)
@@ -155,9 +154,13 @@ def writes_structure(scene: Scene, parts: bool = False) -> bool:
     """Whether :func:`export_design` of ``scene`` (with ``parts``) writes a structure file: it does for a built-in
     object and for a design flown from a structure, unless ``parts``; a design of one's own from ``[[mesh.parts]]``
     is written back as it was read, without one."""
-    if parts:
-        return False
-    return scene.kind != MESH or bool(scene.table(section(MESH)).get("structure"))
+    return not parts and not _own_design(scene)
+
+
+def _own_design(scene: Scene) -> bool:
+    """Whether ``scene`` flies a design of one's own from ``[[mesh.parts]]`` (a mesh without a structure file), which
+    an export writes back as it was read."""
+    return scene.kind == MESH and not scene.table(section(MESH)).get("structure")
 
 
 def _export_structure(single: Scene, model, record, tris: np.ndarray, out: Path) -> tuple[Path, Path, list[str]]:

@@ -22,6 +22,7 @@ import h5py
 import numpy as np
 import warp as wp
 
+from warpsim.io.recording import Recording, RecordingError
 from warpsim.run.simulation import BlowUpError, Simulation
 from warpsim.scene import descriptor
 
@@ -131,12 +132,12 @@ def long_run(seconds: float = 3600.0, fps: float = 1.0, poll: float = 1.0) -> tu
             kib = _rss_kib(child.pid)
             if kib:
                 rss.append((time.perf_counter() - start, kib))
-            try:
-                with h5py.File(rec, "r", libver="latest", swmr=True) as f:
-                    n = f["time"].shape[0]
+            try:  # as a user reads it: only frames a checkpoint covers (each dataset grows on its own under SWMR)
+                with Recording(rec) as f:
+                    n = f.frame_count
                     if n:
-                        reads.append((n, float(f["time"][n - 1]), bool(np.isfinite(f["positions"][n - 1]).all())))
-            except (OSError, KeyError):
+                        reads.append((n, float(f.time[n - 1]), bool(np.isfinite(f.positions(n - 1)).all())))
+            except (OSError, KeyError, RecordingError):
                 pass  # not created yet, or not yet in SWMR mode
         _, err = child.communicate()
         wall = time.perf_counter() - start

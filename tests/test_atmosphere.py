@@ -44,7 +44,7 @@ def test_each_world_breathes_the_air_of_its_own_altitude(worlds):
     np.testing.assert_allclose(sim.control.air_density.numpy(), expected, rtol=2e-6)
     if worlds > 1:
         assert expected[0] > expected[1] > expected[2]
-    fixed = Simulation(descriptor.resolve("parachute")[0])
+    fixed = Simulation(descriptor.merge("test", descriptor.resolve("parachute")[0], {"air": {"density": 1.294217666}}))
     fixed.step(5)
     assert fixed.control.air_density.numpy()[0] == np.float32(1.294217666)
 
@@ -76,13 +76,14 @@ def test_bad_atmosphere_settings_are_one_line(setting, message, capsys):
 
 @pytest.mark.slow
 def test_a_run_says_the_air_its_figures_depend_on(capsys):
-    """The figures of a run in the standard atmosphere and in turbulence say so (the paper's constant air, the
-    default, adds nothing)."""
-    args = ["run", "parachute", "--seconds", "1", "--set", "air.density=0", "--set", "air.elevation=1500"]
+    """The figures of a run say the air they depend on: the standard atmosphere's density at the end (the default),
+    a fixed density, and turbulence."""
+    args = ["run", "parachute", "--seconds", "1", "--set", "air.elevation=1500"]
     assert main([*args, "--set", "wind.turbulence_intensity=0.1"]) == 0
     out = capsys.readouterr().out
     assert "air: the standard atmosphere" in out and "1500 m above sea level" in out
     assert "turbulence: von Karman, intensity 0.1, length scale 24.5 m" in out
-    assert main(["run", "parachute", "--seconds", "1"]) == 0
+    assert main(["run", "parachute", "--seconds", "1", "--set", "air.density=1.294217666"]) == 0
     out = capsys.readouterr().out
-    assert "air:" not in out and "turbulence:" not in out
+    assert "air: a fixed density, 1.29422 kg/m^3" in out and "standard atmosphere, " not in out
+    assert "turbulence:" not in out

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from benchmarks.validation.kite_rows import KITE_STEPS
+from benchmarks.validation.kite_rows import KITE_STEPS, KITE_WINDS
 from warpsim.cli import main
 from warpsim.objects.kite import line_state
 from warpsim.run.simulation import Simulation
@@ -177,13 +177,14 @@ def test_sail_trims_at_a_real_angle_of_attack_and_lifts_as_a_delta(launched, dt)
 # at dt/4 with 4x the iterations (1.25 ms/220) and dt/8 (0.625 ms/220) the validation rows "kite in 3 m/s, dt 1.25
 # ms/220" and "kite in 3 m/s, beyond the ladder" track the light-wind trim (16.3 / 16.1 deg); see also the slow test
 # below
-@pytest.mark.parametrize(
-    "dt, wind", [(dt, wind) for dt in (KITE_STEPS[0][0], KITE_STEPS[1][0]) for wind in (3.0, 6.0, 10.0)]
-)
+@pytest.mark.parametrize("dt, wind", [(dt, wind) for dt in (KITE_STEPS[0][0], KITE_STEPS[1][0]) for wind in KITE_WINDS])
 @pytest.mark.slow
 def test_kite_launched_in_its_wind_flies_high_and_steady(launched, wind, dt):
     # line 40-70 deg, steady within 5 deg, less than 5 m to the side (issue 35's band), at the defaults and at dt
-    # halved with the iterations doubled. Measured (2.5 ms/45, 1.25 ms/90): 54.1-54.6 / 54.4-54.6 deg in 3 m/s (angle
+    # halved with the iterations doubled. In the standard atmosphere (since 2026-12-06) the lightest wind is 3.1 m/s,
+    # the dynamic pressure 3.0 m/s had in the paper's air: at 3.0 m/s and 1.25 ms/90 the trim went over the sail's
+    # stall (24.9 deg, line 38.9-53.3 deg); at 3.1 m/s it flies at 16.2 deg, line 54.5-54.7 deg. Earlier figures,
+    # in the paper's air: measured (2.5 ms/45, 1.25 ms/90): 54.1-54.6 / 54.4-54.6 deg in 3 m/s (angle
     # of attack 15.3 / 16.3 deg), 59.5 / 60.2 deg in 6 m/s, 59.8 / 60.8 deg in 10 m/s, 0.0 m to the side in each (at
     # the former 5 ms/55: 52.4-53.1, 57.6 and 56.6-56.8 deg, 1.5 m in 10 m/s). The 150 g kite at Chebyshev 0.95
     # fell into a deep stall in 3 m/s at 2.5 ms/110 (28 deg, line 36.9-44.1 deg); before the keel was cut taut

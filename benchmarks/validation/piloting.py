@@ -41,7 +41,8 @@ def fly_piloted(
     watch: Callable[[Simulation, dict], None] | None = None,
 ) -> list[dict]:
     """Fly the hang glider of descriptor ``d`` for ``seconds`` [s] with ``pilot`` deciding the controls every
-    ``every`` seconds; the flight state at each decision, with ``t`` [s] and the ``roll``/``pitch`` then set.
+    ``every`` seconds; the flight state at each decision, with ``t`` [s], the air's ``density`` [kg/m^3] and the
+    ``roll``/``pitch`` then set.
 
     The bar moves at most ``slew`` per second (2: from centre to a stop in 0.5 s, as a pilot's arms do; a step of
     the arms' lengths jerks the frame). ``watch(sim, state)``, if given, sees each decision's state first and may
@@ -60,6 +61,7 @@ def fly_piloted(
         sim.step(steps)
         state = flight_state(record, sim.state.positions(), sim.state.particle_q_prev.numpy(), sim.dt, (0, 0, 0))
         state["t"] = (i + 1) * steps * sim.dt
+        state["density"] = float(sim.control.air_density.numpy()[0])  # [kg/m^3] the air it flies in
         q, q_prev = sim.state.positions()[record.particles], sim.state.particle_q_prev.numpy()[record.particles]
         state["cg_velocity"] = mass @ (q - q_prev) / (mass.sum() * sim.dt)
         state["cg_speed"] = float(np.linalg.norm(state["cg_velocity"]))

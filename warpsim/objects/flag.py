@@ -10,7 +10,7 @@ import numpy as np
 
 from ..physics.atmosphere import air_density
 from ..physics.builder import ModelBuilder, check_memory
-from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
+from ..physics.config import AIR_DENSITY, NON_NEGATIVE, POSITIVE, STANDARD_AIR, Bounds, Checked, choice, number
 from ..physics.lattice import trailing_edges
 from ..physics.model import Model, ObjectRecord
 from ..physics.shapes import edge_halves
@@ -107,6 +107,7 @@ PRESETS = {
     # splitting
     "sheet": {
         "flag": {k: getattr(FlagConfig(), k) for k in _DESIGN_KEYS},
+        "air": {"density": STANDARD_AIR},
         "solver": {"mass_splitting": True, "dt": 0.00125, "iterations": SHEET_ITERATIONS * FlagConfig().resolution},
     },
     # 1.25 ms steps and 110 iterations: the flapping's frequency and amplitude within 4 % of their limit as dt -> 0
@@ -119,6 +120,7 @@ PRESETS = {
             "cloth_compliance": 0.0,
             "shear_compliance": 0.0,
         },
+        "air": {"density": AIR_DENSITY},  # the paper's constant air (slide 14)
         "solver": {"mass_splitting": False, "dt": 0.00125, "iterations": 110},
     },
 }

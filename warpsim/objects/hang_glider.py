@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.builder import ModelBuilder
-from ..physics.config import NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
+from ..physics.config import AIR_DENSITY, NON_NEGATIVE, POSITIVE, STANDARD_AIR, Bounds, Checked, choice, number
 from ..physics.model import ObjectRecord
 from ..physics.terrain import Heightfield
 from .delta import add_rigid_frame, body_axes, chordwise_loading, delta_sail_aero
@@ -172,18 +172,22 @@ PRESETS = {
     # the flying glider steps 5 ms (two substeps of the paper's 10 ms, the iterations kept): its glide and trim
     # speed within 1.5 % of their converged values, where 10 ms was 3.5-3.8 % off (docs/validation.md)
     "flying": {
-        "air": {"model": "sail"},
+        "air": {"model": "sail", "density": STANDARD_AIR},
         "hang_glider": _FLYING_GLIDER,
         "solver": {"dt": 0.005},
     },
     # the flying glider on the vortex lattice (issue 53): anhedral against sweep's dihedral effect, a billow shift
     # the lattice's roll needs 1 degree of, and the pilot's drag at the top of Dees's range (it damps the phugoid)
     "lattice": {
-        "air": {"model": "vortex"},
+        "air": {"model": "vortex", "density": STANDARD_AIR},
         "hang_glider": {**_FLYING_GLIDER, **_LATTICE_GLIDER},
         "solver": {"dt": 0.005},
     },
-    "paper": {"air": {"model": "paper"}, "hang_glider": _PAPER_GLIDER, "solver": {"dt": 0.01}},
+    "paper": {
+        "air": {"model": "paper", "density": AIR_DENSITY},  # the paper's constant air (slide 14)
+        "hang_glider": _PAPER_GLIDER,
+        "solver": {"dt": 0.01},
+    },
 }
 """``hang_glider.design`` presets: ``{design: {section: {key: value}}}`` (see :class:`HangGliderConfig`)."""
 

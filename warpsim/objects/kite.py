@@ -20,7 +20,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.builder import ModelBuilder
-from ..physics.config import GRAVITY, NON_NEGATIVE, POSITIVE, Bounds, Checked, choice, number
+from ..physics.config import (
+    AIR_DENSITY,
+    GRAVITY,
+    NON_NEGATIVE,
+    POSITIVE,
+    STANDARD_AIR,
+    Bounds,
+    Checked,
+    choice,
+    number,
+)
 from ..physics.kernels.aero import sail_coefficients
 from ..physics.model import Model, ObjectRecord
 from ..physics.terrain import Heightfield
@@ -160,7 +170,7 @@ PRESETS = {
     # rho 0.99 (4.8-7.3 % off), and flies it steadily in winds where that slid aside or crashed (docs/objects.md,
     # "How the kite flies")
     "flying": {
-        "air": {"model": "sail"},
+        "air": {"model": "sail", "density": STANDARD_AIR},
         "solver": {"dt": 0.0025, "iterations": 45, "relaxation": 1.5, "chebyshev": 0.995},
         "kite": {
             k: getattr(KiteConfig(), k)
@@ -182,7 +192,7 @@ PRESETS = {
         },
     },
     "paper": {
-        "air": {"model": "paper"},
+        "air": {"model": "paper", "density": AIR_DENSITY},  # the paper's constant air (slide 14)
         "solver": {"dt": 0.01, "iterations": 55, "relaxation": 1.0, "chebyshev": 0.95},  # the solver's defaults
         "kite": {
             "tow_point": 0.35,

@@ -22,7 +22,10 @@ GRAVITY = 9.80665
 """Standard gravity [m/s^2] (slide 14; the paper's text misprints 9.80655)."""
 
 AIR_DENSITY = 1.294217666
-"""Air density [kg/m^3] used by the paper (slide 14)."""
+"""Air density [kg/m^3] used by the paper (slide 14): what its designs' presets fix ``[air] density`` to."""
+STANDARD_AIR = 0.0
+"""``[air] density`` that means the International Standard Atmosphere's density at each world's altitude (the
+default; :mod:`warpsim.physics.atmosphere`)."""
 
 
 @dataclass(frozen=True)
@@ -226,9 +229,10 @@ class AirConfig(Checked):
         model: the air-force law, :class:`~warpsim.physics.kernels.aero.AeroModel` (``paper``, ``plate``, ``sail``,
             ``vortex``).
         scale: multiplier on the air force (1 = the model as written; 0 = no air).
-        density: air density [kg/m^3] fixed for the whole flight (default: the paper's 1.294217666, the air its
-            four designs were built and measured in); 0 = the International Standard Atmosphere's at each world's
-            altitude, every step (:mod:`warpsim.physics.atmosphere`), with ``elevation`` and ``temperature_offset``.
+        density: 0 (the default) = the International Standard Atmosphere's density at each world's altitude, every
+            step (:mod:`warpsim.physics.atmosphere`), with ``elevation`` and ``temperature_offset``; a positive
+            number fixes the density [kg/m^3] for the whole flight (the paper designs' presets fix the paper's
+            :data:`AIR_DENSITY`, the air its four objects were built in).
         elevation: altitude above mean sea level [m] of the scene's z = 0 (the terrain's and the objects' heights
             add to it).
         temperature_offset: the day's temperature off the standard atmosphere's at every altitude [K] (ISA+15 is a
@@ -247,7 +251,7 @@ class AirConfig(Checked):
 
     model: AeroModel = choice(AeroModel.PAPER, AeroModel)
     scale: float = number(1.0, NON_NEGATIVE)
-    density: float = number(AIR_DENSITY, Bounds(0.0, 100.0))
+    density: float = number(0.0, Bounds(0.0, 100.0))
     elevation: float = number(0.0, Bounds(-2000.0, 20000.0))
     temperature_offset: float = number(0.0, Bounds(-70.0, 50.0))
     vortex_interval: float = number(0.1, Bounds(0.0, 10.0))

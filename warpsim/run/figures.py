@@ -261,8 +261,8 @@ class FlightFigures:
         return [f"{head}: {', '.join(parts)} ({where})"] + [f"  {some}{note}" for note in notes] + self._air_lines()
 
     def _air_lines(self) -> list[str]:
-        """What the figures depend on beyond the scene's defaults: the standard atmosphere's density at the end, the
-        turbulence."""
+        """What the figures depend on beyond the object's shape: the air's density (the standard atmosphere's at the
+        end, or the fixed one), the turbulence."""
         air, wind, lines = self.sim.settings.air, self.sim.settings.wind, []
         if air.density == 0.0:
             rho = self.sim.control.air_density.numpy()
@@ -273,6 +273,8 @@ class FlightFigures:
                 f"  air: the standard atmosphere, {text} at the end ({air.elevation:g} m above sea level at z = 0, "
                 f"ISA{air.temperature_offset:+g} K)"
             )
+        elif air.scale > 0.0:
+            lines.append(f"  air: a fixed density, {air.density:.6g} kg/m^3 (air.density; 0 = the standard atmosphere)")
         if self.sim.control.turbulence.field is not None:
             lines.append(
                 f"  turbulence: von Karman, intensity {wind.turbulence_intensity:g}, length scale "

@@ -1,5 +1,7 @@
 """The delta kite: counts, climb and settled line angle, rope end on the anchor, anchor control."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -362,3 +364,14 @@ def test_a_rope_lying_on_the_ground_has_no_pull_from_its_sag():
     flying = Simulation(descriptor.resolve("kite")[0])
     flying.run(10.0)
     assert 5.0 < anchor_pull(record, flying.state.positions(), flying.model.particle_free_mass) < 30.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("wind, flies", [(3.0, False), (3.5, True), (13.0, True)])
+def test_the_sport_kite_flies_in_the_winds_its_scene_says(capsys, wind, flies):
+    """scenes/kite_sport.toml says where it flies (in the standard atmosphere at the defaults: 57.8 deg in 3.5 m/s,
+    62.5 deg in 13 m/s over 30-60 s) and where it stops (3 m/s: 23.0 deg); the run's own line angle, over 20-40 s."""
+    args = ["run", "scenes/kite_sport.toml", "--seconds", "40", "--set", f"wind.velocity=[{wind},0,0]"]
+    assert main(args) == 0
+    angle = float(re.search(r"line angle ([\d.]+) deg", capsys.readouterr().out).group(1))
+    assert (55.0 <= angle <= 65.0) if flies else (angle < 35.0), angle

@@ -350,7 +350,7 @@ def case_vortex(name: str, rounds: int = 3) -> Callable[[Options], dict]:
 
 
 AIR_SETTINGS = {
-    "steady": {},
+    "steady": {"air": {"density": AIR_DENSITY}},
     "isa": {"air": {"density": 0.0}},
     "turbulence": {"wind": {"turbulence_intensity": 0.15}},
 }

@@ -9,7 +9,6 @@ import math
 
 import numpy as np
 
-from warpsim.physics.atmosphere import scene_density
 from warpsim.physics.model import AIR_DENSITY, GRAVITY
 from warpsim.run.simulation import Simulation
 
@@ -263,7 +262,6 @@ def lift_slope_flight(scene: str | dict, solver: dict | None = None, bars=(-0.4,
     ``SM = C_L (m_pilot / m) dx / (a |dalpha|)``, the static margin with every contribution (sail, pilot's drag,
     pendulum) in it. Returns ``slope``, ``static_margin`` and each ``cl``, ``alpha`` [deg] and ``pilot`` [m]."""
     d = scene_descriptor(scene, solver)
-    rho = scene_density(d["air"], d["hang_glider"]["altitude"])  # where it is launched
     load = wing_loading(d)
     g = d["hang_glider"]
     share = g["pilot_mass"] / (g["glider_mass"] + g["pilot_mass"] + g["control_frame_mass"])
@@ -277,6 +275,7 @@ def lift_slope_flight(scene: str | dict, solver: dict | None = None, bars=(-0.4,
         cg = np.mean([f["cg_velocity"] for f in frames], axis=0)
         gamma = math.atan2(cg[2], math.hypot(cg[0], cg[1]))
         speed = float(np.mean([f["cg_speed"] for f in frames]))
+        rho = float(np.mean([f["density"] for f in frames]))  # the air it flew these frames in
         cls.append(2.0 * load * GRAVITY * math.cos(gamma) / (rho * speed**2))
         alphas.append(float(np.mean([f["pitch_deg"] - math.degrees(path_angle(f["velocity"])) for f in frames])))
         pilots.append(float(np.mean([f["pilot_forward"] for f in frames])))

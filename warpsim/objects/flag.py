@@ -34,7 +34,8 @@ class FlagConfig(Checked):
             ``paper`` (the paper's cloth: rigid sticks, no bending, even masses, resolution 5, whose flapping is its
             mesh's and its time step's). In a scene or with ``--set`` it is a preset (:data:`PRESETS`): it sets
             the keys below but ``width``, ``height``, ``mass_per_area``, ``pole_height`` and ``position``, and
-            ``solver.mass_splitting``, ``solver.dt`` and ``solver.iterations``, and then the scene's own keys apply.
+            ``solver.mass_splitting``, ``solver.dt``, ``solver.iterations`` and ``air.density`` (the paper's constant
+            air, or 0: the standard atmosphere), and then the scene's own keys apply.
             The builder itself reads only the individual keys: ``FlagConfig(design="paper")`` alone is still the
             sheet (the keys' defaults are the sheet's); the paper's keys are ``PRESETS["paper"]["flag"]``.
         width: length of the flag away from the pole, along +x [m].

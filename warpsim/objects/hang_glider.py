@@ -43,8 +43,9 @@ class HangGliderConfig(Checked):
             ``sail`` air model), ``lattice`` (the same glider under the ``vortex`` air model, the lattice's air from
             the sail's own shape: 1.5 degrees of anhedral, a 1 degree billow shift, the pilot's drag area 0.25 m^2)
             or ``paper`` (Section 6: the pilot on seven control sticks, an untensioned flat sail, the paper's air
-            law). In a scene or with ``--set`` it is a preset (:data:`PRESETS`): it sets those keys, ``air.model``
-            and ``solver.dt`` (5 ms flying and lattice, 10 ms paper), and keys given beside it win. The builder
+            law). In a scene or with ``--set`` it is a preset (:data:`PRESETS`): it sets those keys, ``air.model``,
+            ``air.density`` (the paper's constant air, or 0: the standard atmosphere) and ``solver.dt`` (5 ms flying
+            and lattice, 10 ms paper), and keys given beside it win. The builder
             itself reads only the individual keys.
         divisions: sail subdivisions per side (paper: 8).
         span: tip-to-tip distance [m].

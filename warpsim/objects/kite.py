@@ -50,8 +50,9 @@ class KiteConfig(Checked):
             air model with a 2.5 ms step and 45 over-relaxed, accelerated iterations, it flies as a real delta
             does) or ``paper`` (Section 7: a 200 g kite towed from 35 %, 20 deg dihedral, no tail, the paper's air
             law, 10 ms step and plain 55 iterations). In a scene or with ``--set`` it is a preset
-            (:data:`PRESETS`): it sets those keys, ``air.model`` and the solver's ``dt``, ``iterations``,
-            ``relaxation`` and ``chebyshev``, and keys given beside it win. The builder itself reads only the
+            (:data:`PRESETS`): it sets those keys, ``air.model``, ``air.density`` (the paper's constant air, or 0: the
+            standard atmosphere) and the solver's ``dt``, ``iterations``, ``relaxation`` and ``chebyshev``, and keys
+            given beside it win. The builder itself reads only the
             individual keys.
         divisions: main-sail subdivisions per side (paper: 14 particles per side -> 13).
         keel_divisions: keel subdivisions per side (paper: 6 particles per side -> 5); the keel's top

@@ -9,6 +9,7 @@ import pytest
 from benchmarks.validation.atmosphere_rows import ISO_TABLE, atmosphere_table, canopy_descent
 from warpsim.cli import main
 from warpsim.physics.atmosphere import SEA_LEVEL_DENSITY, isa, scene_density
+from warpsim.physics.config import AIR_DENSITY
 from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
 
@@ -44,9 +45,9 @@ def test_each_world_breathes_the_air_of_its_own_altitude(worlds):
     np.testing.assert_allclose(sim.control.air_density.numpy(), expected, rtol=2e-6)
     if worlds > 1:
         assert expected[0] > expected[1] > expected[2]
-    fixed = Simulation(descriptor.merge("test", descriptor.resolve("parachute")[0], {"air": {"density": 1.294217666}}))
+    fixed = Simulation(descriptor.merge("test", descriptor.resolve("parachute")[0], {"air": {"density": AIR_DENSITY}}))
     fixed.step(5)
-    assert fixed.control.air_density.numpy()[0] == np.float32(1.294217666)
+    assert fixed.control.air_density.numpy()[0] == np.float32(AIR_DENSITY)
 
 
 def test_a_canopy_falls_faster_in_thin_air_as_the_square_root_of_the_density():
@@ -83,7 +84,7 @@ def test_a_run_says_the_air_its_figures_depend_on(capsys):
     out = capsys.readouterr().out
     assert "air: the standard atmosphere" in out and "1500 m above sea level" in out
     assert "turbulence: von Karman, intensity 0.1, length scale 24.5 m" in out
-    assert main(["run", "parachute", "--seconds", "1", "--set", "air.density=1.294217666"]) == 0
+    assert main(["run", "parachute", "--seconds", "1", "--set", f"air.density={AIR_DENSITY}"]) == 0
     out = capsys.readouterr().out
     assert "air: a fixed density, 1.29422 kg/m^3" in out and "standard atmosphere, " not in out
     assert "turbulence:" not in out

@@ -367,10 +367,11 @@ def test_a_rope_lying_on_the_ground_has_no_pull_from_its_sag():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("wind, flies", [(3.0, False), (3.5, True), (13.0, True)])
+@pytest.mark.parametrize("wind, flies", [(3.0, False), (4.0, True), (13.0, True)])
 def test_the_sport_kite_flies_in_the_winds_its_scene_says(capsys, wind, flies):
-    """scenes/kite_sport.toml says where it flies (in the standard atmosphere at the defaults: 57.8 deg in 3.5 m/s,
-    62.5 deg in 13 m/s over 30-60 s) and where it stops (3 m/s: 23.0 deg); the run's own line angle, over 20-40 s."""
+    """scenes/kite_sport.toml says where it flies (in the standard atmosphere at the defaults: 60.1 deg in 4 m/s,
+    62.5 deg in 13 m/s over 30-60 s; 60.7 and 63.8 at dt/2 with twice the iterations) and where it stops (3 m/s:
+    23.0 deg; 3.5 m/s flies at the defaults but not at dt/2, not claimed); the run's own line angle, 20-40 s."""
     args = ["run", "scenes/kite_sport.toml", "--seconds", "40", "--set", f"wind.velocity=[{wind},0,0]"]
     assert main(args) == 0
     angle = float(re.search(r"line angle ([\d.]+) deg", capsys.readouterr().out).group(1))

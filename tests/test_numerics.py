@@ -8,6 +8,7 @@ import pytest
 
 import warpsim as ws
 from warpsim.objects.hang_glider import flight_state
+from warpsim.physics.atmosphere import SEA_LEVEL_DENSITY
 from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
 
@@ -42,7 +43,7 @@ def test_hands_off_glide_is_the_same_anywhere():
     """float64 positions: the glide 10 km from the origin or 3 km up is the one at the origin (with float32
     world coordinates it was 8.2 here and 10.3-18.5 five km away). In one fixed density: the standard atmosphere's
     would be 26 % thinner 3 km up (tests/test_atmosphere.py flies that)."""
-    air = {"density": 1.225}
+    air = {"density": SEA_LEVEL_DENSITY}
     flat = {"terrain": {"kind": "flat"}, "air": air}
     here = _glide(flat)
     assert here[0] >= 8.0 and 9.0 <= here[1] <= 13.0  # it glides (the validation band)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from warpsim.objects.parachute import CANOPIES, canopy_table, descent_and_swing, projected_radius
-from warpsim.physics.atmosphere import scene_density
+from warpsim.physics.atmosphere import SEA_LEVEL_DENSITY, scene_density
 from warpsim.run.simulation import Simulation
 from warpsim.scene import descriptor
 from warpsim.scene.descriptor import defaults
@@ -97,7 +97,7 @@ def test_descent_does_not_depend_on_where_the_parachute_is():
         d["terrain"]["kind"] = "flat"
         d["terrain"]["height"] = ground
         d["solver"]["mass_splitting"] = True
-        d["air"]["density"] = 1.225
+        d["air"]["density"] = SEA_LEVEL_DENSITY
         sim = Simulation(d)
         person = sim.model.objects[0].person
         sim.step(int(round(15.0 / sim.dt)))
